@@ -1,0 +1,112 @@
+//! Eye pass (ALGORITHM.md 1.1): one hit point per slot where the eye path first meets a
+//! non-specular surface, following mirror and glass chains iteratively.
+
+use crate::trace::SceneData;
+use glam::Vec3;
+use ppm_core::compile::camera_ray;
+use ppm_core::geometry::{fresnel_refract, reflect};
+use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, hit_flags, material_kind};
+use ppm_core::passes::EyeStats;
+use ppm_core::rng::{PassKind, StreamKey};
+use rayon::prelude::*;
+
+/// Random dimensions: 0 and 1 jitter the pixel; `2 + depth` picks glass reflection or refraction.
+const DIM_GLASS: u32 = 2;
+
+/// Fills `hit_points` (`width * height * spp` slots, slot = pixel * spp + sample).
+pub fn eye_pass_main(
+    params: &EyePassParams,
+    camera: &GpuCamera,
+    scene: &SceneData,
+    hit_points: &mut [HitPoint],
+) -> EyeStats {
+    let rays: u64 = hit_points
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(256)
+        .map(|(slot, hp)| trace_eye_path(params, camera, scene, slot as u32, hp))
+        .sum();
+    EyeStats {
+        rays,
+        hit_points: hit_points.iter().filter(|h| h.is_valid()).count() as u64,
+    }
+}
+
+/// Traces one slot's eye path and writes its hit point; returns the rays traced.
+fn trace_eye_path(
+    params: &EyePassParams,
+    camera: &GpuCamera,
+    scene: &SceneData,
+    slot: u32,
+    out: &mut HitPoint,
+) -> u64 {
+    let pixel = slot / params.spp;
+    *out = HitPoint::empty(pixel);
+    let key = StreamKey {
+        seed: params.seed,
+        kind: PassKind::Eye,
+        pass_index: params.frame,
+        path: slot,
+    };
+    let (jx, jy) = if params.spp == 1 {
+        (0.5, 0.5)
+    } else {
+        (key.uniform(0), key.uniform(1))
+    };
+    let px = (pixel % camera.width) as f32 + jx;
+    let py = (pixel / camera.width) as f32 + jy;
+    let mut dir = camera_ray(camera, px, py);
+    let mut origin = Vec3::from(camera.eye);
+    let mut throughput = Vec3::ONE;
+    for depth in 0..=params.max_depth {
+        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+            return u64::from(depth) + 1;
+        };
+        let tri = &scene.triangles[hit.triangle as usize];
+        let material = &scene.materials[tri.material as usize];
+        let position = origin + dir * hit.t;
+        let normal = Vec3::from(tri.normal);
+        let front = dir.dot(normal) < 0.0;
+        let facing = if front { normal } else { -normal };
+        match material.kind {
+            material_kind::DIFFUSE => {
+                *out = HitPoint {
+                    position: position.into(),
+                    pixel,
+                    normal: facing.into(),
+                    material: tri.material,
+                    wo: (-dir).into(),
+                    r2: params.r2_initial,
+                    throughput: throughput.into(),
+                    flags: hit_flags::VALID | if front { hit_flags::FRONT } else { 0 },
+                    ..HitPoint::default()
+                };
+                return u64::from(depth) + 1;
+            }
+            material_kind::MIRROR => {
+                throughput *= Vec3::from(material.albedo);
+                dir = reflect(dir, facing);
+                origin = position + facing * params.ray_epsilon;
+            }
+            _ => {
+                let eta = if front {
+                    1.0 / material.ior
+                } else {
+                    material.ior
+                };
+                let (fresnel, refracted) = fresnel_refract(dir, facing, eta);
+                match refracted {
+                    Some(t) if key.uniform(DIM_GLASS + depth) >= fresnel => {
+                        dir = t;
+                        origin = position - facing * params.ray_epsilon;
+                    }
+                    _ => {
+                        dir = reflect(dir, facing);
+                        origin = position + facing * params.ray_epsilon;
+                    }
+                }
+            }
+        }
+    }
+    u64::from(params.max_depth) + 1
+}

@@ -1,0 +1,164 @@
+//! The CPU backend: every pass of ppm-core's contract, parallel over rayon's thread pool.
+//!
+//! Each pass lives in a module of its own name whose `*_main` function works on the same flat
+//! slices a GPU backend binds; [`CpuBackend`] only owns the buffers and calls them. Results do
+//! not depend on the number of threads: work items draw counter-based random numbers and write
+//! only their own slots, and photons are concatenated and filed in path order.
+
+mod direct_light;
+mod eye_pass;
+mod gather_pass;
+mod photon_grid;
+mod photon_pass;
+mod resolve;
+mod trace;
+
+use photon_grid::{PhotonGrid, build_photon_grid};
+use ppm_core::check::check_hit_points;
+use ppm_core::compile::CompiledScene;
+use ppm_core::image::Image;
+use ppm_core::layout::{
+    DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
+    ResolveParams,
+};
+use ppm_core::passes::{
+    Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
+    PhotonPass, PhotonStats, ReadBack, Resolve, SceneUpload,
+};
+use trace::SceneData;
+
+/// The rayon backend. Runs on the current rayon pool: install it in a sized pool to choose the
+/// thread count.
+#[derive(Default)]
+pub struct CpuBackend {
+    scene: Option<(SceneData, GpuCamera)>,
+    hit_points: Vec<HitPoint>,
+    photons: Vec<Photon>,
+    grid: Option<PhotonGrid>,
+}
+
+impl CpuBackend {
+    /// A backend with no scene loaded.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// The loaded scene, or the error for a pass called before `load_scene`.
+fn loaded<'a>(
+    scene: &'a Option<(SceneData, GpuCamera)>,
+    pass: &'static str,
+) -> Result<&'a (SceneData, GpuCamera), BackendError> {
+    scene.as_ref().ok_or(BackendError::OutOfOrder {
+        pass,
+        needs: "load_scene",
+    })
+}
+
+impl SceneUpload for CpuBackend {
+    fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        let data = SceneData {
+            triangles: scene.triangles.clone(),
+            bvh: scene.bvh.clone(),
+            materials: scene.materials.clone(),
+            lights: scene.lights.clone(),
+        };
+        self.scene = Some((data, scene.camera));
+        self.hit_points.clear();
+        self.photons.clear();
+        self.grid = None;
+        Ok(())
+    }
+}
+
+impl EyePass for CpuBackend {
+    fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "eye")?;
+        let slots = camera.width as usize * camera.height as usize * params.spp as usize;
+        let mut hit_points = std::mem::take(&mut self.hit_points);
+        hit_points.resize(slots, HitPoint::default());
+        let stats = eye_pass::eye_pass_main(params, camera, scene, &mut hit_points);
+        self.hit_points = hit_points;
+        check_hit_points("eye", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl DirectLight for CpuBackend {
+    fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "direct light")?;
+        let stats = direct_light::direct_light_main(params, scene, &mut self.hit_points);
+        check_hit_points("direct light", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl PhotonPass for CpuBackend {
+    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "photon")?;
+        let (photons, stats) = photon_pass::photon_pass_main(params, scene);
+        if let Some((i, p)) = photons
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.power.iter().chain(&p.position).all(|v| v.is_finite()))
+        {
+            return Err(BackendError::NonFinite {
+                pass: "photon",
+                field: "photon power or position",
+                index: i,
+                pixel: p.path,
+                value: format!("{:?} at {:?}", p.power, p.position),
+            });
+        }
+        let max_r2 = self
+            .hit_points
+            .iter()
+            .filter(|h| h.is_valid())
+            .map(|h| h.r2)
+            .fold(0.0f32, f32::max);
+        self.grid = Some(build_photon_grid(&photons, max_r2));
+        self.photons = photons;
+        Ok(stats)
+    }
+}
+
+impl GatherPass for CpuBackend {
+    fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "gather")?;
+        let grid = self.grid.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "gather",
+            needs: "a photon pass",
+        })?;
+        let stats = gather_pass::gather_pass_main(
+            params,
+            &scene.materials,
+            &self.photons,
+            grid,
+            &mut self.hit_points,
+        );
+        check_hit_points("gather", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl Resolve for CpuBackend {
+    fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError> {
+        Ok(resolve::resolve_main(params, &self.hit_points))
+    }
+}
+
+impl ReadBack for CpuBackend {
+    fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError> {
+        Ok(self.hit_points.clone())
+    }
+
+    fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
+        Ok(self.photons.clone())
+    }
+}
+
+impl Backend for CpuBackend {
+    fn name(&self) -> &str {
+        "cpu"
+    }
+}

@@ -1,0 +1,54 @@
+//! Ray queries against the scene: obvhs traverses its BVH, ppm-core's test intersects triangles.
+
+use glam::Vec3;
+use obvhs::bvh2::Bvh2;
+use obvhs::ray::{Ray, RayHit};
+use ppm_core::geometry::intersect_triangle;
+use ppm_core::layout::{GpuLight, GpuMaterial, GpuTriangle};
+
+/// The scene as the CPU passes read it: the same flat buffers a GPU backend binds.
+#[derive(Clone)]
+pub struct SceneData {
+    /// Triangles in BVH leaf order.
+    pub triangles: Vec<GpuTriangle>,
+    /// obvhs's BVH over `triangles`.
+    pub bvh: Bvh2,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Emitting triangles.
+    pub lights: Vec<GpuLight>,
+}
+
+/// The nearest surface a ray meets.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Distance along the (unit) direction.
+    pub t: f32,
+    /// Index into [`SceneData::triangles`].
+    pub triangle: u32,
+}
+
+impl SceneData {
+    /// Nearest hit with `tmin < t < tmax`.
+    #[inline]
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        let mut hit = RayHit::none();
+        let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
+            intersect_triangle(origin, dir, &self.triangles[id], r.tmin, r.tmax)
+        });
+        found.then_some(Hit {
+            t: hit.t,
+            triangle: hit.primitive_id,
+        })
+    }
+
+    /// Whether anything lies between `origin` and `origin + dir * tmax`.
+    #[inline]
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        !self.bvh.ray_traverse_miss(ray, |r, id| {
+            intersect_triangle(origin, dir, &self.triangles[id], r.tmin, r.tmax)
+        })
+    }
+}

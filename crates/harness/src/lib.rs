@@ -1,0 +1,27 @@
+//! Drives any backend through the passes of ppm-core: the render loop, its report, and scene
+//! lookup by name or file. The `ppm` command is built on it.
+
+pub mod render;
+pub mod report;
+
+use ppm_core::scene::{Scene, SceneError, load_scene_file};
+use std::path::Path;
+
+/// A built-in scene by name, or else a scene file by path.
+pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
+    if let Some(builtin) = scenes::builtin(name_or_path) {
+        return builtin.load();
+    }
+    let path = Path::new(name_or_path);
+    if !path.exists() {
+        let names: Vec<&str> = scenes::BUILTIN.iter().map(|s| s.name).collect();
+        return Err(SceneError::Read {
+            file: name_or_path.to_owned(),
+            reason: format!(
+                "no such file, and no built-in scene has this name (built-in: {})",
+                names.join(", ")
+            ),
+        });
+    }
+    load_scene_file(path)
+}

@@ -1,0 +1,243 @@
+//! Turns a [`Scene`] into the flat buffers every backend consumes, with the BVH built by obvhs.
+
+use crate::layout::{
+    BvhNode, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
+};
+use crate::scene::{MaterialKind, Scene};
+use glam::{Vec3, Vec3A};
+use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::{BvhBuildParams, triangle::Triangle};
+use std::time::{Duration, Instant};
+
+/// What a scene contains, so that passes and code paths it does not need are left out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SceneFeatures {
+    /// Some surface is a mirror.
+    pub mirror: bool,
+    /// Some surface is glass.
+    pub glass: bool,
+    /// Some object moves between frames.
+    pub moving_objects: bool,
+}
+
+impl SceneFeatures {
+    /// Mirror or glass: photons can form caustics and eye paths can bounce.
+    pub fn specular(&self) -> bool {
+        self.mirror || self.glass
+    }
+}
+
+/// A scene flattened into GPU-layout buffers, plus the obvhs BVH for CPU traversal.
+pub struct CompiledScene {
+    /// Camera at the requested resolution.
+    pub camera: GpuCamera,
+    /// Triangles in BVH leaf order.
+    pub triangles: Vec<GpuTriangle>,
+    /// Flattened BVH nodes; node 0 is the root.
+    pub nodes: Vec<BvhNode>,
+    /// The BVH as obvhs built it; its primitive ids index `triangles` directly.
+    pub bvh: Bvh2,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Emitting triangles with their selection distribution.
+    pub lights: Vec<GpuLight>,
+    /// What the scene contains.
+    pub features: SceneFeatures,
+    /// Length of the scene's bounding-box diagonal: the scale for epsilons.
+    pub extent: f32,
+    /// Total emitted power `sum(pi * A * Le)`.
+    pub light_power: Vec3,
+    /// Time obvhs spent building the BVH.
+    pub bvh_build_time: Duration,
+}
+
+/// Flattens `scene` for an image of `width` x `height`.
+pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
+    let materials: Vec<GpuMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| gpu_material(&m.kind))
+        .collect();
+    let mut tris = Vec::new();
+    for (object_index, object) in scene.objects.iter().enumerate() {
+        for t in &object.triangles {
+            tris.push((t, object.material as u32, object_index as u32));
+        }
+    }
+    let obvhs_tris: Vec<Triangle> = tris
+        .iter()
+        .map(|(t, _, _)| Triangle {
+            v0: Vec3A::from(t[0]),
+            v1: Vec3A::from(t[1]),
+            v2: Vec3A::from(t[2]),
+        })
+        .collect();
+    let start = Instant::now();
+    let mut core_time = Duration::ZERO;
+    let bvh = build_bvh2_from_tris(&obvhs_tris, BvhBuildParams::medium_build(), &mut core_time);
+    let bvh_build_time = start.elapsed();
+
+    let mut triangles = Vec::with_capacity(bvh.primitive_indices.len());
+    let mut lights = Vec::new();
+    for &p in &bvh.primitive_indices {
+        let (t, material, object) = tris[p as usize];
+        let mut gpu = gpu_triangle(t, material, object);
+        if let MaterialKind::Light { .. } = scene.materials[material as usize].kind {
+            let area = 0.5 * Vec3::from(gpu.e1).cross(Vec3::from(gpu.e2)).length();
+            if area > 0.0 {
+                gpu.light = lights.len() as u32;
+                lights.push(GpuLight {
+                    v0: gpu.v0,
+                    area,
+                    e1: gpu.e1,
+                    e2: gpu.e2,
+                    normal: gpu.normal,
+                    material,
+                    ..Default::default()
+                });
+            }
+        }
+        triangles.push(gpu);
+    }
+    let light_power = assign_light_distribution(&mut lights, &materials);
+    let nodes = bvh
+        .nodes
+        .iter()
+        .map(|n| BvhNode {
+            min: n.aabb.min.into(),
+            first: n.first_index,
+            max: n.aabb.max.into(),
+            count: n.prim_count,
+        })
+        .collect();
+    let (lo, hi) = bounds(&triangles);
+    CompiledScene {
+        camera: gpu_camera(scene, width, height),
+        triangles,
+        nodes,
+        bvh,
+        materials,
+        lights,
+        features: SceneFeatures {
+            mirror: scene
+                .materials
+                .iter()
+                .any(|m| matches!(m.kind, MaterialKind::Mirror { .. })),
+            glass: scene
+                .materials
+                .iter()
+                .any(|m| matches!(m.kind, MaterialKind::Glass { .. })),
+            moving_objects: !scene.moves.is_empty(),
+        },
+        extent: (hi - lo).length(),
+        light_power,
+        bvh_build_time,
+    }
+}
+
+/// Selects lights in proportion to their power, and returns the total power.
+fn assign_light_distribution(lights: &mut [GpuLight], materials: &[GpuMaterial]) -> Vec3 {
+    let power = |l: &GpuLight| {
+        Vec3::from(materials[l.material as usize].emission) * (std::f32::consts::PI * l.area)
+    };
+    let total = lights.iter().map(power).fold(Vec3::ZERO, |a, b| a + b);
+    let weights: Vec<f64> = lights
+        .iter()
+        .map(|l| f64::from(power(l).element_sum()) + 1e-30)
+        .collect();
+    let sum: f64 = weights.iter().sum();
+    let mut acc = 0.0f64;
+    for (l, w) in lights.iter_mut().zip(&weights) {
+        acc += w;
+        l.pdf = (w / sum) as f32;
+        l.cdf = (acc / sum) as f32;
+    }
+    if let Some(last) = lights.last_mut() {
+        last.cdf = 1.0;
+    }
+    total
+}
+
+fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
+    match *kind {
+        MaterialKind::Diffuse { albedo } => GpuMaterial {
+            albedo: albedo.into(),
+            kind: material_kind::DIFFUSE,
+            ..Default::default()
+        },
+        MaterialKind::Mirror { reflectance } => GpuMaterial {
+            albedo: reflectance.into(),
+            kind: material_kind::MIRROR,
+            ..Default::default()
+        },
+        MaterialKind::Glass { ior } => GpuMaterial {
+            albedo: [1.0; 3],
+            kind: material_kind::GLASS,
+            ior,
+            ..Default::default()
+        },
+        MaterialKind::Light { radiance, albedo } => GpuMaterial {
+            albedo: albedo.into(),
+            kind: material_kind::DIFFUSE,
+            emission: radiance.into(),
+            ior: 0.0,
+        },
+    }
+}
+
+fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    GpuTriangle {
+        v0: t[0].into(),
+        material,
+        e1: e1.into(),
+        object,
+        e2: e2.into(),
+        light: NO_MATERIAL,
+        normal: e1.cross(e2).normalize_or_zero().into(),
+        _pad: 0,
+    }
+}
+
+fn gpu_camera(scene: &Scene, width: u32, height: u32) -> GpuCamera {
+    let c = &scene.camera;
+    let forward = (c.look_at - c.eye).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    let tan_half = (c.fov_deg.to_radians() * 0.5).tan();
+    let aspect = width as f32 / height as f32;
+    GpuCamera {
+        eye: c.eye.into(),
+        width,
+        forward: forward.into(),
+        height,
+        right: (right * (tan_half * aspect)).into(),
+        _pad0: 0,
+        up: (up * tan_half).into(),
+        _pad1: 0,
+    }
+}
+
+fn bounds(triangles: &[GpuTriangle]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for t in triangles {
+        let v0 = Vec3::from(t.v0);
+        for v in [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)] {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    (lo, hi)
+}
+
+/// Ray direction through the image point `(px, py)` in pixels (`(0, 0)` is the top-left corner).
+#[inline]
+pub fn camera_ray(camera: &GpuCamera, px: f32, py: f32) -> Vec3 {
+    let sx = 2.0 * px / camera.width as f32 - 1.0;
+    let sy = 1.0 - 2.0 * py / camera.height as f32;
+    (Vec3::from(camera.forward) + Vec3::from(camera.right) * sx + Vec3::from(camera.up) * sy)
+        .normalize()
+}

@@ -1,0 +1,344 @@
+//! Buffer layouts shared by every backend.
+//!
+//! Each struct is `#[repr(C)]` + Pod and is byte-for-byte the element of a GPU storage buffer:
+//! a `Vec<HitPoint>` on the CPU is exactly what a WGSL `array<HitPoint>` binds. Fields are
+//! grouped as `vec3<f32>` + one scalar so that every struct is a multiple of 16 bytes and matches
+//! WGSL's std430-like alignment rules without hidden padding.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Material kinds, stored in [`GpuMaterial::kind`].
+pub mod material_kind {
+    /// Lambertian reflector (`albedo`), optionally emitting (`emission`).
+    pub const DIFFUSE: u32 = 0;
+    /// Perfect specular reflector with reflectance `albedo`.
+    pub const MIRROR: u32 = 1;
+    /// Smooth dielectric: Fresnel reflection and refraction with index `ior`.
+    pub const GLASS: u32 = 2;
+}
+
+/// Bits of [`HitPoint::flags`].
+pub mod hit_flags {
+    /// The slot holds a hit point; without it the eye path escaped, was absorbed or ran out of depth.
+    pub const VALID: u32 = 1;
+    /// The eye ray met the surface on the side its normal points to: emitters emit only there.
+    pub const FRONT: u32 = 2;
+}
+
+/// Marks an empty hit-point slot in [`HitPoint::material`].
+pub const NO_MATERIAL: u32 = u32::MAX;
+
+/// One eye-path slot: where an eye path first met a non-specular surface, and its PPM statistics.
+///
+/// 96 bytes: six 16-byte rows, each a `vec3<f32>` plus one scalar. At 768x768 with one eye sample
+/// per pixel that is 589,824 slots = 56.6 MB, well inside one storage binding (128 MiB baseline
+/// limit). The diffuse albedo is not stored: `material` indexes it, which saves a row per slot.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HitPoint {
+    /// World-space position of the hit.
+    pub position: [f32; 3],
+    /// Pixel index `y * width + x` this slot belongs to.
+    pub pixel: u32,
+    /// Shading normal, flipped to face the eye ray.
+    pub normal: [f32; 3],
+    /// Index into the material buffer, or [`NO_MATERIAL`] for an empty slot.
+    pub material: u32,
+    /// Unit direction from the hit towards the eye (the outgoing direction).
+    pub wo: [f32; 3],
+    /// Squared gather radius `r2` (ALGORITHM.md 1.4).
+    pub r2: f32,
+    /// Product of specular reflectances along the eye path.
+    pub throughput: [f32; 3],
+    /// Accumulated photon count `n` (fractional: it grows by `alpha * M`).
+    pub n: f32,
+    /// Accumulated flux `tau` (power times BRDF), per channel.
+    pub tau: [f32; 3],
+    /// Photons emitted so far for this hit point: the normaliser of ALGORITHM.md 1.5.
+    pub emitted: f32,
+    /// Radiance leaving the hit towards the eye from emission plus explicit direct light.
+    pub direct: [f32; 3],
+    /// [`hit_flags`] bits.
+    pub flags: u32,
+}
+
+impl HitPoint {
+    /// An empty slot for `pixel`: no surface, no statistics.
+    pub fn empty(pixel: u32) -> Self {
+        Self {
+            pixel,
+            material: NO_MATERIAL,
+            ..Self::default()
+        }
+    }
+
+    /// Whether the slot holds a hit point.
+    pub fn is_valid(&self) -> bool {
+        self.flags & hit_flags::VALID != 0
+    }
+}
+
+/// A photon deposit made during a photon pass.
+///
+/// 32 bytes, so that ten million photons fit in 320 MB. The surface normal is packed
+/// octahedrally into one `u32` (16 bits per coordinate): it only decides which side of a surface
+/// the photon lies on. No incoming direction is stored: hit points are Lambertian, whose BRDF does
+/// not depend on it, so a scene never needs it (a glossy BRDF would add it here).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Photon {
+    /// Where the photon landed.
+    pub position: [f32; 3],
+    /// Index of the photon path within its pass that made this deposit.
+    pub path: u32,
+    /// Power carried (RGB, negative for compensation photons).
+    pub power: [f32; 3],
+    /// Octahedral encoding of the surface normal on the side the photon arrived from.
+    pub normal_oct: u32,
+}
+
+/// One scene triangle in the form the intersection test wants: a vertex and two edges.
+///
+/// 64 bytes. Triangles are stored in BVH leaf order, so leaves index them directly.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangle {
+    /// First vertex.
+    pub v0: [f32; 3],
+    /// Index into the material buffer.
+    pub material: u32,
+    /// `v1 - v0`.
+    pub e1: [f32; 3],
+    /// Index of the named object this triangle belongs to.
+    pub object: u32,
+    /// `v2 - v0`.
+    pub e2: [f32; 3],
+    /// Index into the light buffer if the triangle emits, else `u32::MAX`.
+    pub light: u32,
+    /// Unit geometric normal, `normalize(e1 x e2)`; zero for a degenerate triangle.
+    pub normal: [f32; 3],
+    /// Padding to 16 bytes.
+    pub _pad: u32,
+}
+
+/// A node of the binary BVH built by obvhs, flattened for traversal on any backend.
+///
+/// 32 bytes. Inner node: `count == 0`, children at `first` and `first + 1`. Leaf: triangles
+/// `first .. first + count` of the (reordered) triangle buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    /// Bounding-box minimum.
+    pub min: [f32; 3],
+    /// First child or first triangle.
+    pub first: u32,
+    /// Bounding-box maximum.
+    pub max: [f32; 3],
+    /// Number of triangles in a leaf, zero for an inner node.
+    pub count: u32,
+}
+
+/// A material. 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// Diffuse albedo or specular reflectance, per channel, in [0, 1].
+    pub albedo: [f32; 3],
+    /// One of [`material_kind`].
+    pub kind: u32,
+    /// Emitted radiance `Le` (one-sided, along the triangle's normal); zero for non-emitters.
+    pub emission: [f32; 3],
+    /// Index of refraction (glass only).
+    pub ior: f32,
+}
+
+/// One emitting triangle, with what photon emission needs precomputed. 64 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    /// First vertex.
+    pub v0: [f32; 3],
+    /// Triangle area.
+    pub area: f32,
+    /// `v1 - v0`.
+    pub e1: [f32; 3],
+    /// Cumulative selection probability up to and including this light (the last is 1).
+    pub cdf: f32,
+    /// `v2 - v0`.
+    pub e2: [f32; 3],
+    /// Probability of selecting this light for a photon.
+    pub pdf: f32,
+    /// Unit normal: the side that emits.
+    pub normal: [f32; 3],
+    /// Index of the triangle's material, which holds the radiance.
+    pub material: u32,
+}
+
+/// Pinhole camera, in the form ray generation wants. 64 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCamera {
+    /// Eye position.
+    pub eye: [f32; 3],
+    /// Image width in pixels.
+    pub width: u32,
+    /// Unit view direction.
+    pub forward: [f32; 3],
+    /// Image height in pixels.
+    pub height: u32,
+    /// Unit screen-right vector scaled by `tan(fov/2) * aspect`.
+    pub right: [f32; 3],
+    /// Padding.
+    pub _pad0: u32,
+    /// Unit screen-up vector scaled by `tan(fov/2)`.
+    pub up: [f32; 3],
+    /// Padding.
+    pub _pad1: u32,
+}
+
+/// Parameters of one eye pass. 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct EyePassParams {
+    /// Run seed.
+    pub seed: u32,
+    /// Eye samples per pixel; 1 shoots through the pixel centre.
+    pub spp: u32,
+    /// Specular bounces after which an eye path is dropped.
+    pub max_depth: u32,
+    /// Frame index (keys the random generator so each frame draws fresh numbers).
+    pub frame: u32,
+    /// Initial squared radius given to every new hit point.
+    pub r2_initial: f32,
+    /// Offset along the normal for new ray origins, against self-intersection.
+    pub ray_epsilon: f32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+/// Parameters of the direct-light pass. 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DirectLightParams {
+    /// Run seed.
+    pub seed: u32,
+    /// Shadow rays per hit point (0 when photons carry direct light).
+    pub samples: u32,
+    /// Frame index.
+    pub frame: u32,
+    /// Offset along the normal for shadow-ray origins.
+    pub ray_epsilon: f32,
+}
+
+/// How the photon pass treats the first surface a photon meets after leaving the light.
+pub mod first_hit {
+    /// Skip it: explicit direct light already counts that light (the thesis's choice).
+    pub const SKIP: u32 = 0;
+    /// Deposit it: photons carry direct light too (classic PPM).
+    pub const DEPOSIT: u32 = 1;
+}
+
+/// Parameters of one photon pass. 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PhotonPassParams {
+    /// Run seed.
+    pub seed: u32,
+    /// Global index of this photon pass (keys the random generator).
+    pub pass_index: u32,
+    /// Photons emitted in this pass.
+    pub photon_count: u32,
+    /// Bounces after which a photon path stops.
+    pub max_depth: u32,
+    /// One of [`first_hit`].
+    pub first_hit: u32,
+    /// Offset along the normal for new ray origins.
+    pub ray_epsilon: f32,
+    /// Multiplies every emitted photon's power (1 for ordinary photons).
+    pub power_scale: f32,
+    /// Padding.
+    pub _pad: u32,
+}
+
+/// Parameters of one gather pass. 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GatherParams {
+    /// Fraction of new photons kept, in (0, 1) (ALGORITHM.md 1.4).
+    pub alpha: f32,
+    /// Photons this pass adds to each gathering hit point's `emitted`.
+    pub emitted_increment: f32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+
+/// The uniform hash grid that indexes one pass's photons. 48 bytes.
+///
+/// A photon lies in cell `floor((p - origin) / cell_size)`; cell `c` hashes to bucket
+/// [`crate::grid::bucket_of`]`(c) & (bucket_count - 1)`. Buckets hold photon indices in ascending
+/// order, so every backend visits photons in the same order and sums them the same way.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridParams {
+    /// Minimum corner of the photons' bounding box.
+    pub origin: [f32; 3],
+    /// Edge length of a cell: at least twice the largest gather radius, so a gather disc
+    /// touches at most 2x2x2 cells.
+    pub cell_size: f32,
+    /// Number of cells along each axis (cell coordinates are clamped into it).
+    pub dims: [u32; 3],
+    /// Number of hash buckets, a power of two.
+    pub bucket_count: u32,
+    /// Photons in the map.
+    pub photon_count: u32,
+    /// Padding.
+    pub _pad: [u32; 3],
+}
+
+/// Parameters of the resolve pass. 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ResolveParams {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Eye samples (hit-point slots) per pixel.
+    pub spp: u32,
+    /// Padding.
+    pub _pad: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{align_of, size_of};
+
+    /// Every shared struct is a whole number of 16-byte rows with 4-byte alignment, so that its
+    /// Rust size equals its WGSL stride.
+    #[test]
+    fn layouts_are_whole_rows() {
+        let sizes = [
+            ("HitPoint", size_of::<HitPoint>(), 96),
+            ("Photon", size_of::<Photon>(), 32),
+            ("GpuTriangle", size_of::<GpuTriangle>(), 64),
+            ("BvhNode", size_of::<BvhNode>(), 32),
+            ("GpuMaterial", size_of::<GpuMaterial>(), 32),
+            ("GpuLight", size_of::<GpuLight>(), 64),
+            ("GpuCamera", size_of::<GpuCamera>(), 64),
+            ("EyePassParams", size_of::<EyePassParams>(), 32),
+            ("DirectLightParams", size_of::<DirectLightParams>(), 16),
+            ("PhotonPassParams", size_of::<PhotonPassParams>(), 32),
+            ("GatherParams", size_of::<GatherParams>(), 16),
+            ("GridParams", size_of::<GridParams>(), 48),
+            ("ResolveParams", size_of::<ResolveParams>(), 16),
+        ];
+        for (name, size, expected) in sizes {
+            assert_eq!(size, expected, "{name}");
+            assert_eq!(size % 16, 0, "{name}");
+        }
+        assert_eq!(align_of::<HitPoint>(), 4);
+        assert_eq!(std::mem::offset_of!(HitPoint, r2), 44);
+        assert_eq!(std::mem::offset_of!(HitPoint, tau), 64);
+    }
+}

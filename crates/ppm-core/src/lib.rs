@@ -1,0 +1,23 @@
+//! The contract of progressive photon mapping with compensation photons: what every backend
+//! shares and nothing that executes.
+//!
+//! - [`passes`]: one trait per pass, implemented by each backend.
+//! - [`layout`]: the `#[repr(C)]` buffer elements, byte-for-byte what the GPU binds.
+//! - [`update`]: the progressive update formulas in their stable forms.
+//! - [`rng`], [`sampling`], [`geometry`]: math that exists once here and once in WGSL.
+//! - [`scene`], [`compile`]: the scene model, its file format, and its flattening into buffers.
+//! - [`grid`]: the photon hash grid's cell and bucket mapping.
+//! - [`params`], [`image`]: render settings and the image with its error metrics.
+
+pub mod check;
+pub mod compile;
+pub mod geometry;
+pub mod grid;
+pub mod image;
+pub mod layout;
+pub mod params;
+pub mod passes;
+pub mod rng;
+pub mod sampling;
+pub mod scene;
+pub mod update;

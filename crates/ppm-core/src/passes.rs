@@ -1,0 +1,137 @@
+//! The pass contract every backend implements (ALGORITHM.md section 1).
+//!
+//! One trait per pass, so that a harness, a conformance check or a debugging tool can name
+//! exactly the pass it drives. Each pass takes its `#[repr(C)]` parameter struct from
+//! [`crate::layout`], the same bytes a GPU backend uploads as a uniform, and returns counters.
+//! The dynamic passes of ALGORITHM.md section 2 arrive as further parameter fields (emission
+//! region, which hit points gather, sign of the power) and further traits beside these; the
+//! static passes keep their shape.
+
+use crate::compile::CompiledScene;
+use crate::image::Image;
+use crate::layout::{
+    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ResolveParams,
+};
+use thiserror::Error;
+
+/// Why a pass failed.
+#[derive(Debug, Error)]
+pub enum BackendError {
+    /// A pass produced NaN or infinity: reported instead of carried into the image.
+    #[error("{pass} pass: {field} of hit point {index} (pixel {pixel}) is not finite: {value}")]
+    NonFinite {
+        /// Pass that produced it.
+        pass: &'static str,
+        /// Field name.
+        field: &'static str,
+        /// Hit-point slot.
+        index: usize,
+        /// Pixel of the slot.
+        pixel: u32,
+        /// The value, printed.
+        value: String,
+    },
+    /// A pass was called before what it needs (for example a gather before any photon pass).
+    #[error("{pass} pass called out of order: {needs}")]
+    OutOfOrder {
+        /// Pass called.
+        pass: &'static str,
+        /// What must run first.
+        needs: &'static str,
+    },
+    /// The request does not fit the device (buffer size, memory).
+    #[error("request exceeds a device limit: {0}")]
+    Limit(String),
+    /// The device reported an error.
+    #[error("device error: {0}")]
+    Device(String),
+}
+
+/// Counters of an eye pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct EyeStats {
+    /// Rays traced (camera rays and specular continuations).
+    pub rays: u64,
+    /// Slots that now hold a hit point.
+    pub hit_points: u64,
+}
+
+/// Counters of a direct-light pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct DirectStats {
+    /// Shadow rays traced.
+    pub rays: u64,
+}
+
+/// Counters of a photon pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PhotonStats {
+    /// Photons emitted.
+    pub emitted: u64,
+    /// Deposits stored in the photon map.
+    pub deposited: u64,
+    /// Ray segments traced.
+    pub rays: u64,
+}
+
+/// Counters of a gather pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct GatherStats {
+    /// Hit points that found at least one photon.
+    pub hit_points_reached: u64,
+    /// Photon-to-hit-point contributions summed.
+    pub photons_gathered: u64,
+}
+
+/// Receives the scene's buffers (and rebuilds whatever the backend derives from them).
+pub trait SceneUpload {
+    /// Replaces the scene; hit points and photon map are cleared.
+    fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
+}
+
+/// Eye pass (ALGORITHM.md 1.1): fills the hit-point buffer, `width * height * spp` slots.
+pub trait EyePass {
+    /// Traces the eye paths and writes fresh hit points with `r2 = params.r2_initial`.
+    fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError>;
+}
+
+/// Direct light at every hit point by shadow rays (ALGORITHM.md 1.2).
+pub trait DirectLight {
+    /// Writes each hit point's `direct` field (emission seen plus reflected direct light).
+    fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError>;
+}
+
+/// Photon pass (ALGORITHM.md 1.3): emits, traces and stores this pass's photon map.
+pub trait PhotonPass {
+    /// Replaces the photon map with this pass's deposits, indexed for gathering.
+    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError>;
+}
+
+/// Gather pass (ALGORITHM.md 1.4): folds the current photon map into every hit point.
+pub trait GatherPass {
+    /// Updates `n`, `r2`, `tau` and `emitted` of the hit points; fails on a non-finite result.
+    fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError>;
+}
+
+/// Resolve (ALGORITHM.md 1.5): the image from the hit points.
+pub trait Resolve {
+    /// Averages `throughput * (direct + indirect)` over each pixel's slots.
+    fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError>;
+}
+
+/// Read-back of the buffers a harness compares across backends.
+pub trait ReadBack {
+    /// The hit-point buffer, slot by slot.
+    fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError>;
+    /// The current photon map's deposits, in path order.
+    fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError>;
+}
+
+/// A complete backend: every static pass plus read-back.
+pub trait Backend:
+    SceneUpload + EyePass + DirectLight + PhotonPass + GatherPass + Resolve + ReadBack
+{
+    /// Short name for reports (`cpu`, `wgpu`).
+    fn name(&self) -> &str;
+}

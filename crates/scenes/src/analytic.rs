@@ -1,0 +1,118 @@
+//! Scenes with a closed-form answer, for tests that must be able to fail.
+
+use glam::Vec3;
+use ppm_core::scene::{
+    Camera, Material, MaterialKind, Object, RenderDefaults, Scene, quad_triangles,
+};
+
+/// The furnace: a closed unit-half-size box whose every wall emits `le` (towards the inside)
+/// and reflects diffusely with `albedo`, seen from its centre.
+///
+/// Uniform radiance `L` solves the rendering equation everywhere inside: each point sees only
+/// walls of radiance `L`, so `L = le + albedo * L`, i.e. `L = le / (1 - albedo)`. Of that,
+/// `le` is emission seen, `albedo * le` is direct light (one bounce), and the rest,
+/// `albedo^2 * le / (1 - albedo)`, is what photons carry when direct light is explicit.
+pub fn furnace(albedo: f32, le: f32) -> Scene {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let faces = [
+        [
+            c(-1., -1., -1.),
+            c(1., -1., -1.),
+            c(1., -1., 1.),
+            c(-1., -1., 1.),
+        ],
+        [
+            c(-1., 1., -1.),
+            c(-1., 1., 1.),
+            c(1., 1., 1.),
+            c(1., 1., -1.),
+        ],
+        [
+            c(-1., -1., -1.),
+            c(-1., 1., -1.),
+            c(1., 1., -1.),
+            c(1., -1., -1.),
+        ],
+        [
+            c(-1., -1., 1.),
+            c(1., -1., 1.),
+            c(1., 1., 1.),
+            c(-1., 1., 1.),
+        ],
+        [
+            c(-1., -1., -1.),
+            c(-1., -1., 1.),
+            c(-1., 1., 1.),
+            c(-1., 1., -1.),
+        ],
+        [
+            c(1., -1., -1.),
+            c(1., 1., -1.),
+            c(1., 1., 1.),
+            c(1., -1., 1.),
+        ],
+    ];
+    let triangles = faces
+        .into_iter()
+        .flat_map(quad_triangles)
+        .map(|t| {
+            // Emit towards the centre: flip any triangle whose normal points outwards.
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            if n.dot(t[0]) > 0.0 {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            }
+        })
+        .collect();
+    Scene {
+        name: format!("furnace(albedo={albedo}, le={le})"),
+        camera: Camera {
+            eye: Vec3::ZERO,
+            look_at: Vec3::Z,
+            up: Vec3::Y,
+            fov_deg: 60.0,
+            width: 32,
+            height: 32,
+        },
+        materials: vec![Material {
+            name: "glow".into(),
+            kind: MaterialKind::Light {
+                radiance: Vec3::splat(le),
+                albedo: Vec3::splat(albedo),
+            },
+        }],
+        objects: vec![Object {
+            name: "walls".into(),
+            material: 0,
+            triangles,
+        }],
+        render: RenderDefaults {
+            initial_radius: 0.1,
+            alpha: 0.7,
+            photons_per_pass: 50_000,
+            passes: 16,
+        },
+        moves: Vec::new(),
+    }
+}
+
+/// Radiance everywhere inside [`furnace`].
+pub fn furnace_radiance(albedo: f32, le: f32) -> f32 {
+    le / (1.0 - albedo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn furnace_walls_all_face_the_centre() {
+        let scene = furnace(0.5, 1.0);
+        for t in &scene.objects[0].triangles {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            let centroid = (t[0] + t[1] + t[2]) / 3.0;
+            assert!(n.dot(-centroid) > 0.0);
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! The built-in scenes: the canonical scenes of SCENES.md, shipped as scene files, and small
+//! analytic scenes whose exact answer tests can check.
+
+pub mod analytic;
+
+use ppm_core::scene::{Scene, SceneError, parse_scene};
+use std::path::Path;
+
+/// A built-in scene.
+pub struct BuiltinScene {
+    /// Name on the command line.
+    pub name: &'static str,
+    /// One line on what it is for.
+    pub description: &'static str,
+    build: fn() -> Result<Scene, SceneError>,
+}
+
+impl BuiltinScene {
+    /// Builds the scene (frame 0).
+    pub fn load(&self) -> Result<Scene, SceneError> {
+        (self.build)()
+    }
+}
+
+/// The cornell-box scene file, as shipped.
+pub const CORNELL_BOX_TOML: &str = include_str!("../data/cornell-box.toml");
+
+fn cornell_box() -> Result<Scene, SceneError> {
+    parse_scene(
+        CORNELL_BOX_TOML,
+        "scenes/data/cornell-box.toml",
+        Path::new("."),
+    )
+}
+
+/// Every built-in scene, in the order `ppm scenes` lists them.
+pub const BUILTIN: &[BuiltinScene] = &[
+    BuiltinScene {
+        name: "cornell-box",
+        description: "SCENES.md 1: the measured Cornell box; frame 1 moves the tall block by (40, 0, -100)",
+        build: cornell_box,
+    },
+    BuiltinScene {
+        name: "furnace",
+        description: "closed box whose walls all emit Le = 1 and reflect albedo 0.5: radiance is exactly 2 everywhere",
+        build: || Ok(analytic::furnace(0.5, 1.0)),
+    },
+];
+
+/// The built-in scene called `name`.
+pub fn builtin(name: &str) -> Option<&'static BuiltinScene> {
+    BUILTIN.iter().find(|s| s.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_scene_loads_and_has_a_light() {
+        for s in BUILTIN {
+            let scene = s.load().unwrap_or_else(|e| panic!("{}: {e}", s.name));
+            assert!(scene.triangle_count() > 0, "{}", s.name);
+        }
+    }
+
+    /// SCENES.md: 5 walls + 5 + 5 block quads + the light = 16 quads, 32 triangles; frame 1
+    /// puts the tall block at x 305..512, z 147..356.
+    #[test]
+    fn cornell_box_matches_scenes_md() {
+        let scene = cornell_box().unwrap();
+        assert_eq!(scene.triangle_count(), 32);
+        let tall = scene.object_index("tall-block").unwrap();
+        let moved = scene.at_frame(1);
+        let (mut lo, mut hi) = (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN));
+        for v in moved.objects[tall].triangles.iter().flatten() {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+        assert_eq!((lo.x, hi.x, lo.z, hi.z), (305.0, 512.0, 147.0, 356.0));
+        assert_eq!(scene.at_frame(0), scene);
+    }
+}
