@@ -7,6 +7,7 @@ use harness::render::{Progress, render};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::params::{DirectMode, RenderParams};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
 #[derive(Parser)]
 #[command(
@@ -95,8 +96,18 @@ struct RenderArgs {
     output: PathBuf,
 }
 
-fn main() -> Result<()> {
-    match Cli::parse().command {
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
         Command::Scenes => {
             for s in scenes::BUILTIN {
                 println!("{:<14} {}", s.name, s.description);

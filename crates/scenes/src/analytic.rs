@@ -6,13 +6,13 @@ use ppm_core::scene::{
 };
 
 /// The furnace: a closed unit-half-size box whose every wall emits `le` (towards the inside)
-/// and reflects diffusely with `albedo`, seen from its centre.
+/// and reflects diffusely with `albedo` (per channel), seen from its centre.
 ///
 /// Uniform radiance `L` solves the rendering equation everywhere inside: each point sees only
 /// walls of radiance `L`, so `L = le + albedo * L`, i.e. `L = le / (1 - albedo)`. Of that,
 /// `le` is emission seen, `albedo * le` is direct light (one bounce), and the rest,
 /// `albedo^2 * le / (1 - albedo)`, is what photons carry when direct light is explicit.
-pub fn furnace(albedo: f32, le: f32) -> Scene {
+pub fn furnace(albedo: Vec3, le: f32) -> Scene {
     let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     let faces = [
         [
@@ -66,7 +66,7 @@ pub fn furnace(albedo: f32, le: f32) -> Scene {
         })
         .collect();
     Scene {
-        name: format!("furnace(albedo={albedo}, le={le})"),
+        name: format!("furnace(albedo={albedo:?}, le={le})"),
         camera: Camera {
             eye: Vec3::ZERO,
             look_at: Vec3::Z,
@@ -79,7 +79,7 @@ pub fn furnace(albedo: f32, le: f32) -> Scene {
             name: "glow".into(),
             kind: MaterialKind::Light {
                 radiance: Vec3::splat(le),
-                albedo: Vec3::splat(albedo),
+                albedo,
             },
         }],
         objects: vec![Object {
@@ -97,9 +97,9 @@ pub fn furnace(albedo: f32, le: f32) -> Scene {
     }
 }
 
-/// Radiance everywhere inside [`furnace`].
-pub fn furnace_radiance(albedo: f32, le: f32) -> f32 {
-    le / (1.0 - albedo)
+/// Radiance everywhere inside [`furnace`], per channel.
+pub fn furnace_radiance(albedo: Vec3, le: f32) -> Vec3 {
+    Vec3::splat(le) / (Vec3::ONE - albedo)
 }
 
 #[cfg(test)]
@@ -108,7 +108,7 @@ mod tests {
 
     #[test]
     fn furnace_walls_all_face_the_centre() {
-        let scene = furnace(0.5, 1.0);
+        let scene = furnace(Vec3::splat(0.5), 1.0);
         for t in &scene.objects[0].triangles {
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             let centroid = (t[0] + t[1] + t[2]) / 3.0;

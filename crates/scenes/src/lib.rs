@@ -43,7 +43,7 @@ pub const BUILTIN: &[BuiltinScene] = &[
     BuiltinScene {
         name: "furnace",
         description: "closed box whose walls all emit Le = 1 and reflect albedo 0.5: radiance is exactly 2 everywhere",
-        build: || Ok(analytic::furnace(0.5, 1.0)),
+        build: || Ok(analytic::furnace(glam::Vec3::splat(0.5), 1.0)),
     },
 ];
 

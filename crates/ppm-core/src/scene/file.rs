@@ -216,14 +216,14 @@ impl Converter<'_> {
         if forward.length_squared() == 0.0 {
             return Err(self.err(
                 "camera.look_at",
-                format!("{look_at:?}"),
+                list(look_at),
                 "equals camera.eye: the camera has no view direction",
             ));
         }
         if forward.normalize().cross(up).length_squared() < 1e-12 {
             return Err(self.err(
                 "camera.up",
-                format!("{up:?}"),
+                list(up),
                 "is zero or parallel to the view direction",
             ));
         }
@@ -368,6 +368,13 @@ impl Converter<'_> {
 
     fn load_obj(&self, field: &str, name: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
         let path: PathBuf = self.base.join(name);
+        if !path.is_file() {
+            return Err(self.err(
+                field,
+                format!("\"{name}\""),
+                &format!("no such file: {}", path.display()),
+            ));
+        }
         let options = tobj::LoadOptions {
             triangulate: true,
             single_index: true,
@@ -422,6 +429,11 @@ impl Converter<'_> {
             rotation: euler_degrees(self.vec3(&format!("moves[{i}].rotate"), m.rotate)?),
         })
     }
+}
+
+/// A vector as written in the scene file.
+fn list(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
 /// Rotation from Euler angles in degrees, applied about x, then y, then z.
