@@ -7,8 +7,16 @@ use ppm_core::scene::Scene;
 
 /// Renders `scene` at `frame` on the CPU backend in a pool of `threads` workers; panics on a
 /// pass error, since a test render must not fail.
-pub fn render_cpu(scene: &Scene, frame: u32, params: &RenderParams, threads: usize) -> (RenderOutcome, CpuBackend) {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+pub fn render_cpu(
+    scene: &Scene,
+    frame: u32,
+    params: &RenderParams,
+    threads: usize,
+) -> (RenderOutcome, CpuBackend) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
     let mut backend = CpuBackend::new();
     let outcome = pool
         .install(|| render(&mut backend, scene, frame, params, &mut |_| {}))

@@ -30,14 +30,25 @@ fn red_wall_left_green_wall_right_and_colour_bleeds_onto_the_ceiling() {
     assert!(image.is_finite());
     let left = region(&image, 0.04, 0.12, 0.35, 0.65);
     let right = region(&image, 0.88, 0.96, 0.35, 0.65);
-    assert!(left[0] > 3.0 * left[1] && left[0] > 3.0 * left[2], "left wall not red: {left:?}");
-    assert!(right[1] > 1.5 * right[0] && right[1] > 1.5 * right[2], "right wall not green: {right:?}");
+    assert!(
+        left[0] > 3.0 * left[1] && left[0] > 3.0 * left[2],
+        "left wall not red: {left:?}"
+    );
+    assert!(
+        right[1] > 1.5 * right[0] && right[1] > 1.5 * right[2],
+        "right wall not green: {right:?}"
+    );
     // The ceiling sees no direct light (the light faces down): everything on it came by
     // photons from the walls, so its corner by the red wall is redder than by the green one.
     let ceiling_left = region(&image, 0.12, 0.25, 0.03, 0.09);
     let ceiling_right = region(&image, 0.75, 0.88, 0.03, 0.09);
-    assert!(ceiling_left.iter().all(|&c| c > 0.0), "ceiling black: {ceiling_left:?}");
-    println!("walls {left:?} {right:?}; ceiling by red {ceiling_left:?}, by green {ceiling_right:?}");
+    assert!(
+        ceiling_left.iter().all(|&c| c > 0.0),
+        "ceiling black: {ceiling_left:?}"
+    );
+    println!(
+        "walls {left:?} {right:?}; ceiling by red {ceiling_left:?}, by green {ceiling_right:?}"
+    );
     let red_ratio = |c: [f64; 3]| c[0] / c[1];
     assert!(
         red_ratio(ceiling_left) > 1.2 * red_ratio(ceiling_right),
@@ -59,9 +70,18 @@ fn shadows_are_soft() {
     let y = (0.97 * SIZE as f32) as u32;
     let row: Vec<f32> = (0..SIZE).map(|x| luminance(image.at(x, y))).collect();
     let lit = row.iter().copied().fold(0.0f32, f32::max);
-    let dark = row[(SIZE / 5) as usize..(4 * SIZE / 5) as usize].iter().copied().fold(f32::MAX, f32::min);
+    let dark = row[(SIZE / 5) as usize..(4 * SIZE / 5) as usize]
+        .iter()
+        .copied()
+        .fold(f32::MAX, f32::min);
     assert!(dark < 0.3 * lit, "no shadow on the floor row: {row:?}");
-    let penumbra = row.iter().filter(|&&l| l > dark + 0.2 * (lit - dark) && l < dark + 0.8 * (lit - dark)).count();
+    let penumbra = row
+        .iter()
+        .filter(|&&l| l > dark + 0.2 * (lit - dark) && l < dark + 0.8 * (lit - dark))
+        .count();
     println!("floor row: lit {lit}, dark {dark}, {penumbra} penumbra pixels");
-    assert!(penumbra >= 4, "shadow edge is hard ({penumbra} pixels between): {row:?}");
+    assert!(
+        penumbra >= 4,
+        "shadow edge is hard ({penumbra} pixels between): {row:?}"
+    );
 }

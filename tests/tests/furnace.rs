@@ -44,7 +44,10 @@ fn converges(direct: DirectMode) {
         let (outcome, _) = render_cpu(&scene, 0, &params(&scene, direct, passes), 2);
         let (mean_err, rel_rmse) = errors(&outcome.image, truth);
         println!("{direct:?} passes {passes}: mean error {mean_err}, relative RMSE {rel_rmse:.4}");
-        assert!(rel_rmse < last_rmse, "error did not fall: {rel_rmse} after {last_rmse}");
+        assert!(
+            rel_rmse < last_rmse,
+            "error did not fall: {rel_rmse} after {last_rmse}"
+        );
         last_rmse = rel_rmse;
         if passes == 32 {
             // 640,000 photons over 24 unit-area walls: the image mean averages 1,024 pixels,

@@ -38,7 +38,9 @@ fn deposited_per_photon(albedo: Vec3, mode: u32, photons: u32) -> (Vec3, Vec3) {
         .unwrap();
     let deposits = backend.read_photons().unwrap();
     assert_eq!(stats.deposited as usize, deposits.len());
-    let total = deposits.iter().fold(Vec3::ZERO, |a, p| a + Vec3::from(p.power));
+    let total = deposits
+        .iter()
+        .fold(Vec3::ZERO, |a, p| a + Vec3::from(p.power));
     (total / photons as f32, compiled.light_power)
 }
 

@@ -15,7 +15,13 @@ fn main() {
     println!("cornell-box on the CPU backend, {threads} threads, 8 passes x 200,000 photons");
     println!(
         "{:>9} {:>13} {:>15} {:>13} {:>15} {:>15} {:>15}",
-        "size", "photons/s", "photon rays/s", "eye rays/s", "shadow rays/s", "photon ms/pass", "gather ms/pass"
+        "size",
+        "photons/s",
+        "photon rays/s",
+        "eye rays/s",
+        "shadow rays/s",
+        "photon ms/pass",
+        "gather ms/pass"
     );
     for size in [256, 768] {
         let mut params = RenderParams::for_scene(&scene);
@@ -23,7 +29,8 @@ fn main() {
         params.height = size;
         params.passes = 8;
         params.photons_per_pass = 200_000;
-        let outcome = render(&mut CpuBackend::new(), &scene, 0, &params, &mut |_| {}).expect("render");
+        let outcome =
+            render(&mut CpuBackend::new(), &scene, 0, &params, &mut |_| {}).expect("render");
         let r = &outcome.report;
         let t = &r.times;
         let passes = f64::from(r.passes);

@@ -35,8 +35,18 @@ fn render_writes_exr_png_and_a_report() {
     let dir = scratch("render");
     let exr = dir.join("cb.exr");
     let out = ppm(&[
-        "render", "cornell-box", "--width", "24", "--height", "20", "--passes", "2",
-        "--photons-per-pass", "5000", "-o", exr.to_str().unwrap(),
+        "render",
+        "cornell-box",
+        "--width",
+        "24",
+        "--height",
+        "20",
+        "--passes",
+        "2",
+        "--photons-per-pass",
+        "5000",
+        "-o",
+        exr.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(exr.is_file() && dir.join("cb.png").is_file());
@@ -50,7 +60,14 @@ fn render_writes_exr_png_and_a_report() {
 
 #[test]
 fn bad_alpha_is_refused_with_option_and_value() {
-    let out = ppm(&["render", "cornell-box", "--alpha", "1.5", "-o", "unused.exr"]);
+    let out = ppm(&[
+        "render",
+        "cornell-box",
+        "--alpha",
+        "1.5",
+        "-o",
+        "unused.exr",
+    ]);
     assert!(!out.status.success());
     insta::assert_snapshot!(stderr(&out).trim_end());
 }
@@ -73,11 +90,22 @@ fn output_must_be_exr() {
 fn bad_scene_file_is_named_in_the_error() {
     let dir = scratch("bad-scene");
     let file = dir.join("bad.toml");
-    let text = scenes::CORNELL_BOX_TOML.replace("red = { type = \"diffuse\", albedo = [0.63,", "red = { type = \"diffuse\", albedo = [1.63,");
+    let text = scenes::CORNELL_BOX_TOML.replace(
+        "red = { type = \"diffuse\", albedo = [0.63,",
+        "red = { type = \"diffuse\", albedo = [1.63,",
+    );
     std::fs::write(&file, text).unwrap();
-    let out = ppm(&["render", file.to_str().unwrap(), "-o", dir.join("x.exr").to_str().unwrap()]);
+    let out = ppm(&[
+        "render",
+        file.to_str().unwrap(),
+        "-o",
+        dir.join("x.exr").to_str().unwrap(),
+    ]);
     std::fs::remove_dir_all(&dir).ok();
     assert!(!out.status.success());
     let err = stderr(&out);
-    assert!(err.contains("bad.toml: materials.red.albedo[0] = 1.63: above 1"), "{err}");
+    assert!(
+        err.contains("bad.toml: materials.red.albedo[0] = 1.63: above 1"),
+        "{err}"
+    );
 }

@@ -48,11 +48,19 @@ fn obj_meshes_load_scaled_and_translated_and_moves_apply_in_frame_one() {
 
     let mesh = &scene.objects[scene.object_index("mesh").unwrap()];
     assert_eq!(mesh.triangles.len(), 4);
-    let max = mesh.triangles.iter().flatten().fold(Vec3::MIN, |a, v| a.max(*v));
+    let max = mesh
+        .triangles
+        .iter()
+        .flatten()
+        .fold(Vec3::MIN, |a, v| a.max(*v));
     assert_eq!(max, Vec3::new(12.0, 2.0, 2.0));
     let moved = scene.at_frame(1);
     let moved_mesh = &moved.objects[scene.object_index("mesh").unwrap()];
-    let moved_max = moved_mesh.triangles.iter().flatten().fold(Vec3::MIN, |a, v| a.max(*v));
+    let moved_max = moved_mesh
+        .triangles
+        .iter()
+        .flatten()
+        .fold(Vec3::MIN, |a, v| a.max(*v));
     assert_eq!(moved_max, Vec3::new(12.0, 2.0, 6.0));
     assert_eq!(moved.objects[1], scene.objects[1], "the lamp does not move");
 }
@@ -60,5 +68,9 @@ fn obj_meshes_load_scaled_and_translated_and_moves_apply_in_frame_one() {
 #[test]
 fn unreadable_scene_file_names_the_file() {
     let err = load_scene_file(std::path::Path::new("no/such/scene.toml")).unwrap_err();
-    assert!(err.to_string().starts_with("no/such/scene.toml: cannot read"), "{err}");
+    assert!(
+        err.to_string()
+            .starts_with("no/such/scene.toml: cannot read"),
+        "{err}"
+    );
 }

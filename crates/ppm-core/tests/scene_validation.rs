@@ -46,7 +46,9 @@ fn error_for(from: &str, to: &str) -> String {
 fn the_probe_scene_is_valid() {
     let scene = parse_scene(VALID, "probe.toml", Path::new(".")).unwrap();
     assert_eq!(scene.triangle_count(), 4);
-    RenderParams::for_scene(&scene).validate("probe.toml").unwrap();
+    RenderParams::for_scene(&scene)
+        .validate("probe.toml")
+        .unwrap();
 }
 
 #[test]
@@ -61,17 +63,26 @@ fn infinite_camera_position() {
 
 #[test]
 fn negative_albedo() {
-    insta::assert_snapshot!(error_for("albedo = [0.5, 0.5, 0.5]", "albedo = [0.5, -0.1, 0.5]"));
+    insta::assert_snapshot!(error_for(
+        "albedo = [0.5, 0.5, 0.5]",
+        "albedo = [0.5, -0.1, 0.5]"
+    ));
 }
 
 #[test]
 fn albedo_above_one() {
-    insta::assert_snapshot!(error_for("albedo = [0.5, 0.5, 0.5]", "albedo = [0.5, 1.3, 0.5]"));
+    insta::assert_snapshot!(error_for(
+        "albedo = [0.5, 0.5, 0.5]",
+        "albedo = [0.5, 1.3, 0.5]"
+    ));
 }
 
 #[test]
 fn negative_radiance() {
-    insta::assert_snapshot!(error_for("radiance = [1.0, 1.0, 1.0]", "radiance = [1.0, 1.0, -2.0]"));
+    insta::assert_snapshot!(error_for(
+        "radiance = [1.0, 1.0, 1.0]",
+        "radiance = [1.0, 1.0, -2.0]"
+    ));
 }
 
 #[test]
@@ -84,7 +95,10 @@ fn zero_area_light() {
 
 #[test]
 fn camera_looking_at_itself() {
-    insta::assert_snapshot!(error_for("look_at = [0.0, 0.0, 0.0]", "look_at = [0.0, 5.0, 0.0]"));
+    insta::assert_snapshot!(error_for(
+        "look_at = [0.0, 0.0, 0.0]",
+        "look_at = [0.0, 5.0, 0.0]"
+    ));
 }
 
 #[test]
@@ -155,7 +169,10 @@ fn move_of_unknown_object() {
 
 #[test]
 fn alpha_out_of_range() {
-    insta::assert_snapshot!(error_for("[materials]", "[render]\nalpha = 1.5\n\n[materials]"));
+    insta::assert_snapshot!(error_for(
+        "[materials]",
+        "[render]\nalpha = 1.5\n\n[materials]"
+    ));
 }
 
 #[test]
