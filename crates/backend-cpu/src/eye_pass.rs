@@ -4,7 +4,7 @@
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::compile::camera_ray;
-use ppm_core::geometry::{fresnel_refract, reflect};
+use ppm_core::geometry::specular_bounce;
 use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, hit_flags, material_kind};
 use ppm_core::passes::EyeStats;
 use ppm_core::rng::{PassKind, StreamKey};
@@ -83,28 +83,13 @@ fn trace_eye_path(
                 };
                 return u64::from(depth) + 1;
             }
-            material_kind::MIRROR => {
-                throughput *= Vec3::from(material.albedo);
-                dir = reflect(dir, facing);
-                origin = position + facing * params.ray_epsilon;
-            }
             _ => {
-                let eta = if front {
-                    1.0 / material.ior
-                } else {
-                    material.ior
-                };
-                let (fresnel, refracted) = fresnel_refract(dir, facing, eta);
-                match refracted {
-                    Some(t) if key.uniform(DIM_GLASS + depth) >= fresnel => {
-                        dir = t;
-                        origin = position - facing * params.ray_epsilon;
-                    }
-                    _ => {
-                        dir = reflect(dir, facing);
-                        origin = position + facing * params.ray_epsilon;
-                    }
-                }
+                let bounce =
+                    specular_bounce(material, dir, facing, front, key.uniform(DIM_GLASS + depth));
+                throughput *= bounce.weight;
+                dir = bounce.dir;
+                let side = if bounce.transmitted { -facing } else { facing };
+                origin = position + side * params.ray_epsilon;
             }
         }
     }

@@ -3,7 +3,7 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::geometry::{fresnel_refract, oct_encode, reflect, to_world};
+use ppm_core::geometry::{oct_encode, specular_bounce, to_world};
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::{PassKind, StreamKey};
@@ -114,29 +114,13 @@ fn trace_photon(
                 );
                 origin = position + facing * params.ray_epsilon;
             }
-            material_kind::MIRROR => {
-                power *= Vec3::from(material.albedo);
-                dir = reflect(dir, facing);
-                origin = position + facing * params.ray_epsilon;
-            }
             _ => {
-                let front = facing == normal;
-                let eta = if front {
-                    1.0 / material.ior
-                } else {
-                    material.ior
-                };
-                let (fresnel, refracted) = fresnel_refract(dir, facing, eta);
-                match refracted {
-                    Some(t) if key.uniform(d) >= fresnel => {
-                        dir = t;
-                        origin = position - facing * params.ray_epsilon;
-                    }
-                    _ => {
-                        dir = reflect(dir, facing);
-                        origin = position + facing * params.ray_epsilon;
-                    }
-                }
+                let bounce =
+                    specular_bounce(material, dir, facing, facing == normal, key.uniform(d));
+                power *= bounce.weight;
+                dir = bounce.dir;
+                let side = if bounce.transmitted { -facing } else { facing };
+                origin = position + side * params.ray_epsilon;
             }
         }
     }

@@ -1,7 +1,7 @@
 //! Ray geometry shared by every pass: triangle intersection, local frames, specular directions
 //! and the packed normal of a photon record.
 
-use crate::layout::GpuTriangle;
+use crate::layout::{GpuMaterial, GpuTriangle, material_kind};
 use glam::Vec3;
 
 /// Distance along `dir` to the triangle, or `f32::INFINITY` on a miss (Moller-Trumbore).
@@ -79,6 +79,52 @@ pub fn fresnel_refract(d: Vec3, n: Vec3, eta: f32) -> (f32, Option<Vec3>) {
     let f = 0.5 * (r_s * r_s + r_p * r_p);
     let t = d * eta + n * (eta * cos_i - cos_t);
     (f.clamp(0.0, 1.0), Some(t.normalize()))
+}
+
+/// How a path continues from a mirror or glass surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpecularBounce {
+    /// New unit direction.
+    pub dir: Vec3,
+    /// The path passed through the surface (refraction): the next origin goes to the far side.
+    pub transmitted: bool,
+    /// Factor on the path's throughput or power.
+    pub weight: Vec3,
+}
+
+/// Continues a path at a specular surface: mirrors reflect with their reflectance; glass
+/// reflects with probability equal to the Fresnel term, else refracts, weight unchanged
+/// (ALGORITHM.md 1.1). `facing` is the normal on the incident side, `front` whether that is the
+/// triangle's own normal (the path is entering), `u` the uniform number that picks for glass.
+#[inline]
+pub fn specular_bounce(
+    material: &GpuMaterial,
+    dir: Vec3,
+    facing: Vec3,
+    front: bool,
+    u: f32,
+) -> SpecularBounce {
+    let reflected = |weight| SpecularBounce {
+        dir: reflect(dir, facing),
+        transmitted: false,
+        weight,
+    };
+    if material.kind == material_kind::MIRROR {
+        return reflected(Vec3::from(material.albedo));
+    }
+    let eta = if front {
+        1.0 / material.ior
+    } else {
+        material.ior
+    };
+    match fresnel_refract(dir, facing, eta) {
+        (fresnel, Some(t)) if u >= fresnel => SpecularBounce {
+            dir: t,
+            transmitted: true,
+            weight: Vec3::ONE,
+        },
+        _ => reflected(Vec3::ONE),
+    }
 }
 
 /// Packs a unit vector into 16+16 bits by the octahedral map (Cigolle et al. 2014).

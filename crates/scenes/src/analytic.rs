@@ -97,6 +97,46 @@ pub fn furnace(albedo: Vec3, le: f32) -> Scene {
     }
 }
 
+/// The furnace with a lossless mirror for its +z wall and a glass cube (ior 1.5, half-size 0.3)
+/// at its centre, seen from `(0, 0, -0.8)`.
+///
+/// Neither a perfect mirror nor a smooth dielectric absorbs, so uniform radiance still solves
+/// the rendering equation: every pixel, seen directly, in the mirror or through the glass, is
+/// `le / (1 - albedo)` as in [`furnace`]. This pins the specular paths of eye and photon passes
+/// (caustic photons included) to a closed form.
+pub fn specular_furnace(albedo: Vec3, le: f32) -> Scene {
+    let mut scene = furnace(albedo, le);
+    scene.name = format!("specular-furnace(albedo={albedo:?}, le={le})");
+    let walls = std::mem::take(&mut scene.objects[0].triangles);
+    let (mirror, emitting): (Vec<_>, Vec<_>) = walls
+        .into_iter()
+        .partition(|t| t.iter().all(|v| v.z == 1.0));
+    scene.objects[0].triangles = emitting;
+    scene.materials.push(Material {
+        name: "mirror".into(),
+        kind: MaterialKind::Mirror {
+            reflectance: Vec3::ONE,
+        },
+    });
+    scene.materials.push(Material {
+        name: "glass".into(),
+        kind: MaterialKind::Glass { ior: 1.5 },
+    });
+    scene.objects.push(Object {
+        name: "mirror".into(),
+        material: 1,
+        triangles: mirror,
+    });
+    let cube = furnace(albedo, le).objects.remove(0).triangles;
+    scene.objects.push(Object {
+        name: "glass-cube".into(),
+        material: 2,
+        triangles: cube.into_iter().map(|t| t.map(|v| v * 0.3)).collect(),
+    });
+    scene.camera.eye = Vec3::new(0.0, 0.0, -0.8);
+    scene
+}
+
 /// Radiance everywhere inside [`furnace`], per channel.
 pub fn furnace_radiance(albedo: Vec3, le: f32) -> Vec3 {
     Vec3::splat(le) / (Vec3::ONE - albedo)
