@@ -2,10 +2,12 @@
 
 use anyhow::{Context, Result, bail};
 use backend_cpu::CpuBackend;
+use backend_wgpu::WgpuBackend;
 use clap::{Parser, Subcommand, ValueEnum};
 use harness::render::{Progress, render};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::params::{DirectMode, RenderParams};
+use ppm_core::passes::Backend;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -32,6 +34,8 @@ enum Command {
 enum BackendChoice {
     /// rayon on this machine's cores.
     Cpu,
+    /// WGSL compute shaders on the best wgpu adapter (a GPU, or lavapipe on the CPU).
+    Wgpu,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -153,12 +157,17 @@ fn run_render(args: RenderArgs) -> Result<()> {
         .build()
         .context("cannot start the worker threads")?;
     let bar = progress_bar(&params);
-    let mut backend = match args.backend {
-        BackendChoice::Cpu => CpuBackend::new(),
+    let mut backend: Box<dyn Backend + Send> = match args.backend {
+        BackendChoice::Cpu => Box::new(CpuBackend::new()),
+        BackendChoice::Wgpu => {
+            let b = WgpuBackend::new().context("the wgpu backend cannot start")?;
+            eprintln!("wgpu adapter: {}", b.adapter_name());
+            Box::new(b)
+        }
     };
     let outcome = pool.install(|| {
         render(
-            &mut backend,
+            backend.as_mut(),
             &scene,
             args.frame,
             &params,

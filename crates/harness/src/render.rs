@@ -72,7 +72,8 @@ pub fn render(
         frame,
         r2_initial: params.initial_radius * params.initial_radius,
         ray_epsilon,
-        _pad: [0; 2],
+        _pad0: 0,
+        _pad1: 0,
     })?;
     times.eye = t.elapsed().as_secs_f64();
     report.hit_points = eye.hit_points;
@@ -107,7 +108,7 @@ pub fn render(
         width: params.width,
         height: params.height,
         spp: params.spp,
-        _pad: 0,
+        _pad0: 0,
     })?;
     times.resolve = t.elapsed().as_secs_f64();
     for p in image.pixels.iter_mut().flatten().filter(|v| !v.is_finite()) {
@@ -152,7 +153,7 @@ fn photon_loop(
             },
             ray_epsilon,
             power_scale: 1.0,
-            _pad: 0,
+            _pad0: 0,
         })?;
         times.photon += t.elapsed().as_secs_f64();
         report.photons_emitted += photons.emitted;
@@ -163,7 +164,8 @@ fn photon_loop(
         let gathered = backend.gather_pass(&GatherParams {
             alpha: params.alpha,
             emitted_increment: params.photons_per_pass as f32,
-            _pad: [0; 2],
+            _pad0: 0,
+            _pad1: 0,
         })?;
         times.gather += t.elapsed().as_secs_f64();
         report.photons_gathered += gathered.photons_gathered;

@@ -50,6 +50,8 @@ pub struct CompiledScene {
     pub light_power: Vec3,
     /// Time obvhs spent building the BVH.
     pub bvh_build_time: Duration,
+    /// Levels of the deepest leaf (the root is level 1): bounds a traversal stack.
+    pub bvh_depth: usize,
 }
 
 /// Flattens `scene` for an image of `width` x `height`.
@@ -101,7 +103,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         triangles.push(gpu);
     }
     let light_power = assign_light_distribution(&mut lights, &materials);
-    let nodes = bvh
+    let nodes: Vec<BvhNode> = bvh
         .nodes
         .iter()
         .map(|n| BvhNode {
@@ -111,6 +113,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             count: n.prim_count,
         })
         .collect();
+    let bvh_depth = tree_depth(&nodes);
     let (lo, hi) = bounds(&triangles);
     CompiledScene {
         camera: gpu_camera(scene, width, height),
@@ -133,7 +136,23 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         extent: (hi - lo).length(),
         light_power,
         bvh_build_time,
+        bvh_depth,
     }
+}
+
+/// Depth of the flattened tree, walked iteratively (the deepest tree must not overflow this).
+fn tree_depth(nodes: &[BvhNode]) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((i, depth)) = stack.pop() {
+        let Some(node) = nodes.get(i) else { continue };
+        deepest = deepest.max(depth);
+        if node.count == 0 {
+            stack.push((node.first as usize, depth + 1));
+            stack.push((node.first as usize + 1, depth + 1));
+        }
+    }
+    deepest
 }
 
 /// Selects lights in proportion to their power, and returns the total power.
@@ -197,7 +216,7 @@ fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
         e2: e2.into(),
         light: NO_MATERIAL,
         normal: e1.cross(e2).normalize_or_zero().into(),
-        _pad: 0,
+        _pad0: 0,
     }
 }
 

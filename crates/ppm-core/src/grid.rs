@@ -25,7 +25,9 @@ pub fn grid_params(lo: Vec3, hi: Vec3, max_r2: f32, photon_count: u32) -> GridPa
         dims: [dims.x as u32, dims.y as u32, dims.z as u32],
         bucket_count: photon_count.max(1).next_power_of_two().min(1 << 26),
         photon_count,
-        _pad: [0; 3],
+        _pad0: 0,
+        _pad1: 0,
+        _pad2: 0,
     }
 }
 

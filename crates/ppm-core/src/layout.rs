@@ -118,7 +118,7 @@ pub struct GpuTriangle {
     /// Unit geometric normal, `normalize(e1 x e2)`; zero for a degenerate triangle.
     pub normal: [f32; 3],
     /// Padding to 16 bytes.
-    pub _pad: u32,
+    pub _pad0: u32,
 }
 
 /// A node of the binary BVH built by obvhs, flattened for traversal on any backend.
@@ -213,7 +213,9 @@ pub struct EyePassParams {
     /// Offset along the normal for new ray origins, against self-intersection.
     pub ray_epsilon: f32,
     /// Padding.
-    pub _pad: [u32; 2],
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
 }
 
 /// Parameters of the direct-light pass. 16 bytes.
@@ -257,7 +259,7 @@ pub struct PhotonPassParams {
     /// Multiplies every emitted photon's power (1 for ordinary photons).
     pub power_scale: f32,
     /// Padding.
-    pub _pad: u32,
+    pub _pad0: u32,
 }
 
 /// Parameters of one gather pass. 16 bytes.
@@ -269,7 +271,9 @@ pub struct GatherParams {
     /// Photons this pass adds to each gathering hit point's `emitted`.
     pub emitted_increment: f32,
     /// Padding.
-    pub _pad: [u32; 2],
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
 }
 
 /// The uniform hash grid that indexes one pass's photons. 48 bytes.
@@ -292,7 +296,11 @@ pub struct GridParams {
     /// Photons in the map.
     pub photon_count: u32,
     /// Padding.
-    pub _pad: [u32; 3],
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
 
 /// Parameters of the resolve pass. 16 bytes.
@@ -306,7 +314,7 @@ pub struct ResolveParams {
     /// Eye samples (hit-point slots) per pixel.
     pub spp: u32,
     /// Padding.
-    pub _pad: u32,
+    pub _pad0: u32,
 }
 
 #[cfg(test)]

@@ -1,0 +1,61 @@
+// #import layout rng sampling geometry bvh lights
+// Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs.
+
+@group(0) @binding(0) var<uniform> params: DirectLightParams;
+@group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
+@group(0) @binding(2) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(3) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
+
+const DIMS_PER_SAMPLE: u32 = 3u;
+
+fn estimate_irradiance(hp: HitPoint, key: StreamKey) -> vec3<f32> {
+    let origin = hp.position + hp.normal * params.ray_epsilon;
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < params.samples; s++) {
+        let d0 = s * DIMS_PER_SAMPLE;
+        let light = lights[sample_light(stream_uniform(key, d0))];
+        let b = uniform_triangle(stream_uniform(key, d0 + 1u), stream_uniform(key, d0 + 2u));
+        let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
+        let to_light = y - origin;
+        let dist2 = dot(to_light, to_light);
+        if dist2 <= 0.0 {
+            continue;
+        }
+        let dist = sqrt(dist2);
+        let w = to_light / dist;
+        let cos_x = dot(hp.normal, w);
+        let cos_l = -dot(light.normal, w);
+        if cos_x <= 0.0 || cos_l <= 0.0 {
+            continue;
+        }
+        if occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
+            continue;
+        }
+        let le = materials[light.material].emission;
+        sum += le * (cos_x * cos_l / dist2 * (light.area / light.pdf));
+    }
+    return sum / f32(params.samples);
+}
+
+@compute @workgroup_size(64)
+fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = item_index(gid, groups);
+    if slot >= arrayLength(&hit_points) {
+        return;
+    }
+    var hp = hit_points[slot];
+    if (hp.flags & HIT_VALID) == 0u {
+        return;
+    }
+    let material = materials[hp.material];
+    var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
+    if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && arrayLength(&lights) > 0u {
+        let key = StreamKey(params.seed, PASS_DIRECT_LIGHT, params.frame, slot);
+        direct += estimate_irradiance(hp, key) * material.albedo * (1.0 / PI);
+    }
+    hit_points[slot].direct = direct;
+    atomicAdd(&counters[COUNTER_RAYS], params.samples);
+}

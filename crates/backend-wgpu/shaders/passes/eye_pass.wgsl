@@ -1,0 +1,73 @@
+// #import layout rng sampling geometry bvh
+// Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs.
+
+@group(0) @binding(0) var<uniform> params: EyePassParams;
+@group(0) @binding(1) var<uniform> camera: GpuCamera;
+@group(0) @binding(2) var<storage, read> triangles: array<GpuTriangle>;
+@group(0) @binding(3) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
+
+const DIM_GLASS: u32 = 2u;
+
+fn empty_hit_point(pixel: u32) -> HitPoint {
+    var hp: HitPoint;
+    hp.pixel = pixel;
+    hp.material = NO_MATERIAL;
+    return hp;
+}
+
+@compute @workgroup_size(64)
+fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = item_index(gid, groups);
+    if slot >= arrayLength(&hit_points) {
+        return;
+    }
+    let pixel = slot / params.spp;
+    let key = StreamKey(params.seed, PASS_EYE, params.frame, slot);
+    var jitter = vec2<f32>(0.5);
+    if params.spp != 1u {
+        jitter = vec2<f32>(stream_uniform(key, 0u), stream_uniform(key, 1u));
+    }
+    let px = f32(pixel % camera.width) + jitter.x;
+    let py = f32(pixel / camera.width) + jitter.y;
+    var dir = camera_ray(camera, px, py);
+    var origin = camera.eye;
+    var throughput = vec3<f32>(1.0);
+    var out = empty_hit_point(pixel);
+    var rays = params.max_depth + 1u;
+    for (var depth = 0u; depth <= params.max_depth; depth++) {
+        let hit = closest_hit(origin, dir, T_MISS);
+        if hit.triangle == 0xffffffffu {
+            rays = depth + 1u;
+            break;
+        }
+        let tri = triangles[hit.triangle];
+        let material = materials[tri.material];
+        let position = origin + dir * hit.t;
+        let front = dot(dir, tri.normal) < 0.0;
+        let facing = select(-tri.normal, tri.normal, front);
+        if material.kind == MATERIAL_DIFFUSE {
+            out.position = position;
+            out.normal = facing;
+            out.material = tri.material;
+            out.wo = -dir;
+            out.r2 = params.r2_initial;
+            out.throughput = throughput;
+            out.flags = HIT_VALID | select(0u, HIT_FRONT, front);
+            rays = depth + 1u;
+            break;
+        }
+        let bounce = specular_bounce(material, dir, facing, front, stream_uniform(key, DIM_GLASS + depth));
+        throughput *= bounce.weight;
+        dir = bounce.dir;
+        let side = select(facing, -facing, bounce.transmitted);
+        origin = position + side * params.ray_epsilon;
+    }
+    hit_points[slot] = out;
+    atomicAdd(&counters[COUNTER_RAYS], rays);
+    if (out.flags & HIT_VALID) != 0u {
+        atomicAdd(&counters[COUNTER_ITEMS], 1u);
+    }
+}

@@ -1,0 +1,91 @@
+// #import layout rng sampling geometry bvh lights
+// Photon pass (ALGORITHM.md 1.3): the twin of backend-cpu's photon_pass.rs.
+//
+// Deposits land in path order, as on the CPU, without float atomics or an unordered append:
+// `photon_count_main` traces every path and stores its deposit count, an exclusive scan turns
+// the counts into offsets, and `photon_write_main` traces the same paths again (the generator
+// is counter-based, so they are identical) and writes each deposit at its path's offset.
+
+@group(0) @binding(0) var<uniform> params: PhotonPassParams;
+@group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
+@group(0) @binding(2) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(3) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(5) var<storage, read_write> path_offsets: array<u32>;
+@group(0) @binding(6) var<storage, read_write> photons: array<Photon>;
+@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
+
+const DIM_LIGHT: u32 = 0u;
+const DIM_BOUNCE: u32 = 5u;
+const DIMS_PER_BOUNCE: u32 = 3u;
+
+// Traces path `path`; writes its deposits from `photons[base]` on when `write` is set.
+// Returns (deposits, rays).
+fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
+    let key = StreamKey(params.seed, PASS_PHOTON, params.pass_index, path);
+    let light = lights[sample_light(stream_uniform(key, DIM_LIGHT))];
+    let b = uniform_triangle(stream_uniform(key, DIM_LIGHT + 1u), stream_uniform(key, DIM_LIGHT + 2u));
+    let start = light.v0 + light.e1 * b.x + light.e2 * b.y;
+    var dir = to_world(cosine_hemisphere(stream_uniform(key, DIM_LIGHT + 3u), stream_uniform(key, DIM_LIGHT + 4u)), light.normal);
+    var origin = start + light.normal * params.ray_epsilon;
+    let le = materials[light.material].emission;
+    var power = le * (PI * light.area / light.pdf * params.power_scale);
+    var deposits = 0u;
+    var rays = 0u;
+    for (var bounce = 0u; bounce < params.max_depth; bounce++) {
+        rays++;
+        let hit = closest_hit(origin, dir, T_MISS);
+        if hit.triangle == 0xffffffffu {
+            break;
+        }
+        let tri = triangles[hit.triangle];
+        let material = materials[tri.material];
+        let position = origin + dir * hit.t;
+        let front = dot(dir, tri.normal) < 0.0;
+        let facing = select(-tri.normal, tri.normal, front);
+        let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
+        if material.kind == MATERIAL_DIFFUSE {
+            if bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT {
+                if write {
+                    photons[base + deposits] = Photon(position, path, power, oct_encode(facing));
+                }
+                deposits++;
+            }
+            let survive = max(material.albedo.x, max(material.albedo.y, material.albedo.z));
+            if stream_uniform(key, d) >= survive {
+                break;
+            }
+            power *= material.albedo / survive;
+            dir = to_world(cosine_hemisphere(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u)), facing);
+            origin = position + facing * params.ray_epsilon;
+        } else {
+            let sb = specular_bounce(material, dir, facing, front, stream_uniform(key, d));
+            power *= sb.weight;
+            dir = sb.dir;
+            let side = select(facing, -facing, sb.transmitted);
+            origin = position + side * params.ray_epsilon;
+        }
+    }
+    return vec2<u32>(deposits, rays);
+}
+
+@compute @workgroup_size(64)
+fn photon_count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let path = item_index(gid, groups);
+    if path >= params.photon_count {
+        return;
+    }
+    let traced = trace_photon(path, false, 0u);
+    path_offsets[path] = traced.x;
+    atomicAdd(&counters[COUNTER_ITEMS], traced.x);
+    atomicAdd(&counters[COUNTER_RAYS], traced.y);
+}
+
+@compute @workgroup_size(64)
+fn photon_write_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let path = item_index(gid, groups);
+    if path >= params.photon_count {
+        return;
+    }
+    trace_photon(path, true, path_offsets[path]);
+}

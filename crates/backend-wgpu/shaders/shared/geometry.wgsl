@@ -1,0 +1,128 @@
+// Ray geometry: the twin of ppm_core::geometry.
+
+// Distance reported for a miss: larger than any real hit.
+const T_MISS: f32 = 3.4028235e38;
+
+fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, tri: GpuTriangle, tmin: f32, tmax: f32) -> f32 {
+    let p = cross(dir, tri.e2);
+    let det = dot(tri.e1, p);
+    if abs(det) < 1e-20 || !is_finite_f32(det) {
+        return T_MISS;
+    }
+    let inv_det = 1.0 / det;
+    let s = origin - tri.v0;
+    let b1 = dot(s, p) * inv_det;
+    if b1 < 0.0 || b1 > 1.0 {
+        return T_MISS;
+    }
+    let q = cross(s, tri.e1);
+    let b2 = dot(dir, q) * inv_det;
+    if b2 < 0.0 || b1 + b2 > 1.0 {
+        return T_MISS;
+    }
+    let t = dot(tri.e2, q) * inv_det;
+    if t > tmin && t < tmax {
+        return t;
+    }
+    return T_MISS;
+}
+
+struct Basis {
+    tangent: vec3<f32>,
+    bitangent: vec3<f32>,
+}
+
+fn orthonormal_basis(n: vec3<f32>) -> Basis {
+    // copysign(1, n.z), reading the sign bit so that -0.0 counts as negative as in Rust.
+    let sign = select(1.0, -1.0, (bitcast<u32>(n.z) & 0x80000000u) != 0u);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(
+        vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        vec3<f32>(b, sign + n.y * n.y * a, -n.y),
+    );
+}
+
+fn to_world(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let basis = orthonormal_basis(n);
+    return basis.tangent * local.x + basis.bitangent * local.y + n * local.z;
+}
+
+struct Fresnel {
+    reflectance: f32,
+    refracts: bool,
+    refracted: vec3<f32>,
+}
+
+fn fresnel_refract(d: vec3<f32>, n: vec3<f32>, eta: f32) -> Fresnel {
+    let cos_i = clamp(-dot(d, n), 0.0, 1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return Fresnel(1.0, false, vec3<f32>(0.0));
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let f = 0.5 * (r_s * r_s + r_p * r_p);
+    let t = d * eta + n * (eta * cos_i - cos_t);
+    return Fresnel(clamp(f, 0.0, 1.0), true, normalize(t));
+}
+
+struct SpecularBounce {
+    dir: vec3<f32>,
+    transmitted: bool,
+    weight: vec3<f32>,
+}
+
+fn specular_bounce(material: GpuMaterial, dir: vec3<f32>, facing: vec3<f32>, front: bool, u: f32) -> SpecularBounce {
+    let reflected = reflect(dir, facing);
+    if material.kind == MATERIAL_MIRROR {
+        return SpecularBounce(reflected, false, material.albedo);
+    }
+    let eta = select(material.ior, 1.0 / material.ior, front);
+    let fresnel = fresnel_refract(dir, facing, eta);
+    if fresnel.refracts && u >= fresnel.reflectance {
+        return SpecularBounce(fresnel.refracted, true, vec3<f32>(1.0));
+    }
+    return SpecularBounce(reflected, false, vec3<f32>(1.0));
+}
+
+fn sign_nonzero(v: f32) -> f32 {
+    return select(-1.0, 1.0, v >= 0.0);
+}
+
+fn oct_quantise(v: f32) -> u32 {
+    return u32(floor((clamp(v, -1.0, 1.0) * 0.5 + 0.5) * 65535.0 + 0.5));
+}
+
+fn oct_encode(n: vec3<f32>) -> u32 {
+    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    var x = n.x / l1;
+    var y = n.y / l1;
+    if n.z < 0.0 {
+        let ox = x;
+        let oy = y;
+        x = (1.0 - abs(oy)) * sign_nonzero(ox);
+        y = (1.0 - abs(ox)) * sign_nonzero(oy);
+    }
+    return oct_quantise(x) | (oct_quantise(y) << 16u);
+}
+
+fn oct_decode(bits: u32) -> vec3<f32> {
+    var x = f32(bits & 0xffffu) / 65535.0 * 2.0 - 1.0;
+    var y = f32(bits >> 16u) / 65535.0 * 2.0 - 1.0;
+    let z = 1.0 - abs(x) - abs(y);
+    if z < 0.0 {
+        let ox = x;
+        let oy = y;
+        x = (1.0 - abs(oy)) * sign_nonzero(ox);
+        y = (1.0 - abs(ox)) * sign_nonzero(oy);
+    }
+    return normalize(vec3<f32>(x, y, z));
+}
+
+fn camera_ray(camera: GpuCamera, px: f32, py: f32) -> vec3<f32> {
+    let sx = 2.0 * px / f32(camera.width) - 1.0;
+    let sy = 1.0 - 2.0 * py / f32(camera.height);
+    return normalize(camera.forward + camera.right * sx + camera.up * sy);
+}

@@ -1,0 +1,158 @@
+// Buffer element layouts: the twins of ppm_core::layout, member for member.
+// tests/layout.rs reflects these with naga and compares every offset and size with Rust.
+
+const MATERIAL_DIFFUSE: u32 = 0u;
+const MATERIAL_MIRROR: u32 = 1u;
+const MATERIAL_GLASS: u32 = 2u;
+
+const HIT_VALID: u32 = 1u;
+const HIT_FRONT: u32 = 2u;
+const NO_MATERIAL: u32 = 0xffffffffu;
+
+const FIRST_HIT_SKIP: u32 = 0u;
+const FIRST_HIT_DEPOSIT: u32 = 1u;
+
+// Slots of the per-pass counter buffer (backend_wgpu::counters).
+const COUNTER_RAYS: u32 = 0u;
+const COUNTER_ITEMS: u32 = 1u;
+const COUNTER_GATHERED: u32 = 2u;
+const COUNTER_FIRST_BAD: u32 = 3u;
+
+struct HitPoint {
+    position: vec3<f32>,
+    pixel: u32,
+    normal: vec3<f32>,
+    material: u32,
+    wo: vec3<f32>,
+    r2: f32,
+    throughput: vec3<f32>,
+    n: f32,
+    tau: vec3<f32>,
+    emitted: f32,
+    direct: vec3<f32>,
+    flags: u32,
+}
+
+struct Photon {
+    position: vec3<f32>,
+    path: u32,
+    power: vec3<f32>,
+    normal_oct: u32,
+}
+
+struct GpuTriangle {
+    v0: vec3<f32>,
+    material: u32,
+    e1: vec3<f32>,
+    object: u32,
+    e2: vec3<f32>,
+    light: u32,
+    normal: vec3<f32>,
+    _pad0: u32,
+}
+
+struct BvhNode {
+    min: vec3<f32>,
+    first: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
+struct GpuMaterial {
+    albedo: vec3<f32>,
+    kind: u32,
+    emission: vec3<f32>,
+    ior: f32,
+}
+
+struct GpuLight {
+    v0: vec3<f32>,
+    area: f32,
+    e1: vec3<f32>,
+    cdf: f32,
+    e2: vec3<f32>,
+    pdf: f32,
+    normal: vec3<f32>,
+    material: u32,
+}
+
+struct GpuCamera {
+    eye: vec3<f32>,
+    width: u32,
+    forward: vec3<f32>,
+    height: u32,
+    right: vec3<f32>,
+    _pad0: u32,
+    up: vec3<f32>,
+    _pad1: u32,
+}
+
+struct EyePassParams {
+    seed: u32,
+    spp: u32,
+    max_depth: u32,
+    frame: u32,
+    r2_initial: f32,
+    ray_epsilon: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct DirectLightParams {
+    seed: u32,
+    samples: u32,
+    frame: u32,
+    ray_epsilon: f32,
+}
+
+struct PhotonPassParams {
+    seed: u32,
+    pass_index: u32,
+    photon_count: u32,
+    max_depth: u32,
+    first_hit: u32,
+    ray_epsilon: f32,
+    power_scale: f32,
+    _pad0: u32,
+}
+
+struct GatherParams {
+    alpha: f32,
+    emitted_increment: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct GridParams {
+    origin: vec3<f32>,
+    cell_size: f32,
+    dims: vec3<u32>,
+    bucket_count: u32,
+    photon_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct ResolveParams {
+    width: u32,
+    height: u32,
+    spp: u32,
+    _pad0: u32,
+}
+
+// Launch geometry: work items beyond 65,535 workgroups spill into the y dimension.
+const WORKGROUP_SIZE: u32 = 64u;
+
+fn item_index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.y * groups.x * WORKGROUP_SIZE + gid.x;
+}
+
+// A NaN or infinity has every exponent bit set; bit tests survive fast-math compilers.
+fn is_finite_f32(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+fn is_finite_vec3(v: vec3<f32>) -> bool {
+    return is_finite_f32(v.x) && is_finite_f32(v.y) && is_finite_f32(v.z);
+}

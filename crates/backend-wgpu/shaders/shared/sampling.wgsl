@@ -1,0 +1,14 @@
+// Warps from uniform numbers to sampled distributions: the twin of ppm_core::sampling.
+
+const PI: f32 = 3.14159265358979;
+
+fn cosine_hemisphere(u1: f32, u2: f32) -> vec3<f32> {
+    let r = sqrt(u1);
+    let phi = 2.0 * PI * u2;
+    return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
+}
+
+fn uniform_triangle(u1: f32, u2: f32) -> vec2<f32> {
+    let s = sqrt(u1);
+    return vec2<f32>(s * (1.0 - u2), s * u2);
+}

@@ -1,0 +1,27 @@
+// The progressive statistics update: the twin of ppm_core::update, in the same stable forms.
+
+struct Statistics {
+    n: f32,
+    r2: f32,
+    tau: vec3<f32>,
+}
+
+fn shrink_ratio(n: f32, m: f32, alpha: f32) -> f32 {
+    return 1.0 - (1.0 - alpha) * (m / (n + m));
+}
+
+fn ppm_update(s: Statistics, m: f32, dtau: vec3<f32>, alpha: f32) -> Statistics {
+    if s.n + m <= 0.0 {
+        return s;
+    }
+    let ratio = shrink_ratio(s.n, m, alpha);
+    return Statistics(s.n + alpha * m, s.r2 * ratio, (s.tau + dtau) * ratio);
+}
+
+fn radiance(tau: vec3<f32>, r2: f32, emitted: f32) -> vec3<f32> {
+    if emitted <= 0.0 || r2 <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let area = PI * r2;
+    return (tau / emitted) / area;
+}

@@ -1,0 +1,132 @@
+//! The GPU buffers, named as the WGSL bindings name them, and their creation and read-back.
+
+use crate::context::GpuContext;
+use bytemuck::Pod;
+use ppm_core::compile::CompiledScene;
+use ppm_core::passes::BackendError;
+use wgpu::util::DeviceExt;
+
+/// Usage of every storage buffer: bindable, and copyable both ways for resets and read-back.
+const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// A storage buffer holding `data` (at least 16 bytes, since empty bindings are invalid).
+pub fn storage_init<T: Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
+    let mut bytes = bytemuck::cast_slice::<T, u8>(data).to_vec();
+    bytes.resize(bytes.len().max(16), 0);
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &bytes,
+            usage: STORAGE,
+        })
+}
+
+/// A zeroed storage buffer of `bytes` bytes, refused with the limit named if it cannot be bound.
+pub fn storage_zeroed(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: u64,
+) -> Result<wgpu::Buffer, BackendError> {
+    let limit = ctx
+        .limits()
+        .max_storage_buffer_binding_size
+        .min(ctx.limits().max_buffer_size);
+    if bytes > limit {
+        return Err(BackendError::Limit(format!(
+            "buffer '{label}' needs {bytes} bytes; this adapter binds at most {limit} (max_storage_buffer_binding_size)"
+        )));
+    }
+    Ok(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(16).next_multiple_of(4),
+        usage: STORAGE,
+        mapped_at_creation: false,
+    }))
+}
+
+/// A uniform buffer holding `value`.
+pub fn uniform<T: Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::bytes_of(value),
+            usage: wgpu::BufferUsages::UNIFORM,
+        })
+}
+
+/// Copies `len` elements from the start of `buffer` back to the host.
+pub fn read_back<T: Pod>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    len: usize,
+) -> Result<Vec<T>, BackendError> {
+    let bytes = (len * size_of::<T>()) as u64;
+    if bytes == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read-back"),
+        size: bytes.next_multiple_of(4),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes.next_multiple_of(4));
+    ctx.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.wait()?;
+    rx.recv()
+        .map_err(|_| BackendError::Device("read-back: the map callback never ran".into()))?
+        .map_err(|e| BackendError::Device(format!("read-back: {e}")))?;
+    let view = staging
+        .get_mapped_range(..)
+        .map_err(|e| BackendError::Device(format!("read-back: {e}")))?;
+    let out = bytemuck::cast_slice::<u8, T>(&view[..bytes as usize]).to_vec();
+    drop(view);
+    staging.unmap();
+    Ok(out)
+}
+
+/// The scene, uploaded once per `load_scene`.
+pub struct SceneBuffers {
+    /// Camera uniform.
+    pub camera: wgpu::Buffer,
+    /// Triangles in BVH leaf order.
+    pub triangles: wgpu::Buffer,
+    /// Flattened BVH nodes.
+    pub nodes: wgpu::Buffer,
+    /// Materials.
+    pub materials: wgpu::Buffer,
+    /// Emitting triangles.
+    pub lights: wgpu::Buffer,
+    /// Camera as uploaded (resolution decides the hit-point count).
+    pub camera_value: ppm_core::layout::GpuCamera,
+}
+
+/// Deepest BVH the shaders' fixed traversal stack (`STACK_SIZE` in bvh.wgsl) can walk.
+const MAX_BVH_DEPTH: usize = 62;
+
+impl SceneBuffers {
+    /// Uploads `scene`; refuses a BVH too deep for the traversal stack.
+    pub fn new(ctx: &GpuContext, scene: &CompiledScene) -> Result<Self, BackendError> {
+        if scene.bvh_depth > MAX_BVH_DEPTH {
+            return Err(BackendError::Limit(format!(
+                "BVH depth {} exceeds the shaders' traversal stack ({MAX_BVH_DEPTH})",
+                scene.bvh_depth
+            )));
+        }
+        Ok(Self {
+            camera: uniform(ctx, "camera", &scene.camera),
+            triangles: storage_init(ctx, "triangles", &scene.triangles),
+            nodes: storage_init(ctx, "nodes", &scene.nodes),
+            materials: storage_init(ctx, "materials", &scene.materials),
+            lights: storage_init(ctx, "lights", &scene.lights),
+            camera_value: scene.camera,
+        })
+    }
+}

@@ -1,0 +1,364 @@
+//! The wgpu backend: every pass of ppm-core's contract as WGSL compute shaders.
+//!
+//! Each pass is one WGSL file in `shaders/passes/`, assembled at build time with the shared
+//! modules it imports (`shaders/shared/`, twins of ppm-core's `rng`, `sampling`, `geometry`,
+//! `update` and `grid`), so a same-seed run traces the CPU backend's paths up to rounding. Only
+//! baseline WebGPU features are used: no f64, no float atomics; integer atomics count and
+//! scatter, and every order that feeds a float sum is made deterministic. Small per-pass
+//! counters are read back after each pass (rays, deposits, the first non-finite slot); bulk
+//! buffers only when the harness asks ([`ReadBack`], [`Resolve`]).
+
+mod buffers;
+mod context;
+mod kernel;
+mod passes;
+mod photon_grid;
+mod scan;
+
+/// The assembled WGSL of every pass.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}
+
+use buffers::{SceneBuffers, read_back, storage_zeroed};
+pub use context::GpuContext;
+use passes::Slots;
+use passes::{
+    CheckKernel, DirectLightKernel, EyePassKernel, GatherKernel, PhotonPassKernel, PhotonTargets,
+    ResolveKernel,
+};
+use photon_grid::{PhotonGridKernels, PhotonMap, photon_bytes};
+use ppm_core::check::check_hit_points;
+use ppm_core::compile::CompiledScene;
+use ppm_core::image::Image;
+use ppm_core::layout::{
+    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ResolveParams,
+};
+use ppm_core::passes::{
+    Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
+    PhotonPass, PhotonStats, ReadBack, Resolve, SceneUpload,
+};
+use scan::Scan;
+
+/// Counter slots (`COUNTER_*` in layout.wgsl).
+const COUNTER_RAYS: usize = 0;
+const COUNTER_ITEMS: usize = 1;
+const COUNTER_GATHERED: usize = 2;
+const COUNTER_FIRST_BAD: usize = 3;
+const COUNTERS_RESET: [u32; 4] = [0, 0, 0, u32::MAX];
+
+/// Every pass's pipelines, compiled once per device.
+struct Kernels {
+    eye: EyePassKernel,
+    direct: DirectLightKernel,
+    photon: PhotonPassKernel,
+    grid: PhotonGridKernels,
+    gather: GatherKernel,
+    resolve: ResolveKernel,
+    check: CheckKernel,
+    scan: Scan,
+}
+
+/// The wgpu backend.
+pub struct WgpuBackend {
+    ctx: GpuContext,
+    kernels: Kernels,
+    counters: wgpu::Buffer,
+    scene: Option<SceneBuffers>,
+    hit_points: Option<(wgpu::Buffer, u32)>,
+    path_offsets: Option<wgpu::Buffer>,
+    map: Option<PhotonMap>,
+}
+
+impl WgpuBackend {
+    /// Opens the best available adapter and compiles every pass.
+    pub fn new() -> Result<Self, BackendError> {
+        let ctx = GpuContext::new()?;
+        let kernels = ctx.scoped("shader compilation", || Kernels {
+            eye: EyePassKernel::new(&ctx),
+            direct: DirectLightKernel::new(&ctx),
+            photon: PhotonPassKernel::new(&ctx),
+            grid: PhotonGridKernels::new(&ctx),
+            gather: GatherKernel::new(&ctx),
+            resolve: ResolveKernel::new(&ctx),
+            check: CheckKernel::new(&ctx),
+            scan: Scan::new(&ctx),
+        })?;
+        let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
+        Ok(Self {
+            ctx,
+            kernels,
+            counters,
+            scene: None,
+            hit_points: None,
+            path_offsets: None,
+            map: None,
+        })
+    }
+
+    /// The adapter that runs the passes, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
+    pub fn adapter_name(&self) -> String {
+        let a = &self.ctx.adapter;
+        format!("{} ({:?})", a.name, a.backend)
+    }
+
+    fn scene(&self, pass: &'static str) -> Result<&SceneBuffers, BackendError> {
+        self.scene.as_ref().ok_or(BackendError::OutOfOrder {
+            pass,
+            needs: "load_scene",
+        })
+    }
+
+    fn hit_points(&self, pass: &'static str) -> Result<&(wgpu::Buffer, u32), BackendError> {
+        self.hit_points.as_ref().ok_or(BackendError::OutOfOrder {
+            pass,
+            needs: "an eye pass",
+        })
+    }
+
+    /// Submits the commands `record` writes, with the counters reset first, then reads the
+    /// counters back.
+    fn run(
+        &self,
+        pass: &'static str,
+        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), BackendError>,
+    ) -> Result<[u32; 4], BackendError> {
+        self.ctx
+            .queue
+            .write_buffer(&self.counters, 0, bytemuck::cast_slice(&COUNTERS_RESET));
+        self.ctx.scoped(pass, || -> Result<(), BackendError> {
+            let mut encoder = self
+                .ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(pass) });
+            record(&mut encoder)?;
+            self.ctx.queue.submit([encoder.finish()]);
+            Ok(())
+        })??;
+        let counters = read_back::<u32>(&self.ctx, &self.counters, 4)?;
+        Ok([counters[0], counters[1], counters[2], counters[3]])
+    }
+
+    /// Fails with the field and value when check.wgsl flagged a slot.
+    fn check(&self, pass: &'static str, counters: &[u32; 4]) -> Result<(), BackendError> {
+        let slot = counters[COUNTER_FIRST_BAD];
+        if slot == u32::MAX {
+            return Ok(());
+        }
+        let hps = read_back::<HitPoint>(&self.ctx, &self.hit_points(pass)?.0, slot as usize + 1)?;
+        match check_hit_points(pass, &hps[slot as usize..]) {
+            Err(BackendError::NonFinite {
+                field,
+                pixel,
+                value,
+                ..
+            }) => Err(BackendError::NonFinite {
+                pass,
+                field,
+                index: slot as usize,
+                pixel,
+                value,
+            }),
+            _ => Err(BackendError::Device(format!(
+                "{pass} pass: slot {slot} flagged non-finite but reads back finite"
+            ))),
+        }
+    }
+}
+
+impl SceneUpload for WgpuBackend {
+    fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        let buffers = self
+            .ctx
+            .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene))??;
+        self.scene = Some(buffers);
+        self.hit_points = None;
+        self.map = None;
+        Ok(())
+    }
+}
+
+impl EyePass for WgpuBackend {
+    fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
+        let scene = self.scene("eye")?;
+        let camera = scene.camera_value;
+        let slots64 = u64::from(camera.width) * u64::from(camera.height) * u64::from(params.spp);
+        let slots = u32::try_from(slots64)
+            .map_err(|_| BackendError::Limit(format!("{slots64} hit-point slots exceed 2^32")))?;
+        let hit_points = storage_zeroed(
+            &self.ctx,
+            "hit_points",
+            slots64 * size_of::<HitPoint>() as u64,
+        )?;
+        let targets = Slots {
+            hit_points: &hit_points,
+            counters: &self.counters,
+            count: slots,
+        };
+        let counters = self.run("eye", |encoder| {
+            self.kernels
+                .eye
+                .record(&self.ctx, encoder, params, scene, &targets);
+            self.kernels.check.record(&self.ctx, encoder, &targets);
+            Ok(())
+        })?;
+        self.hit_points = Some((hit_points, slots));
+        self.check("eye", &counters)?;
+        Ok(EyeStats {
+            rays: u64::from(counters[COUNTER_RAYS]),
+            hit_points: u64::from(counters[COUNTER_ITEMS]),
+        })
+    }
+}
+
+impl DirectLight for WgpuBackend {
+    fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
+        let scene = self.scene("direct light")?;
+        let (hit_points, slots) = self.hit_points("direct light")?;
+        let targets = Slots {
+            hit_points,
+            counters: &self.counters,
+            count: *slots,
+        };
+        let counters = self.run("direct light", |encoder| {
+            self.kernels
+                .direct
+                .record(&self.ctx, encoder, params, scene, &targets);
+            self.kernels.check.record(&self.ctx, encoder, &targets);
+            Ok(())
+        })?;
+        self.check("direct light", &counters)?;
+        // The shader adds `samples` per valid slot; the CPU counts the same.
+        Ok(DirectStats {
+            rays: u64::from(counters[COUNTER_RAYS]),
+        })
+    }
+}
+
+impl PhotonPass for WgpuBackend {
+    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        let path_bytes = u64::from(params.photon_count) * 4;
+        let offsets = match self.path_offsets.take() {
+            Some(b) if b.size() >= path_bytes => b,
+            _ => storage_zeroed(&self.ctx, "path_offsets", path_bytes)?,
+        };
+        let scene = self.scene("photon")?;
+        let (hit_points, slots) = self.hit_points("photon")?;
+        let no_photons = storage_zeroed(&self.ctx, "photons", photon_bytes(0))?;
+        let targets = PhotonTargets {
+            path_offsets: &offsets,
+            photons: &no_photons,
+            counters: &self.counters,
+        };
+        let counted = self.run("photon count", |encoder| {
+            self.kernels
+                .photon
+                .record(&self.ctx, encoder, params, scene, &targets, false);
+            self.kernels
+                .scan
+                .record(&self.ctx, encoder, &offsets, params.photon_count)
+        })?;
+        let deposited = counted[COUNTER_ITEMS];
+        let photons = storage_zeroed(&self.ctx, "photons", photon_bytes(deposited))?;
+        let targets = PhotonTargets {
+            path_offsets: &offsets,
+            photons: &photons,
+            counters: &self.counters,
+        };
+        let mut map = None;
+        self.run("photon write", |encoder| {
+            self.kernels
+                .photon
+                .record(&self.ctx, encoder, params, scene, &targets, true);
+            Ok(())
+        })?;
+        self.run("photon grid", |encoder| {
+            map = Some(self.kernels.grid.record(
+                &self.ctx,
+                encoder,
+                &self.kernels.scan,
+                (photons, deposited),
+                (hit_points, *slots),
+            )?);
+            Ok(())
+        })?;
+        self.map = map;
+        self.path_offsets = Some(offsets);
+        Ok(PhotonStats {
+            emitted: u64::from(params.photon_count),
+            deposited: u64::from(deposited),
+            rays: u64::from(counted[COUNTER_RAYS]),
+        })
+    }
+}
+
+impl GatherPass for WgpuBackend {
+    fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
+        let scene = self.scene("gather")?;
+        let (hit_points, slots) = self.hit_points("gather")?;
+        let map = self.map.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "gather",
+            needs: "a photon pass",
+        })?;
+        let targets = Slots {
+            hit_points,
+            counters: &self.counters,
+            count: *slots,
+        };
+        let counters = self.run("gather", |encoder| {
+            self.kernels
+                .gather
+                .record(&self.ctx, encoder, params, &scene.materials, map, &targets);
+            self.kernels.check.record(&self.ctx, encoder, &targets);
+            Ok(())
+        })?;
+        self.check("gather", &counters)?;
+        Ok(GatherStats {
+            hit_points_reached: u64::from(counters[COUNTER_ITEMS]),
+            photons_gathered: u64::from(counters[COUNTER_GATHERED]),
+        })
+    }
+}
+
+impl Resolve for WgpuBackend {
+    fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError> {
+        let (hit_points, _) = self.hit_points("resolve")?;
+        let pixels = params.width as usize * params.height as usize;
+        let image = storage_zeroed(&self.ctx, "image", pixels as u64 * 12)?;
+        self.run("resolve", |encoder| {
+            self.kernels
+                .resolve
+                .record(&self.ctx, encoder, params, hit_points, &image);
+            Ok(())
+        })?;
+        let rgb = read_back::<[f32; 3]>(&self.ctx, &image, pixels)?;
+        Ok(Image {
+            width: params.width,
+            height: params.height,
+            pixels: rgb,
+        })
+    }
+}
+
+impl ReadBack for WgpuBackend {
+    fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError> {
+        match &self.hit_points {
+            Some((buffer, slots)) => read_back(&self.ctx, buffer, *slots as usize),
+            None => Ok(Vec::new()),
+        }
+    }
+
+    fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
+        match &self.map {
+            Some(map) => read_back(&self.ctx, &map.photons, map.count as usize),
+            None => Ok(Vec::new()),
+        }
+    }
+}
+
+impl Backend for WgpuBackend {
+    fn name(&self) -> &str {
+        "wgpu"
+    }
+}

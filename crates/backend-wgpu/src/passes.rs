@@ -1,0 +1,270 @@
+//! One small type per pass shader: it owns the pipelines of that shader's entry points and
+//! records their dispatches over the buffers named as the WGSL binds them.
+
+use crate::buffers::{SceneBuffers, uniform};
+use crate::context::GpuContext;
+use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
+use crate::shaders;
+use ppm_core::layout::{
+    DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
+};
+
+use Slot::{Read, ReadWrite, Uniform};
+
+/// The hit-point buffer and the pass counters that per-slot passes bind.
+pub struct Slots<'a> {
+    /// Hit points.
+    pub hit_points: &'a wgpu::Buffer,
+    /// Pass counters.
+    pub counters: &'a wgpu::Buffer,
+    /// Number of hit points.
+    pub count: u32,
+}
+
+/// eye_pass.wgsl.
+pub struct EyePassKernel(Kernel);
+
+impl EyePassKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
+        let slots = [Uniform, Uniform, Read, Read, Read, ReadWrite, ReadWrite];
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "eye_pass_main",
+            &slots,
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the eye pass over every hit-point slot.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &EyePassParams,
+        scene: &SceneBuffers,
+        slots: &Slots,
+    ) {
+        let params = uniform(ctx, "eye params", params);
+        let group = self.0.bind(
+            &ctx.device,
+            &[
+                &params,
+                &scene.camera,
+                &scene.triangles,
+                &scene.nodes,
+                &scene.materials,
+                slots.hit_points,
+                slots.counters,
+            ],
+        );
+        self.0.dispatch(encoder, &group, slots.count);
+    }
+}
+
+/// direct_light.wgsl.
+pub struct DirectLightKernel(Kernel);
+
+impl DirectLightKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
+        let slots = [Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite];
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "direct_light_main",
+            &slots,
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the direct-light pass over every hit point.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &DirectLightParams,
+        scene: &SceneBuffers,
+        slots: &Slots,
+    ) {
+        let params = uniform(ctx, "direct params", params);
+        let group = self.0.bind(
+            &ctx.device,
+            &[
+                &params,
+                &scene.triangles,
+                &scene.nodes,
+                &scene.materials,
+                &scene.lights,
+                slots.hit_points,
+                slots.counters,
+            ],
+        );
+        self.0.dispatch(encoder, &group, slots.count);
+    }
+}
+
+/// photon_pass.wgsl: a counting trace, then (after the scan) a writing trace.
+pub struct PhotonPassKernel {
+    count: Kernel,
+    write: Kernel,
+}
+
+/// The buffers a photon pass binds besides the scene.
+pub struct PhotonTargets<'a> {
+    /// Deposits per path, then (scanned) each path's first deposit.
+    pub path_offsets: &'a wgpu::Buffer,
+    /// The deposits.
+    pub photons: &'a wgpu::Buffer,
+    /// Pass counters.
+    pub counters: &'a wgpu::Buffer,
+}
+
+impl PhotonPassKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
+        let slots = [
+            Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite,
+        ];
+        Self {
+            count: Kernel::new(&ctx.device, &module, "photon_count_main", &slots, WORKGROUP),
+            write: Kernel::new(&ctx.device, &module, "photon_write_main", &slots, WORKGROUP),
+        }
+    }
+
+    /// Records the counting trace (`write == false`) or the writing trace.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &PhotonPassParams,
+        scene: &SceneBuffers,
+        targets: &PhotonTargets,
+        write: bool,
+    ) {
+        let kernel = if write { &self.write } else { &self.count };
+        let uniform_params = uniform(ctx, "photon params", params);
+        let group = kernel.bind(
+            &ctx.device,
+            &[
+                &uniform_params,
+                &scene.triangles,
+                &scene.nodes,
+                &scene.materials,
+                &scene.lights,
+                targets.path_offsets,
+                targets.photons,
+                targets.counters,
+            ],
+        );
+        kernel.dispatch(encoder, &group, params.photon_count);
+    }
+}
+
+/// gather_pass.wgsl.
+pub struct GatherKernel(Kernel);
+
+impl GatherKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
+        let slots = [Uniform, Read, Read, Read, Read, Read, ReadWrite, ReadWrite];
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "gather_main",
+            &slots,
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the gather of every hit point from the photon map `map`.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &GatherParams,
+        materials: &wgpu::Buffer,
+        map: &crate::photon_grid::PhotonMap,
+        slots: &Slots,
+    ) {
+        let params = uniform(ctx, "gather params", params);
+        let group = self.0.bind(
+            &ctx.device,
+            &[
+                &params,
+                materials,
+                &map.photons,
+                &map.grid,
+                &map.bucket_start,
+                &map.order,
+                slots.hit_points,
+                slots.counters,
+            ],
+        );
+        self.0.dispatch(encoder, &group, slots.count);
+    }
+}
+
+/// resolve.wgsl.
+pub struct ResolveKernel(Kernel);
+
+impl ResolveKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "resolve", shaders::RESOLVE);
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "resolve_main",
+            &[Uniform, Read, ReadWrite],
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the resolve of `params.width * params.height` pixels into `image` (RGB f32).
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &ResolveParams,
+        hit_points: &wgpu::Buffer,
+        image: &wgpu::Buffer,
+    ) {
+        let uniform_params = uniform(ctx, "resolve params", params);
+        let group = self
+            .0
+            .bind(&ctx.device, &[&uniform_params, hit_points, image]);
+        self.0
+            .dispatch(encoder, &group, params.width * params.height);
+    }
+}
+
+/// check.wgsl.
+pub struct CheckKernel(Kernel);
+
+impl CheckKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "check", shaders::CHECK);
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "check_main",
+            &[Read, ReadWrite],
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the finiteness check of every hit point.
+    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, slots: &Slots) {
+        let group = self
+            .0
+            .bind(&ctx.device, &[slots.hit_points, slots.counters]);
+        self.0.dispatch(encoder, &group, slots.count);
+    }
+}
