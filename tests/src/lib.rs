@@ -19,7 +19,7 @@ pub fn render_cpu(
         .expect("thread pool");
     let mut backend = CpuBackend::new();
     let outcome = pool
-        .install(|| render(&mut backend, scene, frame, params, &mut |_| {}))
+        .install(|| render(&mut backend, scene, frame, params, &mut |_, _| {}))
         .expect("render");
     if let Some(e) = &outcome.error {
         panic!("pass failed: {e}");

@@ -23,7 +23,7 @@ use ppm_core::layout::{
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
-    PhotonPass, PhotonStats, ReadBack, Resolve, SceneUpload,
+    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
 use trace::SceneData;
 
@@ -41,6 +41,12 @@ impl CpuBackend {
     /// A backend with no scene loaded.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// The current photon map's records, writable: lets a debugging tool or a test perturb
+    /// a pass between photon tracing and gathering (the grid keeps indexing the same slots).
+    pub fn photons_mut(&mut self) -> &mut [Photon] {
+        &mut self.photons
     }
 }
 
@@ -154,6 +160,15 @@ impl ReadBack for CpuBackend {
 
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
         Ok(self.photons.clone())
+    }
+}
+
+impl RandomSource for CpuBackend {
+    fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
+        Ok(keys
+            .iter()
+            .map(|k| ppm_core::rng::random_bits(k[0], k[1], k[2], k[3], k[4]))
+            .collect())
     }
 }
 

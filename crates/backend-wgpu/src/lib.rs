@@ -22,10 +22,9 @@ pub mod shaders {
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
-use passes::Slots;
 use passes::{
     CheckKernel, DirectLightKernel, EyePassKernel, GatherKernel, PhotonPassKernel, PhotonTargets,
-    ResolveKernel,
+    ResolveKernel, RngVectorsKernel, Slots,
 };
 use photon_grid::{PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::check::check_hit_points;
@@ -37,7 +36,7 @@ use ppm_core::layout::{
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
-    PhotonPass, PhotonStats, ReadBack, Resolve, SceneUpload,
+    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
 use scan::Scan;
 
@@ -57,6 +56,7 @@ struct Kernels {
     gather: GatherKernel,
     resolve: ResolveKernel,
     check: CheckKernel,
+    rng: RngVectorsKernel,
     scan: Scan,
 }
 
@@ -83,6 +83,7 @@ impl WgpuBackend {
             gather: GatherKernel::new(&ctx),
             resolve: ResolveKernel::new(&ctx),
             check: CheckKernel::new(&ctx),
+            rng: RngVectorsKernel::new(&ctx),
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
@@ -354,6 +355,21 @@ impl ReadBack for WgpuBackend {
             Some(map) => read_back(&self.ctx, &map.photons, map.count as usize),
             None => Ok(Vec::new()),
         }
+    }
+}
+
+impl RandomSource for WgpuBackend {
+    fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
+        let words: Vec<u32> = keys.iter().flatten().copied().collect();
+        let key_buffer = buffers::storage_init(&self.ctx, "rng keys", &words);
+        let bits = storage_zeroed(&self.ctx, "rng bits", keys.len() as u64 * 4)?;
+        self.run("rng vectors", |encoder| {
+            self.kernels
+                .rng
+                .record(&self.ctx, encoder, &key_buffer, &bits, keys.len() as u32);
+            Ok(())
+        })?;
+        read_back(&self.ctx, &bits, keys.len())
     }
 }
 

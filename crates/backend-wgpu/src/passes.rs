@@ -268,3 +268,33 @@ impl CheckKernel {
         self.0.dispatch(encoder, &group, slots.count);
     }
 }
+
+/// rng_vectors.wgsl.
+pub struct RngVectorsKernel(Kernel);
+
+impl RngVectorsKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "rng_vectors", shaders::RNG_VECTORS);
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "rng_vectors_main",
+            &[Read, ReadWrite],
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the evaluation of `count` keys (five words each) into `bits`.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        keys: &wgpu::Buffer,
+        bits: &wgpu::Buffer,
+        count: u32,
+    ) {
+        let group = self.0.bind(&ctx.device, &[keys, bits]);
+        self.0.dispatch(encoder, &group, count);
+    }
+}

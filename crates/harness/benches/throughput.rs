@@ -30,7 +30,7 @@ fn main() {
         params.passes = 8;
         params.photons_per_pass = 200_000;
         let outcome =
-            render(&mut CpuBackend::new(), &scene, 0, &params, &mut |_| {}).expect("render");
+            render(&mut CpuBackend::new(), &scene, 0, &params, &mut |_, _| {}).expect("render");
         let r = &outcome.report;
         let t = &r.times;
         let passes = f64::from(r.passes);

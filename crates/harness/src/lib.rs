@@ -25,3 +25,6 @@ pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
     }
     load_scene_file(path)
 }
+pub mod diff;
+pub mod diff_command;
+pub mod stats;

@@ -28,6 +28,77 @@ enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Render one seeded scene on the CPU and wgpu backends and compare them.
+    Diff(DiffArgs),
+}
+
+#[derive(clap::Args)]
+struct DiffArgs {
+    /// Built-in scene name or path to a TOML scene file.
+    scene: String,
+    /// Photon passes.
+    #[arg(long, default_value_t = 8)]
+    passes: u32,
+    /// Photons per pass.
+    #[arg(long, default_value_t = 100_000)]
+    photons_per_pass: u32,
+    /// Image width.
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Seed (independent mode: the first of each backend's seeds).
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Compare hit point by hit point with one seed (the default).
+    #[arg(long, conflicts_with = "independent")]
+    same_seed: bool,
+    /// Compare statistically, each backend with its own seeds.
+    #[arg(long)]
+    independent: bool,
+    /// Runs per backend in independent mode.
+    #[arg(long, default_value_t = 4)]
+    runs: u32,
+    /// Print the hit-point history of pixel X,Y on both backends instead.
+    #[arg(long, value_parser = parse_pixel)]
+    pixel: Option<(u32, u32)>,
+    /// Folder for diff.json and the heat map (heatmap.exr, heatmap.png).
+    #[arg(short, long, default_value = "out/diff")]
+    output: PathBuf,
+}
+
+impl From<DiffArgs> for harness::diff_command::DiffRequest {
+    fn from(a: DiffArgs) -> Self {
+        use harness::diff_command::DiffMode;
+        let mode = match (a.pixel, a.independent) {
+            (Some((x, y)), _) => DiffMode::Pixel { x, y },
+            (None, true) => DiffMode::Independent { runs: a.runs },
+            (None, false) => DiffMode::SameSeed,
+        };
+        Self {
+            scene: a.scene,
+            passes: a.passes,
+            photons_per_pass: a.photons_per_pass,
+            width: a.width,
+            height: a.height,
+            seed: a.seed,
+            mode,
+            output: a.output,
+        }
+    }
+}
+
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("--pixel {s}: expected X,Y"))?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("--pixel {s}: {e}"))
+    };
+    Ok((n(x)?, n(y)?))
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -119,6 +190,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Render(args) => run_render(args),
+        Command::Diff(args) => harness::diff_command::run(&args.into()),
     }
 }
 
@@ -171,7 +243,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
             &scene,
             args.frame,
             &params,
-            &mut |p: Progress| {
+            &mut |p: Progress, _: &mut dyn Backend| {
                 bar.set_position(u64::from(p.pass));
                 bar.set_message(format!("{:.1}s", p.elapsed));
             },

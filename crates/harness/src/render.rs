@@ -38,7 +38,11 @@ pub struct RenderOutcome {
 /// largest coordinate, far below any feature of the canonical scenes.
 const RAY_EPSILON_RELATIVE: f32 = 1e-5;
 
-/// Renders `scene` at `frame` on `backend`; `on_pass` is called after every photon pass.
+/// Called after direct light (pass 0) and after every photon pass, with the backend, so an
+/// observer can read buffers back between passes (the diff harness records histories so).
+pub type PassObserver<'a> = &'a mut dyn FnMut(Progress, &mut dyn Backend);
+
+/// Renders `scene` at `frame` on `backend`, calling `on_pass` as each pass completes.
 ///
 /// A pass that fails (a non-finite value, a device error) stops the loop; the image resolved
 /// from what was rendered so far is still returned, with the error beside it.
@@ -47,7 +51,7 @@ pub fn render(
     scene: &Scene,
     frame: u32,
     params: &RenderParams,
-    on_pass: &mut dyn FnMut(Progress),
+    on_pass: PassObserver,
 ) -> Result<RenderOutcome, BackendError> {
     let total = Instant::now();
     let posed = scene.at_frame(frame);
@@ -92,6 +96,14 @@ pub fn render(
     })?;
     times.direct = t.elapsed().as_secs_f64();
     report.rays.shadow = direct.rays;
+    on_pass(
+        Progress {
+            pass: 0,
+            passes: params.passes,
+            elapsed: 0.0,
+        },
+        &mut *backend,
+    );
 
     let error = photon_loop(
         backend,
@@ -132,7 +144,7 @@ fn photon_loop(
     ray_epsilon: f32,
     report: &mut RenderReport,
     times: &mut PassTimes,
-    on_pass: &mut dyn FnMut(Progress),
+    on_pass: PassObserver,
 ) -> Result<(), BackendError> {
     let start = Instant::now();
     for pass in 0..params.passes {
@@ -170,11 +182,14 @@ fn photon_loop(
         times.gather += t.elapsed().as_secs_f64();
         report.photons_gathered += gathered.photons_gathered;
         report.passes += 1;
-        on_pass(Progress {
-            pass: pass + 1,
-            passes: params.passes,
-            elapsed: start.elapsed().as_secs_f64(),
-        });
+        on_pass(
+            Progress {
+                pass: pass + 1,
+                passes: params.passes,
+                elapsed: start.elapsed().as_secs_f64(),
+            },
+            &mut *backend,
+        );
     }
     Ok(())
 }

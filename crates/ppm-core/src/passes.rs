@@ -128,9 +128,17 @@ pub trait ReadBack {
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError>;
 }
 
-/// A complete backend: every static pass plus read-back.
+/// The backend's own twin of [`crate::rng::random_bits`], so a conformance check can pin it
+/// to [`crate::rng::TEST_VECTORS`].
+pub trait RandomSource {
+    /// `random_bits(seed, kind, pass_index, path, dimension)` for each key, computed where the
+    /// backend's passes compute it (on the GPU for a GPU backend).
+    fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError>;
+}
+
+/// A complete backend: every static pass, read-back, and its random generator.
 pub trait Backend:
-    SceneUpload + EyePass + DirectLight + PhotonPass + GatherPass + Resolve + ReadBack
+    SceneUpload + EyePass + DirectLight + PhotonPass + GatherPass + Resolve + ReadBack + RandomSource
 {
     /// Short name for reports (`cpu`, `wgpu`).
     fn name(&self) -> &str;

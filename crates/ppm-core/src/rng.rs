@@ -89,23 +89,24 @@ pub fn bits_to_unit(bits: u32) -> f32 {
     (bits >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
+/// Fixed vectors `([seed, kind, pass_index, path, dimension], bits)`: every backend's twin of
+/// [`random_bits`] must reproduce these bits exactly.
+pub const TEST_VECTORS: [([u32; 5], u32); 6] = [
+    ([0, 0, 0, 0, 0], 0x2582_1ee0),
+    ([1, 1, 0, 0, 0], 0x6a2f_940e),
+    ([1, 3, 0, 0, 0], 0x275a_19df),
+    ([42, 3, 7, 123_456, 5], 0x7a28_7a63),
+    ([u32::MAX, 2, u32::MAX, u32::MAX, u32::MAX], 0x2081_2152),
+    ([7, 1, 1, 589_823, 9], 0xe1d0_dda0),
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Fixed vectors: the WGSL twin must reproduce these bits exactly.
-    const VECTORS: [([u32; 5], u32); 6] = [
-        ([0, 0, 0, 0, 0], 0x2582_1ee0),
-        ([1, 1, 0, 0, 0], 0x6a2f_940e),
-        ([1, 3, 0, 0, 0], 0x275a_19df),
-        ([42, 3, 7, 123_456, 5], 0x7a28_7a63),
-        ([u32::MAX, 2, u32::MAX, u32::MAX, u32::MAX], 0x2081_2152),
-        ([7, 1, 1, 589_823, 9], 0xe1d0_dda0),
-    ];
-
     #[test]
     fn generator_reproduces_the_fixed_vectors() {
-        for (k, expected) in VECTORS {
+        for (k, expected) in TEST_VECTORS {
             let got = random_bits(k[0], k[1], k[2], k[3], k[4]);
             assert_eq!(got, expected, "key {k:?}: got {got:#010x}");
         }

@@ -1,0 +1,190 @@
+//! Every struct that crosses to the GPU has the same size and field offsets in Rust as in its
+//! WGSL declaration, as naga lays the WGSL out. Needs no GPU.
+
+use naga::proc::Layouter;
+use ppm_core::layout::*;
+use std::mem::{offset_of, size_of};
+
+const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
+
+/// Span, alignment and (member name, offset) list of the WGSL struct `name`.
+fn wgsl_struct(name: &str) -> (u32, u32, Vec<(String, u32)>) {
+    let module = naga::front::wgsl::parse_str(LAYOUT_WGSL).expect("layout.wgsl parses");
+    let mut layouter = Layouter::default();
+    layouter
+        .update(module.to_ctx())
+        .expect("layout.wgsl lays out");
+    for (handle, ty) in module.types.iter() {
+        if ty.name.as_deref() == Some(name)
+            && let naga::TypeInner::Struct { members, span } = &ty.inner
+        {
+            let fields = members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                .collect();
+            return (*span, layouter[handle].alignment.round_up(1), fields);
+        }
+    }
+    panic!("layout.wgsl declares no struct {name}");
+}
+
+macro_rules! same_layout {
+    ($ty:ident { $($field:ident),* $(,)? }) => {{
+        let (span, align, wgsl) = wgsl_struct(stringify!($ty));
+        let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_owned(), offset_of!($ty, $field) as u32)),*];
+        assert_eq!(wgsl, rust, "{}: member offsets", stringify!($ty));
+        assert_eq!(span as usize, size_of::<$ty>(), "{}: size", stringify!($ty));
+        // An array of the WGSL struct strides by its size rounded up to its alignment: the
+        // Rust Vec strides by size_of, so the size must already be a multiple of it.
+        assert_eq!(span % align, 0, "{}: size is not a multiple of the WGSL alignment {align}", stringify!($ty));
+    }};
+}
+
+#[test]
+fn buffer_elements_match_their_wgsl_twins() {
+    same_layout!(HitPoint {
+        position,
+        pixel,
+        normal,
+        material,
+        wo,
+        r2,
+        throughput,
+        n,
+        tau,
+        emitted,
+        direct,
+        flags
+    });
+    same_layout!(Photon {
+        position,
+        path,
+        power,
+        normal_oct
+    });
+    same_layout!(GpuTriangle {
+        v0,
+        material,
+        e1,
+        object,
+        e2,
+        light,
+        normal,
+        _pad0
+    });
+    same_layout!(BvhNode {
+        min,
+        first,
+        max,
+        count
+    });
+    same_layout!(GpuMaterial {
+        albedo,
+        kind,
+        emission,
+        ior
+    });
+    same_layout!(GpuLight {
+        v0,
+        area,
+        e1,
+        cdf,
+        e2,
+        pdf,
+        normal,
+        material
+    });
+    same_layout!(GpuCamera {
+        eye,
+        width,
+        forward,
+        height,
+        right,
+        _pad0,
+        up,
+        _pad1
+    });
+}
+
+#[test]
+fn pass_parameters_match_their_wgsl_twins() {
+    same_layout!(EyePassParams {
+        seed,
+        spp,
+        max_depth,
+        frame,
+        r2_initial,
+        ray_epsilon,
+        _pad0,
+        _pad1
+    });
+    same_layout!(DirectLightParams {
+        seed,
+        samples,
+        frame,
+        ray_epsilon
+    });
+    same_layout!(PhotonPassParams {
+        seed,
+        pass_index,
+        photon_count,
+        max_depth,
+        first_hit,
+        ray_epsilon,
+        power_scale,
+        _pad0
+    });
+    same_layout!(GatherParams {
+        alpha,
+        emitted_increment,
+        _pad0,
+        _pad1
+    });
+    same_layout!(GridParams {
+        origin,
+        cell_size,
+        dims,
+        bucket_count,
+        photon_count,
+        _pad0,
+        _pad1,
+        _pad2
+    });
+    same_layout!(ResolveParams {
+        width,
+        height,
+        spp,
+        _pad0
+    });
+}
+
+/// The WGSL constants that mirror Rust constants carry the same values.
+#[test]
+fn shared_constants_agree() {
+    for (name, value) in [
+        ("MATERIAL_DIFFUSE", material_kind::DIFFUSE),
+        ("MATERIAL_MIRROR", material_kind::MIRROR),
+        ("MATERIAL_GLASS", material_kind::GLASS),
+        ("HIT_VALID", hit_flags::VALID),
+        ("HIT_FRONT", hit_flags::FRONT),
+        ("NO_MATERIAL", NO_MATERIAL),
+        ("FIRST_HIT_SKIP", first_hit::SKIP),
+        ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),
+    ] {
+        let line = LAYOUT_WGSL
+            .lines()
+            .find(|l| l.starts_with(&format!("const {name}: u32 = ")))
+            .unwrap_or_else(|| panic!("layout.wgsl lacks {name}"));
+        let literal = line
+            .rsplit("= ")
+            .next()
+            .unwrap()
+            .trim_end_matches(';')
+            .trim_end_matches('u');
+        let parsed = match literal.strip_prefix("0x") {
+            Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
+            None => literal.parse().unwrap(),
+        };
+        assert_eq!(parsed, value, "{name}");
+    }
+}
