@@ -1,20 +1,35 @@
-//! Throughput of the CPU backend on `cornell-box`: photons and rays per second, time per pass.
+//! Throughput of each backend on `cornell-box`: photons and rays per second, time per pass.
 //!
-//! `cargo bench -p harness --bench throughput` prints one row per resolution. Figures only: no
-//! threshold is asserted here, since shared machines are noisy; compare rows of one run.
+//! `cargo bench -p harness --bench throughput` prints one row per backend and resolution,
+//! measured side by side in one run. Figures only: no threshold is asserted, since shared
+//! machines are noisy; compare rows of one run. The wgpu rows use whatever adapter wgpu finds
+//! (lavapipe on a machine without a GPU) and are left out, with a note, when there is none.
 
 use backend_cpu::CpuBackend;
+use backend_wgpu::WgpuBackend;
 use harness::render::render;
 use ppm_core::params::RenderParams;
+use ppm_core::passes::Backend;
 
 fn main() {
     let scene = scenes::builtin("cornell-box")
         .and_then(|s| s.load().ok())
         .expect("cornell-box loads");
     let threads = rayon::current_num_threads();
-    println!("cornell-box on the CPU backend, {threads} threads, 8 passes x 200,000 photons");
+    let mut gpu = match WgpuBackend::new() {
+        Ok(b) => Some(b),
+        Err(e) => {
+            println!("no wgpu rows: {e}");
+            None
+        }
+    };
+    println!("cornell-box, 8 passes x 200,000 photons; cpu on {threads} threads");
+    if let Some(g) = &gpu {
+        println!("wgpu adapter: {}", g.adapter_name());
+    }
     println!(
-        "{:>9} {:>13} {:>15} {:>13} {:>15} {:>15} {:>15}",
+        "{:<5} {:>9} {:>12} {:>14} {:>12} {:>14} {:>15} {:>15}",
+        "back",
         "size",
         "photons/s",
         "photon rays/s",
@@ -29,20 +44,27 @@ fn main() {
         params.height = size;
         params.passes = 8;
         params.photons_per_pass = 200_000;
-        let outcome =
-            render(&mut CpuBackend::new(), &scene, 0, &params, &mut |_, _| {}).expect("render");
-        let r = &outcome.report;
-        let t = &r.times;
-        let passes = f64::from(r.passes);
-        println!(
-            "{:>9} {:>13.0} {:>15.0} {:>13.0} {:>15.0} {:>15.1} {:>15.1}",
-            format!("{size}x{size}"),
-            r.photons_emitted as f64 / t.photon,
-            r.rays.photon as f64 / t.photon,
-            r.rays.eye as f64 / t.eye,
-            r.rays.shadow as f64 / t.direct,
-            1e3 * t.photon / passes,
-            1e3 * t.gather / passes,
-        );
+        let mut cpu = CpuBackend::new();
+        let mut backends: Vec<&mut dyn Backend> = vec![&mut cpu];
+        if let Some(g) = gpu.as_mut() {
+            backends.push(g);
+        }
+        for backend in backends {
+            let outcome = render(backend, &scene, 0, &params, &mut |_, _| {}).expect("render");
+            let r = &outcome.report;
+            let t = &r.times;
+            let passes = f64::from(r.passes);
+            println!(
+                "{:<5} {:>9} {:>12.0} {:>14.0} {:>12.0} {:>14.0} {:>15.1} {:>15.1}",
+                r.backend,
+                format!("{size}x{size}"),
+                r.photons_emitted as f64 / t.photon,
+                r.rays.photon as f64 / t.photon,
+                r.rays.eye as f64 / t.eye,
+                r.rays.shadow as f64 / t.direct,
+                1e3 * t.photon / passes,
+                1e3 * t.gather / passes,
+            );
+        }
     }
 }

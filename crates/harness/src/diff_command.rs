@@ -90,8 +90,8 @@ pub fn run(req: &DiffRequest) -> Result<()> {
             }
         }
         DiffMode::Independent { runs } => {
-            let a = runs_of(&mut cpu, &scene, &params, runs)?;
-            let b = runs_of(&mut gpu, &scene, &params, runs)?;
+            let a = runs_of(&mut cpu, &scene, &params, runs, 0)?;
+            let b = runs_of(&mut gpu, &scene, &params, runs, OTHER_SEED_OFFSET)?;
             let report = independent::compare(("cpu", &a), ("wgpu", &b), &params, 10);
             print!("{}", format_independent(&report));
             write_outputs(req, &report, &independent::heat(&a, &b, &params))?;
@@ -113,17 +113,18 @@ pub fn run(req: &DiffRequest) -> Result<()> {
     Ok(())
 }
 
-/// `runs` renders with seeds `params.seed + 1000 * backend_offset + k`, reduced to tile means.
-///
-/// The two backends draw disjoint seeds (the wgpu runs start 1000 further), so their runs are
-/// independent of each other as well as among themselves.
+/// Seed offset of the compared backend's runs: far from the reference's, so no run of one
+/// shares a seed with a run of the other.
+pub const OTHER_SEED_OFFSET: u32 = 1000;
+
+/// `runs` renders with seeds `params.seed + offset + k`, reduced to tile means.
 pub fn runs_of(
     backend: &mut dyn Backend,
     scene: &ppm_core::scene::Scene,
     params: &RenderParams,
     runs: u32,
+    offset: u32,
 ) -> Result<Vec<TileMeans>> {
-    let offset = if backend.name() == "cpu" { 0 } else { 1000 };
     let mut out = Vec::new();
     for k in 0..runs {
         let mut p = params.clone();
@@ -259,7 +260,7 @@ pub fn format_history(rows: &[HistoryRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:>4} {:<5} {:>2} {:<34} {:<24} {:>10} {:>11} flux",
+        "{:>4} {:<6} {:>2} {:<34} {:<24} {:>10} {:>11} flux",
         "pass", "back", "s", "position", "normal", "n", "r2"
     );
     for r in rows {
@@ -267,14 +268,14 @@ pub fn format_history(rows: &[HistoryRow]) -> String {
         if !r.valid {
             let _ = writeln!(
                 s,
-                "{:>4} {:<5} {:>2} (no hit point)",
+                "{:>4} {:<6} {:>2} (no hit point)",
                 r.pass, r.backend, r.sample
             );
             continue;
         }
         let _ = writeln!(
             s,
-            "{:>4} {:<5} {:>2} {:<34} {:<24} {:>10.3} {:>11.5e} {:.5e} {:.5e} {:.5e}",
+            "{:>4} {:<6} {:>2} {:<34} {:<24} {:>10.3} {:>11.5e} {:.5e} {:.5e} {:.5e}",
             r.pass,
             r.backend,
             r.sample,

@@ -1,8 +1,13 @@
-//! Drives any backend through the passes of ppm-core: the render loop, its report, and scene
-//! lookup by name or file. The `ppm` command is built on it.
+//! Drives any backend through the passes of ppm-core: the render loop and its report, the diff
+//! harness that compares two backends, the conformance suite, and scene lookup by name or
+//! file. The `ppm` command is built on it.
 
+pub mod conformance;
+pub mod diff;
+pub mod diff_command;
 pub mod render;
 pub mod report;
+pub mod stats;
 
 use ppm_core::scene::{Scene, SceneError, load_scene_file};
 use std::path::Path;
@@ -25,6 +30,3 @@ pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
     }
     load_scene_file(path)
 }
-pub mod diff;
-pub mod diff_command;
-pub mod stats;

@@ -45,6 +45,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         description: "closed box whose walls all emit Le = 1 and reflect albedo 0.5: radiance is exactly 2 everywhere",
         build: || Ok(analytic::furnace(glam::Vec3::splat(0.5), 1.0)),
     },
+    BuiltinScene {
+        name: "specular-furnace",
+        description: "the furnace with a lossless mirror wall and a glass cube: radiance is still exactly 2",
+        build: || Ok(analytic::specular_furnace(glam::Vec3::splat(0.5), 1.0)),
+    },
 ];
 
 /// The built-in scene called `name`.

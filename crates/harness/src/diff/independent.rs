@@ -27,7 +27,7 @@ const QUANTITY_NAMES: [&str; QUANTITIES] = ["radiance.r", "radiance.g", "radianc
 
 /// Tiles per image side (fewer for tiny images).
 fn tiles_per_side(pixels: u32) -> u32 {
-    pixels.clamp(1, 8)
+    pixels.clamp(1, 4)
 }
 
 /// Means of each quantity over each tile of one run.

@@ -1,0 +1,444 @@
+//! The conformance suite: named checks that any backend implementing ppm-core's pass traits
+//! must pass. A backend author calls [`run_conformance`] with a way to make the backend and
+//! gets a verdict per check; no check knows which backend it tests. The CPU backend is the
+//! reference for the checks that compare.
+
+use crate::diff::{independent, record, same_seed};
+use crate::diff_command::{OTHER_SEED_OFFSET, runs_of};
+use crate::render::render;
+use backend_cpu::CpuBackend;
+use glam::Vec3;
+use ppm_core::compile::compile_scene;
+use ppm_core::geometry::oct_decode;
+use ppm_core::layout::{
+    EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
+};
+use ppm_core::params::RenderParams;
+use ppm_core::passes::{Backend, BackendError};
+use ppm_core::rng::TEST_VECTORS;
+use ppm_core::scene::Scene;
+use ppm_core::update::{Statistics, ppm_update};
+use std::fmt;
+
+/// Makes a fresh backend for each check.
+pub type BackendFactory<'a> = &'a mut dyn FnMut() -> Result<Box<dyn Backend>, BackendError>;
+
+/// Sizes the checks render at.
+#[derive(Clone, Debug)]
+pub struct ConformanceOptions {
+    /// Image side in pixels.
+    pub size: u32,
+    /// Photon passes per render.
+    pub passes: u32,
+    /// Photons per pass.
+    pub photons_per_pass: u32,
+    /// Runs per backend in the independent-seed comparison.
+    pub runs: u32,
+}
+
+impl ConformanceOptions {
+    /// Small enough for `cargo test` on a software adapter.
+    pub fn quick() -> Self {
+        Self {
+            size: 48,
+            passes: 4,
+            photons_per_pass: 20_000,
+            runs: 4,
+        }
+    }
+}
+
+/// One check's outcome.
+#[derive(Clone, Debug)]
+pub struct CheckResult {
+    /// Check name.
+    pub name: String,
+    /// Passed or not.
+    pub passed: bool,
+    /// What was measured, or why it failed.
+    pub detail: String,
+}
+
+/// Every check's outcome.
+#[derive(Clone, Debug)]
+pub struct Verdict {
+    /// Backend name.
+    pub backend: String,
+    /// Results, in the order run.
+    pub checks: Vec<CheckResult>,
+}
+
+impl Verdict {
+    /// Whether every check passed.
+    pub fn passed(&self) -> bool {
+        self.checks.iter().all(|c| c.passed)
+    }
+
+    /// The result of the check called `name`.
+    pub fn check(&self, name: &str) -> Option<&CheckResult> {
+        self.checks.iter().find(|c| c.name == name)
+    }
+}
+
+impl fmt::Display for Verdict {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "conformance of backend '{}':", self.backend)?;
+        for c in &self.checks {
+            writeln!(
+                f,
+                "  {:<4} {:<28} {}",
+                if c.passed { "ok" } else { "FAIL" },
+                c.name,
+                c.detail
+            )?;
+        }
+        write!(
+            f,
+            "{}",
+            if self.passed() {
+                "all checks passed"
+            } else {
+                "some checks FAILED"
+            }
+        )
+    }
+}
+
+type Check = fn(BackendFactory, &ConformanceOptions) -> Result<String, String>;
+
+/// The named checks, in order.
+pub const CHECKS: &[(&str, Check)] = &[
+    ("rng-vectors", check_rng_vectors),
+    ("hit-point-layout", check_hit_point_layout),
+    ("eye-pass", check_eye_pass),
+    ("photon-power", check_photon_power),
+    ("gather-formulas", check_gather_formulas),
+    ("determinism", check_determinism),
+    ("agreement/same-seed", check_same_seed),
+    ("agreement/independent", check_independent),
+];
+
+/// Runs every check against backends made by `make`.
+pub fn run_conformance(make: BackendFactory, options: &ConformanceOptions) -> Verdict {
+    let backend = make()
+        .map(|b| b.name().to_owned())
+        .unwrap_or_else(|e| format!("(cannot start: {e})"));
+    let checks = CHECKS
+        .iter()
+        .map(|(name, check)| {
+            let (passed, detail) = match check(&mut *make, options) {
+                Ok(detail) => (true, detail),
+                Err(detail) => (false, detail),
+            };
+            CheckResult {
+                name: (*name).to_owned(),
+                passed,
+                detail,
+            }
+        })
+        .collect();
+    Verdict { backend, checks }
+}
+
+fn err(e: impl fmt::Display) -> String {
+    e.to_string()
+}
+
+fn cornell() -> Result<Scene, String> {
+    scenes::builtin("cornell-box")
+        .ok_or("no cornell-box")?
+        .load()
+        .map_err(err)
+}
+
+fn params_for(scene: &Scene, o: &ConformanceOptions) -> RenderParams {
+    let mut p = RenderParams::for_scene(scene);
+    p.width = o.size;
+    p.height = o.size;
+    p.passes = o.passes;
+    p.photons_per_pass = o.photons_per_pass;
+    p.seed = 7;
+    p
+}
+
+fn eye_params(p: &RenderParams, extent: f32) -> EyePassParams {
+    EyePassParams {
+        seed: p.seed,
+        spp: p.spp,
+        max_depth: p.max_eye_depth,
+        frame: 0,
+        r2_initial: p.initial_radius * p.initial_radius,
+        ray_epsilon: 1e-5 * extent,
+        ..Default::default()
+    }
+}
+
+/// The backend's generator reproduces the fixed vectors bit for bit.
+fn check_rng_vectors(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    let keys: Vec<[u32; 5]> = TEST_VECTORS.iter().map(|(k, _)| *k).collect();
+    let got = make().map_err(err)?.random_bits(&keys).map_err(err)?;
+    for ((key, expected), got) in TEST_VECTORS.iter().zip(&got) {
+        if got != expected {
+            return Err(format!(
+                "key {key:?}: {got:#010x}, expected {expected:#010x}"
+            ));
+        }
+    }
+    Ok(format!("{} vectors reproduced", keys.len()))
+}
+
+/// Slot `i` belongs to pixel `i / spp`; empty slots say so; fresh hit points start at zero.
+fn check_hit_point_layout(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let scene = cornell()?;
+    let mut p = params_for(&scene, o);
+    p.spp = 2;
+    let compiled = compile_scene(&scene, p.width, p.height);
+    let mut b = make().map_err(err)?;
+    b.load_scene(&compiled).map_err(err)?;
+    b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
+    let hps = b.read_hit_points().map_err(err)?;
+    if hps.len() != p.slots() {
+        return Err(format!(
+            "{} slots read back, expected {}",
+            hps.len(),
+            p.slots()
+        ));
+    }
+    let r2 = p.initial_radius * p.initial_radius;
+    for (i, hp) in hps.iter().enumerate() {
+        let bad = if hp.pixel as usize != i / 2 {
+            Some("pixel index")
+        } else if !hp.is_valid() && hp.material != NO_MATERIAL {
+            Some("empty slot without NO_MATERIAL")
+        } else if hp.is_valid()
+            && (hp.r2 != r2 || hp.n != 0.0 || hp.emitted != 0.0 || hp.tau != [0.0; 3])
+        {
+            Some("fresh statistics")
+        } else if hp.is_valid() && (Vec3::from(hp.normal).length() - 1.0).abs() > 1e-3 {
+            Some("unit normal")
+        } else {
+            None
+        };
+        if let Some(what) = bad {
+            return Err(format!("slot {i}: {what} wrong: {hp:?}"));
+        }
+    }
+    let valid = hps
+        .iter()
+        .filter(|h| h.flags & hit_flags::VALID != 0)
+        .count();
+    Ok(format!(
+        "{} slots, {valid} hit points, layout as specified",
+        hps.len()
+    ))
+}
+
+/// Eye-pass hit points match the CPU reference's positions.
+fn check_eye_pass(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let scene = cornell()?;
+    let p = params_for(&scene, o);
+    let compiled = compile_scene(&scene, p.width, p.height);
+    let eye = |b: &mut dyn Backend| -> Result<Vec<HitPoint>, String> {
+        b.load_scene(&compiled).map_err(err)?;
+        b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
+        b.read_hit_points().map_err(err)
+    };
+    let reference = eye(&mut CpuBackend::new())?;
+    let got = eye(make().map_err(err)?.as_mut())?;
+    let tolerance = 1e-4 * compiled.extent;
+    let matching = reference
+        .iter()
+        .zip(&got)
+        .filter(|(a, b)| {
+            a.is_valid() == b.is_valid()
+                && Vec3::from(a.position).distance(Vec3::from(b.position)) <= tolerance
+                && a.material == b.material
+        })
+        .count();
+    let share = matching as f64 / reference.len() as f64;
+    if share < 0.999 {
+        return Err(format!(
+            "{:.3}% of slots match the CPU eye pass (need 99.9%)",
+            100.0 * share
+        ));
+    }
+    Ok(format!(
+        "{:.3}% of slots within {tolerance:.3e} of the CPU eye pass",
+        100.0 * share
+    ))
+}
+
+/// In the closed grey furnace (albedo 0.5, photons carrying direct light), deposits sum to
+/// the emitted power times `1 + rho + rho^2 + ... = 2` per photon.
+fn check_photon_power(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let scene = scenes::analytic::furnace(Vec3::splat(0.5), 1.0);
+    let compiled = compile_scene(&scene, 8, 8);
+    let mut b = make().map_err(err)?;
+    b.load_scene(&compiled).map_err(err)?;
+    let p = params_for(&scene, o);
+    b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
+    let photons = o.photons_per_pass.max(50_000);
+    b.photon_pass(&PhotonPassParams {
+        seed: 3,
+        photon_count: photons,
+        max_depth: 24,
+        first_hit: first_hit::DEPOSIT,
+        ray_epsilon: 1e-5 * compiled.extent,
+        power_scale: 1.0,
+        ..Default::default()
+    })
+    .map_err(err)?;
+    let deposits = b.read_photons().map_err(err)?;
+    let total: f64 = deposits.iter().map(|d| f64::from(d.power[0])).sum();
+    let ratio = total / f64::from(photons) / f64::from(compiled.light_power.x);
+    // Deposits per photon are geometric (mean 2, variance 2): 4 standard errors at 50,000
+    // photons is 2.5%.
+    if (ratio - 2.0).abs() > 0.05 {
+        return Err(format!(
+            "deposited / emitted power = {ratio:.4}, expected 2"
+        ));
+    }
+    Ok(format!(
+        "deposited / emitted power = {ratio:.4} (expected 2)"
+    ))
+}
+
+/// The gather applies eqs 1-3 to exactly the photons within each radius: recomputed on the
+/// host by brute force from the backend's own photons and hit points.
+fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let scene = cornell()?;
+    let p = params_for(&scene, o);
+    let compiled = compile_scene(&scene, p.width.min(32), p.height.min(32));
+    let mut b = make().map_err(err)?;
+    b.load_scene(&compiled).map_err(err)?;
+    b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
+    b.photon_pass(&PhotonPassParams {
+        seed: 5,
+        photon_count: o.photons_per_pass,
+        max_depth: 16,
+        first_hit: first_hit::SKIP,
+        ray_epsilon: 1e-5 * compiled.extent,
+        power_scale: 1.0,
+        ..Default::default()
+    })
+    .map_err(err)?;
+    let before = b.read_hit_points().map_err(err)?;
+    let photons = b.read_photons().map_err(err)?;
+    let gather = GatherParams {
+        alpha: p.alpha,
+        emitted_increment: o.photons_per_pass as f32,
+        ..Default::default()
+    };
+    b.gather_pass(&gather).map_err(err)?;
+    let after = b.read_hit_points().map_err(err)?;
+    let mut checked = 0;
+    let mut off = 0;
+    for (hp, got) in before.iter().zip(&after).filter(|(h, _)| h.is_valid()) {
+        let x = Vec3::from(hp.position);
+        let n = Vec3::from(hp.normal);
+        let (mut m, mut flux) = (0u32, Vec3::ZERO);
+        for ph in &photons {
+            if (Vec3::from(ph.position) - x).length_squared() < hp.r2
+                && oct_decode(ph.normal_oct).dot(n) > 0.0
+            {
+                m += 1;
+                flux += Vec3::from(ph.power);
+            }
+        }
+        let albedo = Vec3::from(compiled.materials[hp.material as usize].albedo);
+        let dtau = flux * albedo * std::f32::consts::FRAC_1_PI;
+        let s = ppm_update(
+            Statistics {
+                n: hp.n,
+                r2: hp.r2,
+                tau: hp.tau,
+            },
+            m as f32,
+            dtau.into(),
+            p.alpha,
+        );
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-12;
+        let ok = close(s.n, got.n)
+            && close(s.r2, got.r2)
+            && (0..3).all(|c| close(s.tau[c], got.tau[c]))
+            && close(hp.emitted + gather.emitted_increment, got.emitted);
+        checked += 1;
+        off += usize::from(!ok);
+    }
+    // A photon at distance^2 within rounding of r2 may fall on either side.
+    if off * 1000 > checked {
+        return Err(format!(
+            "{off} of {checked} hit points differ from eqs 1-3 applied by brute force"
+        ));
+    }
+    Ok(format!(
+        "{} of {checked} hit points match eqs 1-3 by brute force",
+        checked - off
+    ))
+}
+
+/// Two renders with the same seed give identical buffers.
+fn check_determinism(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let scene = cornell()?;
+    let p = params_for(&scene, o);
+    let mut run = || -> Result<Vec<HitPoint>, String> {
+        let mut b = make().map_err(err)?;
+        render(b.as_mut(), &scene, 0, &p, &mut |_, _| {}).map_err(err)?;
+        b.read_hit_points().map_err(err)
+    };
+    let (a, b) = (run()?, run()?);
+    if bytemuck::cast_slice::<_, u8>(&a) != bytemuck::cast_slice::<_, u8>(&b) {
+        return Err("two same-seed renders differ".into());
+    }
+    Ok(format!("{} hit points identical across two runs", a.len()))
+}
+
+/// Same seed: hit points agree with the CPU reference on every built-in scene.
+fn check_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let mut details = Vec::new();
+    for builtin in scenes::BUILTIN {
+        let scene = builtin.load().map_err(err)?;
+        let mut p = params_for(&scene, o);
+        p.initial_radius = scene.render.initial_radius;
+        let reference = record(&mut CpuBackend::new(), &scene, 0, &p).map_err(err)?;
+        let other = record(make().map_err(err)?.as_mut(), &scene, 0, &p).map_err(err)?;
+        let r = same_seed::compare(&reference, &other, &p, 3);
+        let line = format!("{}: {:.3}% agree", builtin.name, 100.0 * r.all_fields_share);
+        if !r.agree {
+            return Err(format!(
+                "{line}; {}",
+                crate::diff_command::format_same_seed(&r).replace('\n', "; ")
+            ));
+        }
+        details.push(line);
+    }
+    Ok(details.join(", "))
+}
+
+/// Independent seeds: no tile of any built-in scene differs significantly from the CPU.
+fn check_independent(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let mut details = Vec::new();
+    for builtin in scenes::BUILTIN {
+        let scene = builtin.load().map_err(err)?;
+        let p = params_for(&scene, o);
+        let reference = runs_of(&mut CpuBackend::new(), &scene, &p, o.runs, 0).map_err(err)?;
+        let other = runs_of(
+            make().map_err(err)?.as_mut(),
+            &scene,
+            &p,
+            o.runs,
+            OTHER_SEED_OFFSET,
+        )
+        .map_err(err)?;
+        let r = independent::compare(("cpu", &reference), ("other", &other), &p, 3);
+        let line = format!(
+            "{}: {} of {} tests rejected, min p {:.2e}",
+            builtin.name, r.rejected, r.tests, r.min_p
+        );
+        if !r.agree {
+            return Err(line);
+        }
+        details.push(line);
+    }
+    Ok(details.join(", "))
+}

@@ -1,0 +1,174 @@
+//! Both backends pass the conformance suite; a deliberately broken backend is caught by the
+//! same-seed and the independent-seed comparison alike.
+
+use backend_cpu::CpuBackend;
+use harness::conformance::{ConformanceOptions, run_conformance};
+use harness::diff::{independent, record, same_seed};
+use harness::diff_command::{OTHER_SEED_OFFSET, runs_of};
+use ppm_core::compile::CompiledScene;
+use ppm_core::image::Image;
+use ppm_core::layout::*;
+use ppm_core::params::RenderParams;
+use ppm_core::passes::*;
+
+#[test]
+fn cpu_backend_passes_conformance() {
+    let verdict = run_conformance(
+        &mut || Ok(Box::new(CpuBackend::new())),
+        &ConformanceOptions::quick(),
+    );
+    println!("{verdict}");
+    assert!(verdict.passed(), "{verdict}");
+}
+
+#[test]
+fn wgpu_backend_passes_conformance() {
+    if backend_wgpu::backend_or_skip("wgpu_backend_passes_conformance").is_none() {
+        return;
+    }
+    let verdict = run_conformance(
+        &mut || Ok(Box::new(backend_wgpu::WgpuBackend::new()?)),
+        &ConformanceOptions::quick(),
+    );
+    println!("{verdict}");
+    assert!(verdict.passed(), "{verdict}");
+}
+
+/// The CPU backend with a faulty gather: one photon in ten (every tenth deposit) is never
+/// found, as if the gather skipped it. It moves those photons out of every disc's reach after
+/// the photon pass, so the grid still files them and only the gather misses them.
+struct DropsOneInTen(CpuBackend);
+
+impl SceneUpload for DropsOneInTen {
+    fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        self.0.load_scene(scene)
+    }
+}
+impl EyePass for DropsOneInTen {
+    fn eye_pass(&mut self, p: &EyePassParams) -> Result<EyeStats, BackendError> {
+        self.0.eye_pass(p)
+    }
+}
+impl DirectLight for DropsOneInTen {
+    fn direct_light(&mut self, p: &DirectLightParams) -> Result<DirectStats, BackendError> {
+        self.0.direct_light(p)
+    }
+}
+impl PhotonPass for DropsOneInTen {
+    fn photon_pass(&mut self, p: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        let stats = self.0.photon_pass(p)?;
+        for photon in self.0.photons_mut().iter_mut().step_by(10) {
+            photon.position = [f32::MAX; 3];
+        }
+        Ok(stats)
+    }
+}
+impl GatherPass for DropsOneInTen {
+    fn gather_pass(&mut self, p: &GatherParams) -> Result<GatherStats, BackendError> {
+        self.0.gather_pass(p)
+    }
+}
+impl Resolve for DropsOneInTen {
+    fn resolve(&mut self, p: &ResolveParams) -> Result<Image, BackendError> {
+        self.0.resolve(p)
+    }
+}
+impl ReadBack for DropsOneInTen {
+    fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError> {
+        self.0.read_hit_points()
+    }
+    fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
+        self.0.read_photons()
+    }
+}
+impl RandomSource for DropsOneInTen {
+    fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
+        self.0.random_bits(keys)
+    }
+}
+impl Backend for DropsOneInTen {
+    fn name(&self) -> &str {
+        "broken"
+    }
+}
+
+fn cornell_params() -> (ppm_core::scene::Scene, RenderParams) {
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let mut p = RenderParams::for_scene(&scene);
+    p.width = 64;
+    p.height = 64;
+    p.passes = 4;
+    p.photons_per_pass = 30_000;
+    (scene, p)
+}
+
+#[test]
+fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
+    let (scene, p) = cornell_params();
+    let reference = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
+    let honest = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
+    let broken = record(&mut DropsOneInTen(CpuBackend::new()), &scene, 0, &p).unwrap();
+    let good = same_seed::compare(&reference, &honest, &p, 5);
+    let bad = same_seed::compare(&reference, &broken, &p, 5);
+    println!("{}", harness::diff_command::format_same_seed(&bad));
+    insta::assert_snapshot!(
+        "same_seed_table_broken",
+        harness::diff_command::format_same_seed(&bad)
+    );
+    insta::assert_json_snapshot!("same_seed_json_broken", bad);
+    let rows = harness::diff::history::pixel_history(&[&reference, &broken], &p, 31, 44);
+    insta::assert_snapshot!(
+        "pixel_history_broken",
+        harness::diff_command::format_history(&rows)
+    );
+    assert!(good.agree && good.all_fields_share == 1.0);
+    assert!(!bad.agree, "the broken gather went unnoticed");
+    let n = bad.fields.iter().find(|f| f.field == "n").unwrap();
+    assert!(
+        n.share < 0.5,
+        "most hit points should see fewer photons: {n:?}"
+    );
+    assert!(
+        bad.first_divergence.iter().any(|p| p.pass == 1),
+        "divergence starts at the first gather"
+    );
+}
+
+#[test]
+fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
+    let (scene, p) = cornell_params();
+    let reference = runs_of(&mut CpuBackend::new(), &scene, &p, 4, 0).unwrap();
+    let honest = runs_of(&mut CpuBackend::new(), &scene, &p, 4, OTHER_SEED_OFFSET).unwrap();
+    let broken = runs_of(
+        &mut DropsOneInTen(CpuBackend::new()),
+        &scene,
+        &p,
+        4,
+        OTHER_SEED_OFFSET,
+    )
+    .unwrap();
+    let good = independent::compare(("cpu", &reference), ("cpu", &honest), &p, 5);
+    let bad = independent::compare(("cpu", &reference), ("broken", &broken), &p, 5);
+    println!("{}", harness::diff_command::format_independent(&bad));
+    insta::assert_snapshot!(
+        "independent_table_broken",
+        harness::diff_command::format_independent(&bad)
+    );
+    assert!(good.agree, "false alarm on two honest CPU runs: {good:?}");
+    assert!(!bad.agree, "the broken gather went unnoticed");
+}
+
+#[test]
+fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
+    let verdict = run_conformance(
+        &mut || Ok(Box::new(DropsOneInTen(CpuBackend::new()))),
+        &ConformanceOptions::quick(),
+    );
+    println!("{verdict}");
+    assert!(!verdict.check("agreement/same-seed").unwrap().passed);
+    assert!(!verdict.check("agreement/independent").unwrap().passed);
+    // Its gather is consistent with the photons it reads back (the fault hides them), and its
+    // generator is the CPU's: only the comparisons with the reference can see the fault.
+    assert!(verdict.check("gather-formulas").unwrap().passed);
+    assert!(verdict.check("rng-vectors").unwrap().passed);
+}
