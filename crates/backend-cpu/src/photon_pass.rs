@@ -31,7 +31,8 @@ pub fn photon_pass_main(
             let mut deposits = Vec::new();
             let mut rays = 0;
             let end = ((c + 1) * CHUNK).min(params.photon_count);
-            for path in c * CHUNK..end {
+            for local in c * CHUNK..end {
+                let path = params.first_path + local;
                 rays += trace_photon(params, scene, path, &mut deposits);
             }
             (deposits, rays)

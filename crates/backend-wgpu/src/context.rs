@@ -112,4 +112,12 @@ impl GpuContext {
     pub fn limits(&self) -> wgpu::Limits {
         self.device.limits()
     }
+
+    /// The largest buffer a shader can bind as a whole, in bytes.
+    pub fn binding_limit(&self) -> u64 {
+        let limits = self.limits();
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+    }
 }

@@ -23,8 +23,8 @@ pub mod shaders {
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
 use passes::{
-    CheckKernel, DirectLightKernel, EyePassKernel, GatherKernel, PhotonPassKernel, PhotonTargets,
-    ResolveKernel, RngVectorsKernel, Slots,
+    CheckKernel, DirectLightKernel, EyePassKernel, GatherInputs, GatherKernel, PhotonPassKernel,
+    PhotonTargets, ResolveKernel, RngVectorsKernel, Slots,
 };
 use photon_grid::{PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::check::check_hit_points;
@@ -67,8 +67,14 @@ pub struct WgpuBackend {
     counters: wgpu::Buffer,
     scene: Option<SceneBuffers>,
     hit_points: Option<(wgpu::Buffer, u32)>,
+    /// Per hit point: photons found and their power so far in the current pass.
+    accumulated: Option<wgpu::Buffer>,
     path_offsets: Option<wgpu::Buffer>,
     map: Option<PhotonMap>,
+    /// Batches the last photon pass took.
+    batches: u32,
+    /// Cap on the bytes of one photon batch (see [`WgpuBackend::set_photon_buffer_limit`]).
+    photon_buffer_limit: u64,
 }
 
 impl WgpuBackend {
@@ -93,9 +99,24 @@ impl WgpuBackend {
             counters,
             scene: None,
             hit_points: None,
+            accumulated: None,
             path_offsets: None,
             map: None,
+            batches: 0,
+            photon_buffer_limit: u64::MAX,
         })
+    }
+
+    /// Caps the bytes of photon records one batch may hold (default: the device's binding
+    /// limit). A pass whose deposits exceed it is traced in several batches that still make
+    /// one gather update; smaller caps trade speed for memory.
+    pub fn set_photon_buffer_limit(&mut self, bytes: u64) {
+        self.photon_buffer_limit = bytes;
+    }
+
+    /// Batches the last photon pass was split into.
+    pub fn last_pass_batches(&self) -> u32 {
+        self.batches
     }
 
     /// The adapter that runs the passes, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
@@ -175,6 +196,7 @@ impl SceneUpload for WgpuBackend {
             .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene))??;
         self.scene = Some(buffers);
         self.hit_points = None;
+        self.accumulated = None;
         self.map = None;
         Ok(())
     }
@@ -205,6 +227,8 @@ impl EyePass for WgpuBackend {
             Ok(())
         })?;
         self.hit_points = Some((hit_points, slots));
+        self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 16)?);
+        self.map = None;
         self.check("eye", &counters)?;
         Ok(EyeStats {
             rays: u64::from(counters[COUNTER_RAYS]),
@@ -238,59 +262,110 @@ impl DirectLight for WgpuBackend {
 }
 
 impl PhotonPass for WgpuBackend {
+    /// Traces the pass in as few batches as the device's binding limit allows (one, unless the
+    /// deposits would not fit one buffer) and accumulates each batch into the hit points'
+    /// accumulators, so the gather that follows makes one update from the whole pass.
     fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
-        let path_bytes = u64::from(params.photon_count) * 4;
+        let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
+        let max_deposits = (limit / size_of::<Photon>() as u64).max(1);
+        // Start from a little under one deposit per path (the common case); a batch that
+        // deposits more is counted again, smaller.
+        let mut batch = params
+            .photon_count
+            .min((self.ctx.binding_limit() / 4).min(u64::from(u32::MAX)) as u32)
+            .min((max_deposits * 9 / 10).clamp(1, u64::from(u32::MAX)) as u32);
+        let path_bytes = u64::from(batch) * 4;
         let offsets = match self.path_offsets.take() {
             Some(b) if b.size() >= path_bytes => b,
             _ => storage_zeroed(&self.ctx, "path_offsets", path_bytes)?,
         };
         let scene = self.scene("photon")?;
         let (hit_points, slots) = self.hit_points("photon")?;
-        let no_photons = storage_zeroed(&self.ctx, "photons", photon_bytes(0))?;
-        let targets = PhotonTargets {
-            path_offsets: &offsets,
-            photons: &no_photons,
-            counters: &self.counters,
-        };
-        let counted = self.run("photon count", |encoder| {
-            self.kernels
-                .photon
-                .record(&self.ctx, encoder, params, scene, &targets, false);
-            self.kernels
-                .scan
-                .record(&self.ctx, encoder, &offsets, params.photon_count)
+        let accumulated = self.accumulated.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "photon",
+            needs: "an eye pass",
         })?;
-        let deposited = counted[COUNTER_ITEMS];
-        let photons = storage_zeroed(&self.ctx, "photons", photon_bytes(deposited))?;
-        let targets = PhotonTargets {
-            path_offsets: &offsets,
-            photons: &photons,
+        let slots = Slots {
+            hit_points,
             counters: &self.counters,
+            count: *slots,
+        };
+        let gather = GatherInputs {
+            params: &GatherParams::default(),
+            materials: &scene.materials,
+            accumulated,
+        };
+        let mut stats = PhotonStats {
+            emitted: u64::from(params.photon_count),
+            ..Default::default()
         };
         let mut map = None;
-        self.run("photon write", |encoder| {
-            self.kernels
-                .photon
-                .record(&self.ctx, encoder, params, scene, &targets, true);
+        let mut batches = 0;
+        let mut start = 0;
+        self.run("photon accumulator reset", |encoder| {
+            encoder.clear_buffer(accumulated, 0, None);
             Ok(())
         })?;
-        self.run("photon grid", |encoder| {
-            map = Some(self.kernels.grid.record(
-                &self.ctx,
-                encoder,
-                &self.kernels.scan,
-                (photons, deposited),
-                (hit_points, *slots),
-            )?);
-            Ok(())
-        })?;
+        while start < params.photon_count {
+            let launch = PhotonPassParams {
+                photon_count: batch.min(params.photon_count - start),
+                first_path: params.first_path + start,
+                ..*params
+            };
+            let no_photons = storage_zeroed(&self.ctx, "photons", photon_bytes(0))?;
+            let targets = PhotonTargets {
+                path_offsets: &offsets,
+                photons: &no_photons,
+                counters: &self.counters,
+            };
+            let counted = self.run("photon count", |encoder| {
+                self.kernels
+                    .photon
+                    .record(&self.ctx, encoder, &launch, scene, &targets, false);
+                self.kernels
+                    .scan
+                    .record(&self.ctx, encoder, &offsets, launch.photon_count)
+            })?;
+            let deposited = counted[COUNTER_ITEMS];
+            if u64::from(deposited) > max_deposits {
+                // Shrink the batch to fit, with a tenth to spare; this count is discarded.
+                batch = ((u64::from(launch.photon_count) * max_deposits / u64::from(deposited)) * 9
+                    / 10)
+                    .max(1) as u32;
+                continue;
+            }
+            let photons = storage_zeroed(&self.ctx, "photons", photon_bytes(deposited))?;
+            let targets = PhotonTargets {
+                path_offsets: &offsets,
+                photons: &photons,
+                counters: &self.counters,
+            };
+            self.run("photon map", |encoder| {
+                self.kernels
+                    .photon
+                    .record(&self.ctx, encoder, &launch, scene, &targets, true);
+                let built = self.kernels.grid.record(
+                    &self.ctx,
+                    encoder,
+                    &self.kernels.scan,
+                    (photons.clone(), deposited),
+                    (hit_points, slots.count),
+                )?;
+                self.kernels
+                    .gather
+                    .record(&self.ctx, encoder, &gather, &built, &slots, false);
+                map = Some(built);
+                Ok(())
+            })?;
+            stats.deposited += u64::from(deposited);
+            stats.rays += u64::from(counted[COUNTER_RAYS]);
+            start += launch.photon_count;
+            batches += 1;
+        }
         self.map = map;
+        self.batches = batches;
         self.path_offsets = Some(offsets);
-        Ok(PhotonStats {
-            emitted: u64::from(params.photon_count),
-            deposited: u64::from(deposited),
-            rays: u64::from(counted[COUNTER_RAYS]),
-        })
+        Ok(stats)
     }
 }
 
@@ -298,19 +373,29 @@ impl GatherPass for WgpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let scene = self.scene("gather")?;
         let (hit_points, slots) = self.hit_points("gather")?;
-        let map = self.map.as_ref().ok_or(BackendError::OutOfOrder {
+        let needs_photons = BackendError::OutOfOrder {
             pass: "gather",
             needs: "a photon pass",
+        };
+        let map = self.map.as_ref().ok_or(needs_photons)?;
+        let accumulated = self.accumulated.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "gather",
+            needs: "an eye pass",
         })?;
         let targets = Slots {
             hit_points,
             counters: &self.counters,
             count: *slots,
         };
+        let inputs = GatherInputs {
+            params,
+            materials: &scene.materials,
+            accumulated,
+        };
         let counters = self.run("gather", |encoder| {
             self.kernels
                 .gather
-                .record(&self.ctx, encoder, params, &scene.materials, map, &targets);
+                .record(&self.ctx, encoder, &inputs, map, &targets, true);
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;
@@ -350,7 +435,15 @@ impl ReadBack for WgpuBackend {
         }
     }
 
+    /// The last photon pass's deposits; refused when that pass had to be split into batches,
+    /// since its deposits never sat in one buffer.
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
+        if self.batches > 1 {
+            return Err(BackendError::Limit(format!(
+                "the last photon pass was split into {} batches to fit the binding limit; its deposits were never held together",
+                self.batches
+            )));
+        }
         match &self.map {
             Some(map) => read_back(&self.ctx, &map.photons, map.count as usize),
             None => Ok(Vec::new()),

@@ -165,48 +165,69 @@ impl PhotonPassKernel {
     }
 }
 
-/// gather_pass.wgsl.
-pub struct GatherKernel(Kernel);
+/// gather_pass.wgsl: accumulate (once per photon batch), then apply (once per pass).
+pub struct GatherKernel {
+    accumulate: Kernel,
+    apply: Kernel,
+}
+
+/// What the gather binds besides the hit points.
+pub struct GatherInputs<'a> {
+    /// Gather parameters (alpha, emitted increment).
+    pub params: &'a GatherParams,
+    /// Materials, for the BRDF.
+    pub materials: &'a wgpu::Buffer,
+    /// Per-hit-point running count and power of the pass's photons so far.
+    pub accumulated: &'a wgpu::Buffer,
+}
 
 impl GatherKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
-        let slots = [Uniform, Read, Read, Read, Read, Read, ReadWrite, ReadWrite];
-        Self(Kernel::new(
-            &ctx.device,
-            &module,
-            "gather_main",
-            &slots,
-            WORKGROUP,
-        ))
+        let slots = [
+            Uniform, Read, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite,
+        ];
+        Self {
+            accumulate: Kernel::new(
+                &ctx.device,
+                &module,
+                "gather_accumulate_main",
+                &slots,
+                WORKGROUP,
+            ),
+            apply: Kernel::new(&ctx.device, &module, "gather_apply_main", &slots, WORKGROUP),
+        }
     }
 
-    /// Records the gather of every hit point from the photon map `map`.
+    /// Records the accumulation of photon map `map` into every hit point's accumulator
+    /// (`apply == false`), or the update of every hit point from its accumulator.
     pub fn record(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        params: &GatherParams,
-        materials: &wgpu::Buffer,
+        inputs: &GatherInputs,
         map: &crate::photon_grid::PhotonMap,
         slots: &Slots,
+        apply: bool,
     ) {
-        let params = uniform(ctx, "gather params", params);
-        let group = self.0.bind(
+        let kernel = if apply { &self.apply } else { &self.accumulate };
+        let params = uniform(ctx, "gather params", inputs.params);
+        let group = kernel.bind(
             &ctx.device,
             &[
                 &params,
-                materials,
+                inputs.materials,
                 &map.photons,
                 &map.grid,
                 &map.bucket_start,
                 &map.order,
                 slots.hit_points,
+                inputs.accumulated,
                 slots.counters,
             ],
         );
-        self.0.dispatch(encoder, &group, slots.count);
+        kernel.dispatch(encoder, &group, slots.count);
     }
 }
 

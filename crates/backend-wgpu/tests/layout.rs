@@ -132,7 +132,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         first_hit,
         ray_epsilon,
         power_scale,
-        _pad0
+        first_path
     });
     same_layout!(GatherParams {
         alpha,

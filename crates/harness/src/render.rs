@@ -165,7 +165,7 @@ fn photon_loop(
             },
             ray_epsilon,
             power_scale: 1.0,
-            _pad0: 0,
+            first_path: 0,
         })?;
         times.photon += t.elapsed().as_secs_f64();
         report.photons_emitted += photons.emitted;

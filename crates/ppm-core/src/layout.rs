@@ -258,8 +258,9 @@ pub struct PhotonPassParams {
     pub ray_epsilon: f32,
     /// Multiplies every emitted photon's power (1 for ordinary photons).
     pub power_scale: f32,
-    /// Padding.
-    pub _pad0: u32,
+    /// Index of the first path traced: paths `first_path .. first_path + photon_count`. Lets a
+    /// backend split a pass into batches that still draw the numbers of the whole pass.
+    pub first_path: u32,
 }
 
 /// Parameters of one gather pass. 16 bytes.

@@ -1,5 +1,9 @@
 // #import layout geometry sampling update grid
-// Gather pass (ALGORITHM.md 1.4): the twin of backend-cpu's gather_pass.rs.
+// Gather pass (ALGORITHM.md 1.4): the twin of backend-cpu's gather_pass.rs, in two steps so
+// that a photon pass split into batches still makes one update: `gather_accumulate_main`
+// adds each batch's photons within the radius to a per-hit-point accumulator (count in w,
+// power in xyz), and `gather_apply_main` folds the accumulator into the statistics with the
+// stable update, then clears it.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> materials: array<GpuMaterial>;
@@ -8,15 +12,16 @@
 @group(0) @binding(4) var<storage, read> bucket_start: array<u32>;
 @group(0) @binding(5) var<storage, read> order: array<u32>;
 @group(0) @binding(6) var<storage, read_write> hit_points: array<HitPoint>;
-@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(7) var<storage, read_write> accumulated: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
 @compute @workgroup_size(64)
-fn gather_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let slot = item_index(gid, groups);
     if slot >= arrayLength(&hit_points) {
         return;
     }
-    var hp = hit_points[slot];
+    let hp = hit_points[slot];
     if (hp.flags & HIT_VALID) == 0u {
         return;
     }
@@ -35,15 +40,30 @@ fn gather_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
             }
         }
     }
+    accumulated[slot] += vec4<f32>(flux, f32(m));
+}
+
+@compute @workgroup_size(64)
+fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let slot = item_index(gid, groups);
+    if slot >= arrayLength(&hit_points) {
+        return;
+    }
+    var hp = hit_points[slot];
+    if (hp.flags & HIT_VALID) == 0u {
+        return;
+    }
+    let acc = accumulated[slot];
+    accumulated[slot] = vec4<f32>(0.0);
     let brdf = materials[hp.material].albedo * (1.0 / PI);
-    let s = ppm_update(Statistics(hp.n, hp.r2, hp.tau), f32(m), flux * brdf, params.alpha);
+    let s = ppm_update(Statistics(hp.n, hp.r2, hp.tau), acc.w, acc.xyz * brdf, params.alpha);
     hp.n = s.n;
     hp.r2 = s.r2;
     hp.tau = s.tau;
     hp.emitted += params.emitted_increment;
     hit_points[slot] = hp;
-    if m > 0u {
+    if acc.w > 0.0 {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
-        atomicAdd(&counters[COUNTER_GATHERED], m);
+        atomicAdd(&counters[COUNTER_GATHERED], u32(acc.w));
     }
 }

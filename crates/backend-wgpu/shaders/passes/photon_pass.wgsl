@@ -5,6 +5,8 @@
 // `photon_count_main` traces every path and stores its deposit count, an exclusive scan turns
 // the counts into offsets, and `photon_write_main` traces the same paths again (the generator
 // is counter-based, so they are identical) and writes each deposit at its path's offset.
+// A launch traces paths `first_path + i` for `i < photon_count`: the host splits a pass whose
+// deposits would not fit one binding into such batches.
 
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -71,21 +73,21 @@ fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
 
 @compute @workgroup_size(64)
 fn photon_count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let path = item_index(gid, groups);
-    if path >= params.photon_count {
+    let local = item_index(gid, groups);
+    if local >= params.photon_count {
         return;
     }
-    let traced = trace_photon(path, false, 0u);
-    path_offsets[path] = traced.x;
+    let traced = trace_photon(params.first_path + local, false, 0u);
+    path_offsets[local] = traced.x;
     atomicAdd(&counters[COUNTER_ITEMS], traced.x);
     atomicAdd(&counters[COUNTER_RAYS], traced.y);
 }
 
 @compute @workgroup_size(64)
 fn photon_write_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let path = item_index(gid, groups);
-    if path >= params.photon_count {
+    let local = item_index(gid, groups);
+    if local >= params.photon_count {
         return;
     }
-    trace_photon(path, true, path_offsets[path]);
+    trace_photon(params.first_path + local, true, path_offsets[local]);
 }

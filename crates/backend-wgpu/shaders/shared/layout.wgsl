@@ -113,7 +113,7 @@ struct PhotonPassParams {
     first_hit: u32,
     ray_epsilon: f32,
     power_scale: f32,
-    _pad0: u32,
+    first_path: u32,
 }
 
 struct GatherParams {
