@@ -11,6 +11,7 @@
 mod buffers;
 mod context;
 mod kernel;
+pub mod layout;
 mod passes;
 mod photon_grid;
 mod scan;

@@ -4,6 +4,7 @@
 use crate::buffers::{storage_zeroed, uniform};
 use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
+use crate::layout::GridBuildParams;
 use crate::scan::Scan;
 use crate::shaders;
 use ppm_core::layout::{GridParams, Photon};
@@ -21,15 +22,6 @@ pub struct PhotonMap {
     pub bucket_start: wgpu::Buffer,
     /// Photon indices grouped by bucket, ascending within each.
     pub order: wgpu::Buffer,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GridBuildParams {
-    photon_count: u32,
-    bucket_count: u32,
-    hit_point_count: u32,
-    _pad0: u32,
 }
 
 /// Initial bounds keys: minima start at the largest key, maxima and r2 at the smallest.

@@ -3,6 +3,7 @@
 use crate::buffers::{storage_zeroed, uniform};
 use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, shader_module};
+use crate::layout::ScanParams;
 use ppm_core::passes::BackendError;
 
 /// Elements one workgroup scans (`BLOCK` in scan.wgsl).
@@ -12,15 +13,6 @@ const BLOCK: u32 = 256;
 pub struct Scan {
     blocks: Kernel,
     add: Kernel,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ScanParams {
-    count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 impl Scan {

@@ -7,9 +7,14 @@ use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
 
-/// Span, alignment and (member name, offset) list of the WGSL struct `name`.
+/// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
+/// layout.wgsl or in the assembled pass shaders.
 fn wgsl_struct(name: &str) -> (u32, u32, Vec<(String, u32)>) {
-    let module = naga::front::wgsl::parse_str(LAYOUT_WGSL).expect("layout.wgsl parses");
+    let source = std::iter::once(LAYOUT_WGSL)
+        .chain(backend_wgpu::shaders::ALL.iter().map(|(_, s)| *s))
+        .find(|s| s.contains(&format!("struct {name} {{")))
+        .unwrap_or_else(|| panic!("no shader declares struct {name}"));
+    let module = naga::front::wgsl::parse_str(source).expect("shader parses");
     let mut layouter = Layouter::default();
     layouter
         .update(module.to_ctx())
@@ -25,7 +30,7 @@ fn wgsl_struct(name: &str) -> (u32, u32, Vec<(String, u32)>) {
             return (*span, layouter[handle].alignment.round_up(1), fields);
         }
     }
-    panic!("layout.wgsl declares no struct {name}");
+    panic!("the shader declares no struct {name}");
 }
 
 macro_rules! same_layout {
@@ -154,6 +159,23 @@ fn pass_parameters_match_their_wgsl_twins() {
         width,
         height,
         spp,
+        _pad0
+    });
+}
+
+#[test]
+fn backend_kernel_parameters_match_their_wgsl_twins() {
+    use backend_wgpu::layout::{GridBuildParams, ScanParams};
+    same_layout!(ScanParams {
+        count,
+        _pad0,
+        _pad1,
+        _pad2
+    });
+    same_layout!(GridBuildParams {
+        photon_count,
+        bucket_count,
+        hit_point_count,
         _pad0
     });
 }
