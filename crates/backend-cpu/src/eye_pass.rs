@@ -78,7 +78,9 @@ fn trace_eye_path(
                     wo: (-dir).into(),
                     r2: params.r2_initial,
                     throughput: throughput.into(),
-                    flags: hit_flags::VALID | if front { hit_flags::FRONT } else { 0 },
+                    flags: hit_flags::VALID
+                        | if front { hit_flags::FRONT } else { 0 }
+                        | (tri.object << hit_flags::OBJECT_SHIFT),
                     ..HitPoint::default()
                 };
                 return u64::from(depth) + 1;

@@ -1,49 +1,88 @@
-//! Gather pass (ALGORITHM.md 1.4): each hit point sums this pass's photons within its radius
-//! and folds them into its statistics with the stable update of ppm-core.
+//! Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): each hit point that gathers this
+//! kind of pass sums the photons within its radius and folds them into its statistics with
+//! ppm-core's stable updates.
 
 use crate::photon_grid::PhotonGrid;
 use glam::Vec3;
 use ppm_core::geometry::oct_decode;
 use ppm_core::grid::buckets_around;
-use ppm_core::layout::{GatherParams, GpuMaterial, HitPoint, Photon};
+use ppm_core::layout::{GatherParams, GpuMaterial, HitPoint, Photon, gather_kind, hit_flags};
 use ppm_core::passes::GatherStats;
-use ppm_core::update::{Statistics, ppm_update};
+use ppm_core::update::{Statistics, compensation_update, ppm_update};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 
-/// Updates every valid hit point from `photons` (indexed by `grid`).
+/// The current photon map: deposits, their grid, and (region passes) each deposit's weight.
+pub struct PhotonMap<'a> {
+    /// Deposits.
+    pub photons: &'a [Photon],
+    /// Their grid.
+    pub grid: &'a PhotonGrid,
+    /// Path weights per deposit, when the pass kept them.
+    pub weights: Option<&'a [f32]>,
+}
+
+/// Whether a hit point gathers a pass of `kind`.
+pub fn gathers(hp: &HitPoint, kind: u32) -> bool {
+    let updated = hp.flags & hit_flags::UPDATED != 0;
+    hp.is_valid()
+        && match kind & gather_kind::KIND_MASK {
+            gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE => !updated,
+            gather_kind::GUIDED => updated,
+            _ => true,
+        }
+}
+
+/// Updates every hit point that gathers this pass.
 pub fn gather_pass_main(
     params: &GatherParams,
     materials: &[GpuMaterial],
-    photons: &[Photon],
-    grid: &PhotonGrid,
+    map: &PhotonMap,
+    r2_initial: f32,
     hit_points: &mut [HitPoint],
 ) -> GatherStats {
+    let kind = params.kind & gather_kind::KIND_MASK;
+    let region = matches!(
+        kind,
+        gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE
+    );
     let (reached, gathered) = hit_points
         .par_iter_mut()
         .with_min_len(256)
         .map(|hp| {
-            if !hp.is_valid() {
+            if !gathers(hp, params.kind) {
                 return (0, 0);
             }
-            let (m, flux) = photons_in_disc(hp, photons, grid);
+            let (found, weight_sum, flux) = photons_in_disc(hp, map);
+            // Region photons stand for `emitted / N_c` ordinary photons each, times their
+            // path weight (ALGORITHM.md 3, "Power of region photons").
+            let scale = if region {
+                hp.emitted / params.region_photons
+            } else {
+                1.0
+            };
+            let m = if region && params.kind & gather_kind::RAW_COUNT == 0 {
+                weight_sum * scale
+            } else {
+                found as f32
+            };
             let brdf = Vec3::from(materials[hp.material as usize].albedo) * FRAC_1_PI;
-            let dtau = flux * brdf;
-            let s = ppm_update(
-                Statistics {
-                    n: hp.n,
-                    r2: hp.r2,
-                    tau: hp.tau,
-                },
-                m as f32,
-                dtau.into(),
-                params.alpha,
-            );
+            let dtau = (flux * brdf * scale).into();
+            let s = Statistics {
+                n: hp.n,
+                r2: hp.r2,
+                tau: hp.tau,
+            };
+            let s = if kind == gather_kind::REGION_NEGATIVE {
+                compensation_update(s, m, dtau, params.alpha, r2_initial)
+            } else {
+                ppm_update(s, m, dtau, params.alpha)
+            };
             hp.n = s.n;
             hp.r2 = s.r2;
             hp.tau = s.tau;
             hp.emitted += params.emitted_increment;
-            (u64::from(m > 0), u64::from(m))
+            (u64::from(found > 0), u64::from(found))
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     GatherStats {
@@ -52,24 +91,34 @@ pub fn gather_pass_main(
     }
 }
 
-/// Count and summed power of the photons within `sqrt(r2)` of the hit point whose surface
-/// faces the same way; summed in bucket order, then ascending photon index.
+/// Count, summed path weight and summed power of the photons within `sqrt(r2)` of the hit
+/// point whose surface faces the same way; summed in bucket order, then ascending index.
 #[inline]
-fn photons_in_disc(hp: &HitPoint, photons: &[Photon], grid: &PhotonGrid) -> (u32, Vec3) {
+fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> (u32, f32, Vec3) {
+    let mut found = 0u32;
+    let mut weight = 0.0f32;
+    let mut flux = Vec3::ZERO;
+    for_photons_in_disc(hp, map, |i, p| {
+        found += 1;
+        weight += map.weights.map_or(1.0, |w| w[i]);
+        flux += Vec3::from(p.power);
+    });
+    (found, weight, flux)
+}
+
+/// Calls `visit(index, photon)` for each photon within the hit point's disc.
+#[inline]
+pub fn for_photons_in_disc(hp: &HitPoint, map: &PhotonMap, mut visit: impl FnMut(usize, &Photon)) {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
-    let (buckets, count) = buckets_around(x, hp.r2.sqrt(), &grid.params);
-    let mut m = 0u32;
-    let mut flux = Vec3::ZERO;
+    let (buckets, count) = buckets_around(x, hp.r2.sqrt(), &map.grid.params);
     for &b in &buckets[..count] {
-        for &i in grid.bucket(b) {
-            let p = &photons[i as usize];
+        for &i in map.grid.bucket(b) {
+            let p = &map.photons[i as usize];
             let d = Vec3::from(p.position) - x;
             if d.length_squared() < hp.r2 && oct_decode(p.normal_oct).dot(n) > 0.0 {
-                m += 1;
-                flux += Vec3::from(p.power);
+                visit(i as usize, p);
             }
         }
     }
-    (m, flux)
 }

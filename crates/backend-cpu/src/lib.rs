@@ -8,23 +8,33 @@
 mod direct_light;
 mod eye_pass;
 mod gather_pass;
+mod hit_point_update;
 mod photon_grid;
 mod photon_pass;
 mod resolve;
 mod trace;
 
+use gather_pass::{PhotonMap, for_photons_in_disc};
 use photon_grid::{PhotonGrid, build_photon_grid};
+use photon_pass::{Deposits, photon_pass_main};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
+use ppm_core::emission::{guided_emission, ordinary_emission, region_emission};
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
     ResolveParams,
 };
+use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, hit_flags};
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
+use ppm_core::passes::{
+    GuidedPhotonPass, HitPointUpdate, LandingPaths, RegionPhotonPass, SceneUpdate, UpdateStats,
+};
+use ppm_core::rng::PassKind;
+use rayon::prelude::*;
 use trace::SceneData;
 
 /// The rayon backend. Runs on the current rayon pool: install it in a sized pool to choose the
@@ -33,7 +43,11 @@ use trace::SceneData;
 pub struct CpuBackend {
     scene: Option<(SceneData, GpuCamera)>,
     hit_points: Vec<HitPoint>,
+    /// Squared radius new hit points start with (from the last eye pass).
+    r2_initial: f32,
     photons: Vec<Photon>,
+    /// Path weight per deposit, kept by region passes only.
+    weights: Option<Vec<f32>>,
     grid: Option<PhotonGrid>,
 }
 
@@ -61,49 +75,41 @@ fn loaded<'a>(
     })
 }
 
+fn scene_data(scene: &CompiledScene) -> SceneData {
+    SceneData {
+        triangles: scene.triangles.clone(),
+        bvh: scene.bvh.clone(),
+        materials: scene.materials.clone(),
+        lights: scene.lights.clone(),
+    }
+}
+
 impl SceneUpload for CpuBackend {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        let data = SceneData {
-            triangles: scene.triangles.clone(),
-            bvh: scene.bvh.clone(),
-            materials: scene.materials.clone(),
-            lights: scene.lights.clone(),
-        };
-        self.scene = Some((data, scene.camera));
+        self.scene = Some((scene_data(scene), scene.camera));
         self.hit_points.clear();
         self.photons.clear();
+        self.weights = None;
         self.grid = None;
         Ok(())
     }
 }
 
-impl EyePass for CpuBackend {
-    fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
-        let (scene, camera) = loaded(&self.scene, "eye")?;
-        let slots = camera.width as usize * camera.height as usize * params.spp as usize;
-        let mut hit_points = std::mem::take(&mut self.hit_points);
-        hit_points.resize(slots, HitPoint::default());
-        let stats = eye_pass::eye_pass_main(params, camera, scene, &mut hit_points);
-        self.hit_points = hit_points;
-        check_hit_points("eye", &self.hit_points)?;
-        Ok(stats)
+impl SceneUpdate for CpuBackend {
+    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        self.scene = Some((scene_data(scene), scene.camera));
+        self.photons.clear();
+        self.weights = None;
+        self.grid = None;
+        Ok(())
     }
 }
 
-impl DirectLight for CpuBackend {
-    fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
-        let (scene, _) = loaded(&self.scene, "direct light")?;
-        let stats = direct_light::direct_light_main(params, scene, &mut self.hit_points);
-        check_hit_points("direct light", &self.hit_points)?;
-        Ok(stats)
-    }
-}
-
-impl PhotonPass for CpuBackend {
-    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
-        let (scene, _) = loaded(&self.scene, "photon")?;
-        let (photons, stats) = photon_pass::photon_pass_main(params, scene);
-        if let Some((i, p)) = photons
+impl CpuBackend {
+    /// Files `deposits` as the current photon map.
+    fn store(&mut self, deposits: Deposits) -> Result<PhotonStats, BackendError> {
+        if let Some((i, p)) = deposits
+            .photons
             .iter()
             .enumerate()
             .find(|(_, p)| !p.power.iter().chain(&p.position).all(|v| v.is_finite()))
@@ -122,9 +128,128 @@ impl PhotonPass for CpuBackend {
             .filter(|h| h.is_valid())
             .map(|h| h.r2)
             .fold(0.0f32, f32::max);
-        self.grid = Some(build_photon_grid(&photons, max_r2));
-        self.photons = photons;
+        self.grid = Some(build_photon_grid(&deposits.photons, max_r2));
+        self.photons = deposits.photons;
+        self.weights = deposits.weights;
+        Ok(deposits.stats)
+    }
+}
+
+impl EyePass for CpuBackend {
+    fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "eye")?;
+        let slots = camera.width as usize * camera.height as usize * params.spp as usize;
+        let mut hit_points = std::mem::take(&mut self.hit_points);
+        hit_points.resize(slots, HitPoint::default());
+        let stats = eye_pass::eye_pass_main(params, camera, scene, &mut hit_points);
+        self.hit_points = hit_points;
+        self.r2_initial = params.r2_initial;
+        check_hit_points("eye", &self.hit_points)?;
         Ok(stats)
+    }
+}
+
+impl DirectLight for CpuBackend {
+    fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "direct light")?;
+        let stats = direct_light::direct_light_main(params, scene, &mut self.hit_points);
+        check_hit_points("direct light", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl PhotonPass for CpuBackend {
+    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "photon")?;
+        let emit = |key: &ppm_core::rng::StreamKey| {
+            ordinary_emission(&scene.lights, &scene.materials, key)
+        };
+        let deposits = photon_pass_main(params, scene, PassKind::Photon, &emit, false);
+        self.store(deposits)
+    }
+}
+
+impl RegionPhotonPass for CpuBackend {
+    fn region_photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        region: &EmissionRegion,
+    ) -> Result<PhotonStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "region photon")?;
+        let emit = |key: &ppm_core::rng::StreamKey| {
+            region_emission(&scene.lights, &scene.materials, region, key)
+        };
+        let deposits = photon_pass_main(params, scene, PassKind::Region, &emit, true);
+        self.store(deposits)
+    }
+}
+
+impl GuidedPhotonPass for CpuBackend {
+    fn guided_photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        guide: &GuidedEmission,
+        paths: &[RecordedPath],
+    ) -> Result<PhotonStats, BackendError> {
+        let (scene, _) = loaded(&self.scene, "guided photon")?;
+        let emit = |key: &ppm_core::rng::StreamKey| {
+            guided_emission(&scene.lights, &scene.materials, guide, paths, key)
+        };
+        let deposits = photon_pass_main(params, scene, PassKind::Guided, &emit, false);
+        self.store(deposits)
+    }
+}
+
+impl HitPointUpdate for CpuBackend {
+    fn update_hit_points(
+        &mut self,
+        params: &EyePassParams,
+        epsilon: f32,
+    ) -> Result<UpdateStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "hit-point update")?;
+        if self.hit_points.is_empty() {
+            return Err(BackendError::OutOfOrder {
+                pass: "hit-point update",
+                needs: "an eye pass",
+            });
+        }
+        let stats = hit_point_update::update_hit_points_main(
+            params,
+            camera,
+            scene,
+            epsilon,
+            &mut self.hit_points,
+        );
+        self.r2_initial = params.r2_initial;
+        check_hit_points("hit-point update", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl LandingPaths for CpuBackend {
+    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
+        let grid = self.grid.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "landing paths",
+            needs: "a photon pass",
+        })?;
+        let map = PhotonMap {
+            photons: &self.photons,
+            grid,
+            weights: None,
+        };
+        let mut paths: Vec<u32> = self
+            .hit_points
+            .par_iter()
+            .filter(|h| h.is_valid() && h.flags & hit_flags::UPDATED != 0)
+            .flat_map_iter(|hp| {
+                let mut found = Vec::new();
+                for_photons_in_disc(hp, &map, |_, p| found.push(p.path));
+                found
+            })
+            .collect();
+        paths.sort_unstable();
+        paths.dedup();
+        Ok(paths)
     }
 }
 
@@ -135,11 +260,16 @@ impl GatherPass for CpuBackend {
             pass: "gather",
             needs: "a photon pass",
         })?;
+        let map = PhotonMap {
+            photons: &self.photons,
+            grid,
+            weights: self.weights.as_deref(),
+        };
         let stats = gather_pass::gather_pass_main(
             params,
             &scene.materials,
-            &self.photons,
-            grid,
+            &map,
+            self.r2_initial,
             &mut self.hit_points,
         );
         check_hit_points("gather", &self.hit_points)?;

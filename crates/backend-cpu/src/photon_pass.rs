@@ -3,80 +3,98 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
+use ppm_core::emission::{EMISSION_DIMS, Emission};
 use ppm_core::geometry::{oct_encode, specular_bounce, to_world};
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::{PassKind, StreamKey};
-use ppm_core::sampling::{cosine_hemisphere, sample_cdf, uniform_triangle};
+use ppm_core::sampling::cosine_hemisphere;
 use rayon::prelude::*;
-use std::f32::consts::PI;
 
-/// Random dimensions: light, point (2), direction (2), then three per bounce.
-const DIM_LIGHT: u32 = 0;
-const DIM_BOUNCE: u32 = 5;
+/// Random dimensions: the emission's (see `ppm_core::emission`), then three per bounce.
+const DIM_BOUNCE: u32 = EMISSION_DIMS;
 const DIMS_PER_BOUNCE: u32 = 3;
 
 /// Photons traced per parallel task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: u32 = 2048;
 
-/// Traces `params.photon_count` photons; deposits come back in path order whatever the threads.
+/// One pass's deposits, with the weight of the path that made each when the pass needs it.
+pub struct Deposits {
+    /// The deposits, in path order.
+    pub photons: Vec<Photon>,
+    /// Per deposit, its path's weight relative to an ordinary photon (region passes only).
+    pub weights: Option<Vec<f32>>,
+    /// Counters.
+    pub stats: PhotonStats,
+}
+
+/// Traces paths `first_path .. first_path + photon_count`, each starting where `emit` says;
+/// deposits come back in path order whatever the threads. `keep_weights` stores each
+/// deposit's path weight (region passes count `M` in ordinary-photon units with it).
 pub fn photon_pass_main(
     params: &PhotonPassParams,
     scene: &SceneData,
-) -> (Vec<Photon>, PhotonStats) {
+    kind: PassKind,
+    emit: &(dyn Fn(&StreamKey) -> Emission + Sync),
+    keep_weights: bool,
+) -> Deposits {
     let chunks = params.photon_count.div_ceil(CHUNK);
-    let traced: Vec<(Vec<Photon>, u64)> = (0..chunks)
+    let traced: Vec<(Vec<Photon>, Vec<f32>, u64)> = (0..chunks)
         .into_par_iter()
         .map(|c| {
-            let mut deposits = Vec::new();
-            let mut rays = 0;
+            let (mut deposits, mut weights, mut rays) = (Vec::new(), Vec::new(), 0);
             let end = ((c + 1) * CHUNK).min(params.photon_count);
             for local in c * CHUNK..end {
-                let path = params.first_path + local;
-                rays += trace_photon(params, scene, path, &mut deposits);
+                let key = StreamKey {
+                    seed: params.seed,
+                    kind,
+                    pass_index: params.pass_index,
+                    path: params.first_path + local,
+                };
+                let emission = emit(&key);
+                if emission.weight <= 0.0 {
+                    continue;
+                }
+                let before = deposits.len();
+                rays += trace_photon(params, scene, &key, &emission, &mut deposits);
+                if keep_weights {
+                    weights.resize(weights.len() + deposits.len() - before, emission.weight);
+                }
             }
-            (deposits, rays)
+            (deposits, weights, rays)
         })
         .collect();
-    let rays = traced.iter().map(|(_, r)| r).sum();
-    let photons: Vec<Photon> = traced.into_iter().flat_map(|(d, _)| d).collect();
+    let rays = traced.iter().map(|(_, _, r)| r).sum();
+    let mut photons = Vec::new();
+    let mut weights = Vec::new();
+    for (d, w, _) in traced {
+        photons.extend(d);
+        weights.extend(w);
+    }
     let stats = PhotonStats {
         emitted: u64::from(params.photon_count),
         deposited: photons.len() as u64,
         rays,
     };
-    (photons, stats)
+    Deposits {
+        photons,
+        weights: keep_weights.then_some(weights),
+        stats,
+    }
 }
 
-/// Traces one photon path, appending its deposits; returns the ray segments traced.
+/// Traces one photon path from `emission`, appending its deposits; returns the ray segments traced.
 fn trace_photon(
     params: &PhotonPassParams,
     scene: &SceneData,
-    path: u32,
+    key: &StreamKey,
+    emission: &Emission,
     out: &mut Vec<Photon>,
 ) -> u64 {
-    let key = StreamKey {
-        seed: params.seed,
-        kind: PassKind::Photon,
-        pass_index: params.pass_index,
-        path,
-    };
-    let light = &scene.lights[sample_cdf(
-        |i| scene.lights[i].cdf,
-        scene.lights.len(),
-        key.uniform(DIM_LIGHT),
-    )];
-    let (b1, b2) = uniform_triangle(key.uniform(DIM_LIGHT + 1), key.uniform(DIM_LIGHT + 2));
-    let light_normal = Vec3::from(light.normal);
-    let start = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
-    let mut dir = to_world(
-        cosine_hemisphere(key.uniform(DIM_LIGHT + 3), key.uniform(DIM_LIGHT + 4)),
-        light_normal,
-    );
-    let mut origin = start + light_normal * params.ray_epsilon;
-    // Each photon carries the light's whole power pi * A * Le, divided by its selection probability.
-    let le = Vec3::from(scene.materials[light.material as usize].emission);
-    let mut power = le * (PI * light.area / light.pdf * params.power_scale);
+    let path = key.path;
+    let mut dir = emission.direction;
+    let mut origin = emission.origin + emission.normal * params.ray_epsilon;
+    let mut power = emission.power * params.power_scale;
     let mut rays = 0;
     for bounce in 0..params.max_depth {
         rays += 1;

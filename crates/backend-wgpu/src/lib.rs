@@ -372,6 +372,12 @@ impl PhotonPass for WgpuBackend {
 
 impl GatherPass for WgpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
+        if params.kind != ppm_core::layout::gather_kind::ORDINARY {
+            return Err(BackendError::Unsupported(format!(
+                "the wgpu backend gathers ordinary photon passes only (gather kind {:#x})",
+                params.kind
+            )));
+        }
         let scene = self.scene("gather")?;
         let (hit_points, slots) = self.hit_points("gather")?;
         let needs_photons = BackendError::OutOfOrder {

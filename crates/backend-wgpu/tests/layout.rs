@@ -142,8 +142,8 @@ fn pass_parameters_match_their_wgsl_twins() {
     same_layout!(GatherParams {
         alpha,
         emitted_increment,
-        _pad0,
-        _pad1
+        kind,
+        region_photons
     });
     same_layout!(GridParams {
         origin,
@@ -189,6 +189,8 @@ fn shared_constants_agree() {
         ("MATERIAL_GLASS", material_kind::GLASS),
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
+        ("HIT_UPDATED", hit_flags::UPDATED),
+        ("HIT_OBJECT_SHIFT", hit_flags::OBJECT_SHIFT),
         ("NO_MATERIAL", NO_MATERIAL),
         ("FIRST_HIT_SKIP", first_hit::SKIP),
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),

@@ -176,8 +176,8 @@ fn photon_loop(
         let gathered = backend.gather_pass(&GatherParams {
             alpha: params.alpha,
             emitted_increment: params.photons_per_pass as f32,
-            _pad0: 0,
-            _pad1: 0,
+            kind: ppm_core::layout::gather_kind::ORDINARY,
+            region_photons: 0.0,
         })?;
         times.gather += t.elapsed().as_secs_f64();
         report.photons_gathered += gathered.photons_gathered;

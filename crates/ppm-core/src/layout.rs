@@ -23,6 +23,10 @@ pub mod hit_flags {
     pub const VALID: u32 = 1;
     /// The eye ray met the surface on the side its normal points to: emitters emit only there.
     pub const FRONT: u32 = 2;
+    /// The hit point was reset by the last hit-point update (ALGORITHM.md 2.4).
+    pub const UPDATED: u32 = 4;
+    /// The index of the object hit sits in the bits from here up (24 bits).
+    pub const OBJECT_SHIFT: u32 = 8;
 }
 
 /// Marks an empty hit-point slot in [`HitPoint::material`].
@@ -263,6 +267,24 @@ pub struct PhotonPassParams {
     pub first_path: u32,
 }
 
+/// Which photons a gather folds in, who gathers them, and with which update
+/// (ALGORITHM.md 3, "Who gathers what"), stored in [`GatherParams::kind`].
+pub mod gather_kind {
+    /// Ordinary photons: every hit point, eqs 1-3, `emitted` grows.
+    pub const ORDINARY: u32 = 0;
+    /// Compensation photons (negative, pose A): hit points not updated, eqs 5-7 with clamps.
+    pub const REGION_NEGATIVE: u32 = 1;
+    /// Region photons (positive, pose B): hit points not updated, eqs 1-3.
+    pub const REGION_POSITIVE: u32 = 2;
+    /// Testing and guided photons: updated hit points only, eqs 1-3, `emitted` grows.
+    pub const GUIDED: u32 = 3;
+    /// Low bits hold the kind.
+    pub const KIND_MASK: u32 = 0xff;
+    /// Flag: region photons count raw in `M` (thesis mode) instead of as the ordinary photons
+    /// their weights stand for (area mode).
+    pub const RAW_COUNT: u32 = 0x100;
+}
+
 /// Parameters of one gather pass. 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -271,10 +293,69 @@ pub struct GatherParams {
     pub alpha: f32,
     /// Photons this pass adds to each gathering hit point's `emitted`.
     pub emitted_increment: f32,
-    /// Padding.
-    pub _pad0: u32,
+    /// One of [`gather_kind`], with its flags.
+    pub kind: u32,
+    /// Photons emitted by the region pass being gathered (`N_c`); unused otherwise.
+    pub region_photons: f32,
+}
+
+/// The emitting region of compensation and region photons (ALGORITHM.md 2.1, 3). 64 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct EmissionRegion {
+    /// Thesis mode: the point light (the lights' area-weighted centre).
+    pub light_point: [f32; 3],
+    /// One of [`region_mode`].
+    pub mode: u32,
+    /// A corner of the rectangle.
+    pub origin: [f32; 3],
     /// Padding.
     pub _pad1: u32,
+    /// First edge of the rectangle from `origin`.
+    pub edge_u: [f32; 3],
+    /// Area of the rectangle.
+    pub area: f32,
+    /// Second edge, orthogonal to the first.
+    pub edge_v: [f32; 3],
+    /// Padding.
+    pub _pad0: u32,
+}
+
+/// Where region photons start (ALGORITHM.md 3, "Which light point").
+pub mod region_mode {
+    /// Uniform on the area lights (ours, the default).
+    pub const AREA: u32 = 0;
+    /// The point light at the lights' centre (the thesis's T3.3 choice).
+    pub const POINT: u32 = 1;
+}
+
+/// A recorded emission that reached an updated hit point: guided photons start around it.
+/// 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RecordedPath {
+    /// Where the testing photon left the light.
+    pub origin: [f32; 3],
+    /// Index of the light it left.
+    pub light: u32,
+    /// Its emission direction.
+    pub direction: [f32; 3],
+    /// Padding.
+    pub _pad0: u32,
+}
+
+/// How guided photons are emitted (ALGORITHM.md 2.6, 3). 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GuidedEmission {
+    /// Cosine of the jitter cone's half-angle.
+    pub cos_cone: f32,
+    /// Probability of drawing from the ordinary distribution (defensive mixture).
+    pub beta: f32,
+    /// Recorded paths to draw around.
+    pub paths: u32,
+    /// 1: weight by `p_ordinary / p_mixture` (unbiased, ours); 0: the thesis's unweighted rule.
+    pub weighted: u32,
 }
 
 /// The uniform hash grid that indexes one pass's photons. 48 bytes.
@@ -329,6 +410,9 @@ mod tests {
     fn layouts_are_whole_rows() {
         let sizes = [
             ("HitPoint", size_of::<HitPoint>(), 96),
+            ("EmissionRegion", size_of::<EmissionRegion>(), 64),
+            ("RecordedPath", size_of::<RecordedPath>(), 32),
+            ("GuidedEmission", size_of::<GuidedEmission>(), 16),
             ("Photon", size_of::<Photon>(), 32),
             ("GpuTriangle", size_of::<GpuTriangle>(), 64),
             ("BvhNode", size_of::<BvhNode>(), 32),

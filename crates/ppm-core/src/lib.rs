@@ -11,12 +11,14 @@
 
 pub mod check;
 pub mod compile;
+pub mod emission;
 pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod layout;
 pub mod params;
 pub mod passes;
+pub mod region;
 pub mod rng;
 pub mod sampling;
 pub mod scene;

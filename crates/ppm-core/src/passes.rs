@@ -10,8 +10,8 @@
 use crate::compile::CompiledScene;
 use crate::image::Image;
 use crate::layout::{
-    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
-    ResolveParams,
+    DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams,
 };
 use thiserror::Error;
 
@@ -40,6 +40,9 @@ pub enum BackendError {
         /// What must run first.
         needs: &'static str,
     },
+    /// The backend does not implement what the parameters ask for.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
     /// The request does not fit the device (buffer size, memory).
     #[error("request exceeds a device limit: {0}")]
     Limit(String),
@@ -82,6 +85,17 @@ pub struct GatherStats {
     pub hit_points_reached: u64,
     /// Photon-to-hit-point contributions summed.
     pub photons_gathered: u64,
+}
+
+/// Counters of a hit-point update.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct UpdateStats {
+    /// Hit points reset because their surface moved or changed.
+    pub updated: u64,
+    /// Hit points that kept their statistics.
+    pub kept: u64,
+    /// Eye rays traced.
+    pub rays: u64,
 }
 
 /// Receives the scene's buffers (and rebuilds whatever the backend derives from them).
@@ -142,4 +156,63 @@ pub trait Backend:
 {
     /// Short name for reports (`cpu`, `wgpu`).
     fn name(&self) -> &str;
+}
+
+/// Swaps the geometry under the hit points when an object moves (ALGORITHM.md 2.3).
+pub trait SceneUpdate {
+    /// Replaces triangles, BVH and lights with `scene`'s, keeping hit points and statistics.
+    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
+}
+
+/// Hit-point update after a move (ALGORITHM.md 2.4).
+pub trait HitPointUpdate {
+    /// Re-runs the eye pass on the current geometry; a slot whose surface changed object,
+    /// validity, or moved more than `epsilon` is reset (`n = 0`, `tau = 0`,
+    /// `r2 = r2_initial`, `emitted = 0`) and flagged `UPDATED`; the others keep their
+    /// statistics. Flags of earlier updates are cleared.
+    fn update_hit_points(
+        &mut self,
+        params: &EyePassParams,
+        epsilon: f32,
+    ) -> Result<UpdateStats, BackendError>;
+}
+
+/// Compensation and region photons (ALGORITHM.md 2.2, 2.5).
+pub trait RegionPhotonPass {
+    /// Replaces the photon map with photons emitted through `region`; `params.power_scale`
+    /// is -1 for compensation photons. Each deposit keeps its path's weight for `M`.
+    fn region_photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        region: &EmissionRegion,
+    ) -> Result<PhotonStats, BackendError>;
+}
+
+/// Guided photons around recorded paths (ALGORITHM.md 2.6).
+pub trait GuidedPhotonPass {
+    /// Replaces the photon map with guided photons.
+    fn guided_photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        guide: &GuidedEmission,
+        paths: &[RecordedPath],
+    ) -> Result<PhotonStats, BackendError>;
+}
+
+/// Which testing photons reached updated hit points (ALGORITHM.md 2.6).
+pub trait LandingPaths {
+    /// Distinct path indices, ascending, of the current map's photons that lie within the
+    /// radius of an updated hit point.
+    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError>;
+}
+
+/// A backend that also runs the dynamic passes of compensation photons.
+pub trait DynamicBackend:
+    Backend + SceneUpdate + HitPointUpdate + RegionPhotonPass + GuidedPhotonPass + LandingPaths
+{
+}
+
+impl<T> DynamicBackend for T where
+    T: Backend + SceneUpdate + HitPointUpdate + RegionPhotonPass + GuidedPhotonPass + LandingPaths
+{
 }

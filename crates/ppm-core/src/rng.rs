@@ -14,8 +14,12 @@ pub enum PassKind {
     Eye = 1,
     /// Shadow rays towards the lights.
     DirectLight = 2,
-    /// Ordinary photons.
+    /// Ordinary and testing photons.
     Photon = 3,
+    /// Compensation and region photons (a negative pass and its positive twin share indices).
+    Region = 4,
+    /// Guided photons.
+    Guided = 5,
 }
 
 /// The key of one random stream: everything but the dimension.

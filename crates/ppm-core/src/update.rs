@@ -45,6 +45,46 @@ pub fn ppm_update(s: Statistics, m: f32, dtau: [f32; 3], alpha: f32) -> Statisti
     }
 }
 
+/// Folds one gather of compensation (negative) photons into the statistics (thesis eqs 5 to
+/// 7, ALGORITHM.md 3 "Counts under negative photons").
+///
+/// `m` counts the negative photons found (in ordinary-photon units), `dtau` is their
+/// (negative) flux. The count falls by `alpha * m` and radius and flux grow by the ratio
+/// `(n - alpha*m) / (n - m)`, written `1 + (1 - alpha) * m / (n - m)` so the departure from 1
+/// is computed directly. Clamps: once the negative photons reach the count (`m >= n`, which
+/// includes `n - alpha*m <= 0`) the hit point is emptied (`n = 0`, `tau = 0`,
+/// `r2 = r2_initial`) rather than divided by zero or a negative number; `r2` never exceeds
+/// `r2_initial`; every `tau` channel is clamped at zero.
+#[inline]
+pub fn compensation_update(
+    s: Statistics,
+    m: f32,
+    dtau: [f32; 3],
+    alpha: f32,
+    r2_initial: f32,
+) -> Statistics {
+    if m <= 0.0 {
+        return s;
+    }
+    if m >= s.n {
+        return Statistics {
+            n: 0.0,
+            r2: r2_initial,
+            tau: [0.0; 3],
+        };
+    }
+    let ratio = 1.0 + (1.0 - alpha) * (m / (s.n - m));
+    Statistics {
+        n: s.n - alpha * m,
+        r2: (s.r2 * ratio).min(r2_initial),
+        tau: [
+            ((s.tau[0] + dtau[0]) * ratio).max(0.0),
+            ((s.tau[1] + dtau[1]) * ratio).max(0.0),
+            ((s.tau[2] + dtau[2]) * ratio).max(0.0),
+        ],
+    }
+}
+
 /// Reflected radiance estimate `tau / (pi * r2 * emitted)` (thesis eq 4, ALGORITHM.md 1.5).
 ///
 /// Divides in two steps so the product `pi * r2 * emitted` is never formed: it overflows at
@@ -114,6 +154,45 @@ mod tests {
         for (n, m, alpha) in [(10.0, 5.0, 0.7), (0.0, 3.0, 0.5), (1000.0, 1.0, 0.9)] {
             let quotient = (n + alpha * m) / (n + m);
             assert_relative_eq!(shrink_ratio(n, m, alpha), quotient, max_relative = 1e-6);
+        }
+    }
+
+    /// Eqs 5-7 reverse eqs 1-3 in the count: removing the M photons just added restores `n`,
+    /// and the radius grows back (not exactly to where it was: the thesis's ratio is taken at
+    /// the new count) while the flux falls.
+    #[test]
+    fn compensation_reverses_the_count_and_grows_the_radius() {
+        let before = stats(40.0, 300.0, 12.0);
+        let added = ppm_update(before, 10.0, [5.0; 3], 0.7);
+        let removed = compensation_update(added, 10.0, [-5.0; 3], 0.7, 400.0);
+        assert_relative_eq!(removed.n, before.n, max_relative = 1e-6);
+        assert!(removed.r2 > added.r2 && removed.r2 <= 400.0, "{removed:?}");
+        assert!(
+            removed.tau[0] < added.tau[0] && removed.tau[0] >= 0.0,
+            "{removed:?}"
+        );
+    }
+
+    #[test]
+    fn negative_photons_outnumbering_the_count_empty_the_hit_point() {
+        let s = stats(5.0, 100.0, 3.0);
+        for m in [5.0, 6.0, 1e6] {
+            let e = compensation_update(s, m, [-1.0; 3], 0.7, 400.0);
+            assert_eq!((e.n, e.r2, e.tau), (0.0, 400.0, [0.0; 3]), "m = {m}");
+        }
+    }
+
+    #[test]
+    fn compensation_clamps_radius_and_flux() {
+        // Nearly all photons removed: the ratio is huge, r2 stops at r2_initial.
+        let s = compensation_update(stats(10.0, 350.0, 1.0), 9.99, [-50.0; 3], 0.7, 400.0);
+        assert!(s.n > 0.0 && s.r2 == 400.0 && s.tau == [0.0; 3], "{s:?}");
+        for m in [0.1f32, 1.0, 4.0, 9.0] {
+            let s = compensation_update(stats(10.0, 100.0, 2.0), m, [-3.0; 3], 0.5, 400.0);
+            assert!(
+                s.n.is_finite() && s.r2 <= 400.0 && s.r2 >= 100.0 && s.tau[0] >= 0.0,
+                "{s:?}"
+            );
         }
     }
 

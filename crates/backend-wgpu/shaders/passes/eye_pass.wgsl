@@ -55,7 +55,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             out.wo = -dir;
             out.r2 = params.r2_initial;
             out.throughput = throughput;
-            out.flags = HIT_VALID | select(0u, HIT_FRONT, front);
+            out.flags = HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
             rays = depth + 1u;
             break;
         }

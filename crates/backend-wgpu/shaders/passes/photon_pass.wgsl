@@ -18,7 +18,8 @@
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
 const DIM_LIGHT: u32 = 0u;
-const DIM_BOUNCE: u32 = 5u;
+// Bounces start after the emission's dimensions (ppm_core::emission::EMISSION_DIMS).
+const DIM_BOUNCE: u32 = 8u;
 const DIMS_PER_BOUNCE: u32 = 3u;
 
 // Traces path `path`; writes its deposits from `photons[base]` on when `write` is set.

@@ -7,6 +7,8 @@ const MATERIAL_GLASS: u32 = 2u;
 
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
+const HIT_UPDATED: u32 = 4u;
+const HIT_OBJECT_SHIFT: u32 = 8u;
 const NO_MATERIAL: u32 = 0xffffffffu;
 
 const FIRST_HIT_SKIP: u32 = 0u;
@@ -119,8 +121,8 @@ struct PhotonPassParams {
 struct GatherParams {
     alpha: f32,
     emitted_increment: f32,
-    _pad0: u32,
-    _pad1: u32,
+    kind: u32,
+    region_photons: f32,
 }
 
 struct GridParams {

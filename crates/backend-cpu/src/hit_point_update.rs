@@ -1,0 +1,51 @@
+//! Hit-point update after a move (ALGORITHM.md 2.4): the eye pass runs again on the new pose,
+//! and only slots whose surface changed start over.
+
+use crate::eye_pass::eye_pass_main;
+use crate::trace::SceneData;
+use glam::Vec3;
+use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, hit_flags};
+use ppm_core::passes::UpdateStats;
+use rayon::prelude::*;
+
+/// Object index stored in a hit point's flags.
+pub fn object_of(hp: &HitPoint) -> u32 {
+    hp.flags >> hit_flags::OBJECT_SHIFT
+}
+
+/// Compares a fresh eye pass with `hit_points` and resets the slots that changed.
+pub fn update_hit_points_main(
+    params: &EyePassParams,
+    camera: &GpuCamera,
+    scene: &SceneData,
+    epsilon: f32,
+    hit_points: &mut [HitPoint],
+) -> UpdateStats {
+    let mut fresh = vec![HitPoint::default(); hit_points.len()];
+    let eye = eye_pass_main(params, camera, scene, &mut fresh);
+    let updated: u64 = hit_points
+        .par_iter_mut()
+        .zip(&fresh)
+        .map(|(old, new)| {
+            let same = old.is_valid() == new.is_valid()
+                && (!new.is_valid()
+                    || (object_of(old) == object_of(new)
+                        && Vec3::from(old.position).distance(Vec3::from(new.position)) <= epsilon));
+            if same {
+                old.flags &= !hit_flags::UPDATED;
+                0
+            } else {
+                *old = *new;
+                if new.is_valid() {
+                    old.flags |= hit_flags::UPDATED;
+                }
+                1
+            }
+        })
+        .sum();
+    UpdateStats {
+        updated,
+        kept: hit_points.len() as u64 - updated,
+        rays: eye.rays,
+    }
+}
