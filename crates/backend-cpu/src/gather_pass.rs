@@ -33,23 +33,34 @@ pub fn gathers(hp: &HitPoint, kind: u32) -> bool {
         }
 }
 
-/// Updates every hit point that gathers this pass.
+/// Region photons gathered but not yet applied: signed count and flux (times BRDF) per hit
+/// point (area mode's deferred compensation).
+pub type Pending = [f32; 4];
+
+/// Updates every hit point that gathers this pass (or adds to its pending sum, or applies it).
 pub fn gather_pass_main(
     params: &GatherParams,
     materials: &[GpuMaterial],
     map: &PhotonMap,
     r2_initial: f32,
     hit_points: &mut [HitPoint],
+    pending: &mut [Pending],
 ) -> GatherStats {
     let kind = params.kind & gather_kind::KIND_MASK;
+    if kind == gather_kind::REGION_APPLY {
+        apply_pending(params.alpha, r2_initial, hit_points, pending);
+        return GatherStats::default();
+    }
+    let deferred = params.kind & gather_kind::DEFERRED != 0;
     let region = matches!(
         kind,
         gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE
     );
     let (reached, gathered) = hit_points
         .par_iter_mut()
+        .zip(pending.par_iter_mut())
         .with_min_len(256)
-        .map(|hp| {
+        .map(|(hp, pending)| {
             if !gathers(hp, params.kind) {
                 return (0, 0);
             }
@@ -67,7 +78,21 @@ pub fn gather_pass_main(
                 found as f32
             };
             let brdf = Vec3::from(materials[hp.material as usize].albedo) * FRAC_1_PI;
-            let dtau = (flux * brdf * scale).into();
+            let dtau: [f32; 3] = (flux * brdf * scale).into();
+            if deferred {
+                let sign = if kind == gather_kind::REGION_NEGATIVE {
+                    -1.0
+                } else {
+                    1.0
+                };
+                *pending = [
+                    pending[0] + sign * m,
+                    pending[1] + dtau[0],
+                    pending[2] + dtau[1],
+                    pending[3] + dtau[2],
+                ];
+                return (u64::from(found > 0), u64::from(found));
+            }
             let s = Statistics {
                 n: hp.n,
                 r2: hp.r2,
@@ -82,6 +107,11 @@ pub fn gather_pass_main(
             hp.r2 = s.r2;
             hp.tau = s.tau;
             hp.emitted += params.emitted_increment;
+            if kind == gather_kind::REGION_NEGATIVE && m > 0.0 && s.n == 0.0 {
+                // Emptied: its statistics start over, so does their normaliser; otherwise the
+                // photons it gathers next would be divided by everything emitted before.
+                hp.emitted = 0.0;
+            }
             (u64::from(found > 0), u64::from(found))
         })
         .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
@@ -121,4 +151,43 @@ pub fn for_photons_in_disc(hp: &HitPoint, map: &PhotonMap, mut visit: impl FnMut
             }
         }
     }
+}
+
+/// Folds each hit point's pending region photons into its statistics as one update: eqs 1-3
+/// when the net count grew, eqs 5-7 with their clamps when it fell; flux clamped at zero.
+fn apply_pending(
+    alpha: f32,
+    r2_initial: f32,
+    hit_points: &mut [HitPoint],
+    pending: &mut [Pending],
+) {
+    hit_points
+        .par_iter_mut()
+        .zip(pending.par_iter_mut())
+        .for_each(|(hp, p)| {
+            let [m, t0, t1, t2] = std::mem::take(p);
+            if !hp.is_valid() || (m == 0.0 && t0 == 0.0 && t1 == 0.0 && t2 == 0.0) {
+                return;
+            }
+            let s = Statistics {
+                n: hp.n,
+                r2: hp.r2,
+                tau: hp.tau,
+            };
+            let s = if m >= 0.0 {
+                let s = ppm_update(s, m, [t0, t1, t2], alpha);
+                Statistics {
+                    tau: s.tau.map(|t| t.max(0.0)),
+                    ..s
+                }
+            } else {
+                compensation_update(s, -m, [t0, t1, t2], alpha, r2_initial)
+            };
+            if m < 0.0 && s.n == 0.0 {
+                hp.emitted = 0.0;
+            }
+            hp.n = s.n;
+            hp.r2 = s.r2;
+            hp.tau = s.tau;
+        });
 }

@@ -48,6 +48,8 @@ pub struct CpuBackend {
     photons: Vec<Photon>,
     /// Path weight per deposit, kept by region passes only.
     weights: Option<Vec<f32>>,
+    /// Deferred region photons per hit point (area mode).
+    pending: Vec<gather_pass::Pending>,
     grid: Option<PhotonGrid>,
 }
 
@@ -143,6 +145,7 @@ impl EyePass for CpuBackend {
         hit_points.resize(slots, HitPoint::default());
         let stats = eye_pass::eye_pass_main(params, camera, scene, &mut hit_points);
         self.hit_points = hit_points;
+        self.pending = vec![[0.0; 4]; self.hit_points.len()];
         self.r2_initial = params.r2_initial;
         check_hit_points("eye", &self.hit_points)?;
         Ok(stats)
@@ -265,12 +268,14 @@ impl GatherPass for CpuBackend {
             grid,
             weights: self.weights.as_deref(),
         };
+        self.pending.resize(self.hit_points.len(), [0.0; 4]);
         let stats = gather_pass::gather_pass_main(
             params,
             &scene.materials,
             &map,
             self.r2_initial,
             &mut self.hit_points,
+            &mut self.pending,
         );
         check_hit_points("gather", &self.hit_points)?;
         Ok(stats)

@@ -2,9 +2,12 @@
 //! harness that compares two backends, the conformance suite, and scene lookup by name or
 //! file. The `ppm` command is built on it.
 
+pub mod chart;
 pub mod conformance;
 pub mod diff;
 pub mod diff_command;
+pub mod dynamic;
+pub mod error_report;
 pub mod render;
 pub mod report;
 pub mod stats;

@@ -4,6 +4,8 @@ use anyhow::{Context, Result, bail};
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
 use clap::{Parser, Subcommand, ValueEnum};
+use harness::dynamic::{DynamicParams, Mode, Progressive};
+use harness::error_report::{self, ErrorSettings};
 use harness::render::{Progress, render};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::params::{DirectMode, RenderParams};
@@ -30,6 +32,121 @@ enum Command {
     Scenes,
     /// Render one seeded scene on the CPU and wgpu backends and compare them.
     Diff(DiffArgs),
+    /// Render a scene's move as an animation, carrying the light from frame to frame.
+    Animate(AnimateArgs),
+    /// Measurement reports.
+    #[command(subcommand)]
+    Report(ReportCommand),
+}
+
+#[derive(Subcommand)]
+enum ReportCommand {
+    /// Relative RMSE against a from-scratch render of the new pose, over time, per mode.
+    ErrorVsTime(ErrorArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ModeChoice {
+    /// Start over on every frame (plain PPM).
+    Restart,
+    /// The thesis's compensation photons (point light, raw counts, unweighted guides).
+    Thesis,
+    /// Ours: compensation from the whole area light, weighted counts and guides.
+    Area,
+}
+
+impl From<ModeChoice> for Mode {
+    fn from(m: ModeChoice) -> Self {
+        match m {
+            ModeChoice::Restart => Mode::Restart,
+            ModeChoice::Thesis => Mode::Thesis,
+            ModeChoice::Area => Mode::Area,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct DynamicArgs {
+    /// Built-in scene name or path to a TOML scene file (its [[moves]] define the motion).
+    scene: String,
+    /// Backend (the dynamic passes run on the CPU backend so far).
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: BackendChoice,
+    /// Image width.
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Photons per ordinary pass (default: the scene's).
+    #[arg(long)]
+    photons_per_pass: Option<u32>,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Shadow rays per hit point (their noise is fixed per frame: keep it below the error
+    /// being measured).
+    #[arg(long, default_value_t = 64)]
+    direct_samples: u32,
+    /// Compensation passes per move (and as many positive region passes).
+    #[arg(long, default_value_t = 4)]
+    compensation_passes: u32,
+    /// Photons per compensation or region pass.
+    #[arg(long, default_value_t = 65_536)]
+    region_photons: u32,
+    /// Half-angle of the guided photons' cone, degrees.
+    #[arg(long, default_value_t = 10.0)]
+    cone_deg: f32,
+}
+
+impl DynamicArgs {
+    fn dynamic(&self) -> DynamicParams {
+        DynamicParams {
+            compensation_passes: self.compensation_passes,
+            region_photons: self.region_photons,
+            cone_deg: self.cone_deg,
+            ..DynamicParams::default()
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct AnimateArgs {
+    #[command(flatten)]
+    common: DynamicArgs,
+    /// Steps from frame 0 to frame 1 (the scene's move cut into equal parts).
+    #[arg(long, default_value_t = 8)]
+    steps: u32,
+    /// How each step is handled.
+    #[arg(long, value_enum, default_value = "area")]
+    mode: ModeChoice,
+    /// Seconds of passes per frame.
+    #[arg(long, default_value_t = 2.0)]
+    time_per_frame: f64,
+    /// Output folder: frame-NNN.exr, .png and .json.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct ErrorArgs {
+    #[command(flatten)]
+    common: DynamicArgs,
+    /// Seconds of ordinary passes on frame 0 before the move.
+    #[arg(long, default_value_t = 10.0)]
+    warmup: f64,
+    /// Seconds measured after the move.
+    #[arg(long, default_value_t = 8.0)]
+    seconds: f64,
+    /// Photon passes of the from-scratch reference of frame 1 (cached).
+    #[arg(long, default_value_t = 400)]
+    reference_passes: u32,
+    /// Folder of cached references.
+    #[arg(long, default_value = "out/cache")]
+    cache: PathBuf,
+    /// Output folder: error-vs-time.csv, .json and .png.
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -191,6 +308,8 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Render(args) => run_render(args),
         Command::Diff(args) => harness::diff_command::run(&args.into()),
+        Command::Animate(args) => run_animate(args),
+        Command::Report(ReportCommand::ErrorVsTime(args)) => run_error_report(args),
     }
 }
 
@@ -310,4 +429,136 @@ fn progress_bar(params: &RenderParams) -> ProgressBar {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar
+}
+
+/// The scene and render settings of a dynamic command, on the CPU backend.
+fn dynamic_setup(a: &DynamicArgs) -> Result<(ppm_core::scene::Scene, RenderParams)> {
+    if let BackendChoice::Wgpu = a.backend {
+        bail!(
+            "--backend wgpu: the wgpu backend does not run the dynamic passes yet; use --backend cpu"
+        );
+    }
+    let scene = harness::load_scene(&a.scene)?;
+    if scene.moves.is_empty() {
+        bail!(
+            "{}: the scene has no [[moves]]: nothing to animate",
+            a.scene
+        );
+    }
+    let mut params = RenderParams::for_scene(&scene);
+    params.width = a.width;
+    params.height = a.height;
+    params.photons_per_pass = a.photons_per_pass.unwrap_or(params.photons_per_pass);
+    params.seed = a.seed;
+    params.direct_samples = a.direct_samples;
+    params.validate("command line")?;
+    Ok((scene, params))
+}
+
+fn run_animate(args: AnimateArgs) -> Result<()> {
+    let (scene, params) = dynamic_setup(&args.common)?;
+    if args.steps == 0 {
+        bail!("--steps = 0: must be at least 1");
+    }
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    let mode = Mode::from(args.mode);
+    let mut backend = CpuBackend::new();
+    let mut render = Progressive::start(
+        &mut backend,
+        scene.at_time(0.0),
+        &params,
+        &args.common.dynamic(),
+    )?;
+    for step in 0..=args.steps {
+        let start = std::time::Instant::now();
+        let moved = if step == 0 {
+            None
+        } else {
+            Some(render.move_to(scene.at_time(step as f32 / args.steps as f32), mode)?)
+        };
+        let mut passes = 0;
+        while start.elapsed().as_secs_f64() < args.time_per_frame {
+            if step == 0 {
+                render.ordinary_pass()?
+            } else {
+                render.step()?
+            };
+            passes += 1;
+        }
+        let image = render.resolve()?;
+        let stem = args.output.join(format!("frame-{step:03}"));
+        image.write_exr(&stem.with_extension("exr"))?;
+        image.write_png(&stem.with_extension("png"), 1.0)?;
+        let report = serde_json::json!({
+            "scene": scene.name, "frame": step, "steps": args.steps, "mode": mode,
+            "passes": passes, "seconds": start.elapsed().as_secs_f64(), "move": moved,
+            "photons": render.counts,
+        });
+        std::fs::write(
+            stem.with_extension("json"),
+            serde_json::to_string_pretty(&report)?,
+        )?;
+        println!(
+            "frame {step}: {passes} passes, {:.2}s -> {}",
+            start.elapsed().as_secs_f64(),
+            stem.with_extension("exr").display()
+        );
+    }
+    Ok(())
+}
+
+fn run_error_report(args: ErrorArgs) -> Result<()> {
+    let (scene, params) = dynamic_setup(&args.common)?;
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    let settings = ErrorSettings {
+        params,
+        dynamic: args.common.dynamic(),
+        warmup_seconds: args.warmup,
+        seconds: args.seconds,
+        reference_passes: args.reference_passes,
+    };
+    let mut backend = CpuBackend::new();
+    let cached = error_report::reference_path(&args.cache, &scene, &settings);
+    eprintln!("reference: {}", cached.display());
+    let truth = error_report::reference(&mut backend, &scene, &settings, &cached)
+        .map_err(|e| anyhow::anyhow!("reference render: {e}"))?;
+    let mut runs = Vec::new();
+    for mode in Mode::ALL {
+        eprintln!("measuring {}", mode.name());
+        runs.push(error_report::run_mode(
+            &mut backend,
+            &scene,
+            mode,
+            &settings,
+            &truth,
+        )?);
+    }
+    let triangles = scene.triangle_count();
+    let out = &args.output;
+    std::fs::write(out.join("error-vs-time.csv"), error_report::csv(&runs))?;
+    let json = serde_json::json!({ "scene": scene.name, "settings": settings, "runs": runs,
+        "seconds_to_restart_error": error_report::time_to_restart_error(&runs) });
+    std::fs::write(
+        out.join("error-vs-time.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    error_report::chart(&scene.name, &runs).write_png(&out.join("error-vs-time.png"), 1.0)?;
+    print!("{}", error_report::tables(&runs, triangles));
+    for (mode, t) in error_report::time_to_restart_error(&runs) {
+        match t {
+            Some(t) => println!(
+                "{:<8} reaches restart's final error after {t:.2}s",
+                mode.name()
+            ),
+            None => println!(
+                "{:<8} does not reach restart's final error within {:.1}s",
+                mode.name(),
+                args.seconds
+            ),
+        }
+    }
+    println!("wrote {}", out.display());
+    Ok(())
 }

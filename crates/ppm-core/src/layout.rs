@@ -278,8 +278,16 @@ pub mod gather_kind {
     pub const REGION_POSITIVE: u32 = 2;
     /// Testing and guided photons: updated hit points only, eqs 1-3, `emitted` grows.
     pub const GUIDED: u32 = 3;
+    /// No photons: folds the region photons deferred so far into the statistics, as one
+    /// update with their net count and flux, and clears them.
+    pub const REGION_APPLY: u32 = 4;
     /// Low bits hold the kind.
     pub const KIND_MASK: u32 = 0xff;
+    /// Flag on region kinds: add the photons to a per-hit-point pending sum instead of
+    /// updating now (area mode). With the same random numbers for the compensation and the
+    /// region passes, the photons whose paths the move did not touch cancel exactly in the
+    /// sum, so only the light that changed reaches the statistics.
+    pub const DEFERRED: u32 = 0x200;
     /// Flag: region photons count raw in `M` (thesis mode) instead of as the ordinary photons
     /// their weights stand for (area mode).
     pub const RAW_COUNT: u32 = 0x100;
@@ -295,7 +303,8 @@ pub struct GatherParams {
     pub emitted_increment: f32,
     /// One of [`gather_kind`], with its flags.
     pub kind: u32,
-    /// Photons emitted by the region pass being gathered (`N_c`); unused otherwise.
+    /// Photons of all the region passes that together make one compensation (`N_c`), each
+    /// standing for `emitted / N_c` ordinary photons times its weight; unused otherwise.
     pub region_photons: f32,
 }
 

@@ -129,19 +129,35 @@ impl Default for RenderDefaults {
 impl Scene {
     /// The scene as it stands in `frame`: frame 0 is as loaded, frame 1 has every move applied.
     pub fn at_frame(&self, frame: u32) -> Scene {
+        self.at_time(if frame >= 1 { 1.0 } else { 0.0 })
+    }
+
+    /// The scene a fraction `t` of the way through its moves: translations scale by `t`,
+    /// rotations turn by `t` of their angle (0 is frame 0, 1 is frame 1).
+    pub fn at_time(&self, t: f32) -> Scene {
         let mut scene = self.clone();
-        if frame >= 1 {
-            for m in &self.moves {
-                let object = &mut scene.objects[m.object];
-                let centre = object.bounds_centre();
-                for tri in &mut object.triangles {
-                    for v in tri.iter_mut() {
-                        *v = m.rotation * (*v - centre) + centre + m.translation;
-                    }
+        if t == 0.0 {
+            return scene;
+        }
+        for m in &self.moves {
+            let rotation = Quat::IDENTITY.slerp(m.rotation, t);
+            let object = &mut scene.objects[m.object];
+            let centre = object.bounds_centre();
+            for tri in &mut object.triangles {
+                for v in tri.iter_mut() {
+                    *v = rotation * (*v - centre) + centre + m.translation * t;
                 }
             }
         }
         scene
+    }
+
+    /// Vertices of every moving object, as posed in `self`.
+    pub fn moving_vertices(&self) -> Vec<Vec3> {
+        self.moves
+            .iter()
+            .flat_map(|m| self.objects[m.object].triangles.iter().flatten().copied())
+            .collect()
     }
 
     /// Index of the object called `name`.
