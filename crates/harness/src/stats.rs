@@ -9,10 +9,13 @@ pub fn mean_variance(xs: &[f64]) -> (f64, f64) {
     (mean, var)
 }
 
-/// Welch's t statistic and its Welch-Satterthwaite degrees of freedom.
-pub fn welch_t(a: &[f64], b: &[f64]) -> (f64, f64) {
+/// Welch's t statistic and its Welch-Satterthwaite degrees of freedom, each sample's
+/// variance taken at least `min_variance` (a floor against samples that happen to be nearly
+/// constant, whose spread would otherwise be underestimated).
+pub fn welch_t(a: &[f64], b: &[f64], min_variance: f64) -> (f64, f64) {
     let (ma, va) = mean_variance(a);
     let (mb, vb) = mean_variance(b);
+    let (va, vb) = (va.max(min_variance), vb.max(min_variance));
     let (sa, sb) = (va / a.len() as f64, vb / b.len() as f64);
     let se2 = sa + sb;
     if se2 <= 0.0 {
@@ -148,9 +151,9 @@ mod tests {
     fn welch_separates_shifted_samples_and_not_equal_ones() {
         let a = [1.0, 1.1, 0.9, 1.05, 0.95];
         let b = [2.0, 2.1, 1.9, 2.05, 1.95];
-        let (t, df) = welch_t(&a, &b);
+        let (t, df) = welch_t(&a, &b, 0.0);
         assert!(t_two_sided_p(t, df) < 1e-6);
-        let (t, df) = welch_t(&a, &a);
+        let (t, df) = welch_t(&a, &a, 0.0);
         close(t_two_sided_p(t, df), 1.0, 1e-12);
     }
 

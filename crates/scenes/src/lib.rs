@@ -2,6 +2,8 @@
 //! analytic scenes whose exact answer tests can check.
 
 pub mod analytic;
+pub mod canonical;
+pub mod meshes;
 
 use ppm_core::scene::{Scene, SceneError, parse_scene};
 use std::path::Path;
@@ -25,7 +27,8 @@ impl BuiltinScene {
 /// The cornell-box scene file, as shipped.
 pub const CORNELL_BOX_TOML: &str = include_str!("../data/cornell-box.toml");
 
-fn cornell_box() -> Result<Scene, SceneError> {
+/// The cornell-box scene as its shipped file describes it.
+pub fn cornell_box_file() -> Result<Scene, SceneError> {
     parse_scene(
         CORNELL_BOX_TOML,
         "scenes/data/cornell-box.toml",
@@ -38,7 +41,17 @@ pub const BUILTIN: &[BuiltinScene] = &[
     BuiltinScene {
         name: "cornell-box",
         description: "SCENES.md 1: the measured Cornell box; frame 1 moves the tall block by (40, 0, -100)",
-        build: cornell_box,
+        build: cornell_box_file,
+    },
+    BuiltinScene {
+        name: "cornell-bunny",
+        description: "SCENES.md 2: the box with a 70,300-triangle procedural bunny stand-in, moved by (40, 0, -100)",
+        build: canonical::cornell_bunny,
+    },
+    BuiltinScene {
+        name: "wedding-band",
+        description: "SCENES.md 3: three gold rings throwing caustics, 41,184 triangles; the middle ring moves by (0, 0, 8)",
+        build: canonical::wedding_band,
     },
     BuiltinScene {
         name: "furnace",
@@ -73,7 +86,7 @@ mod tests {
     /// puts the tall block at x 305..512, z 147..356.
     #[test]
     fn cornell_box_matches_scenes_md() {
-        let scene = cornell_box().unwrap();
+        let scene = cornell_box_file().unwrap();
         assert_eq!(scene.triangle_count(), 32);
         let tall = scene.object_index("tall-block").unwrap();
         let moved = scene.at_frame(1);

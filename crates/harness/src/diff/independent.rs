@@ -18,6 +18,18 @@ use serde::Serialize;
 /// Family-wise false-alarm rate of the comparison.
 pub const ALPHA: f64 = 0.01;
 
+/// Floor on a run's relative spread: a tile mean is never trusted to better than 1% per run.
+/// Tiles with few photons can come out nearly identical in a handful of runs by chance (or
+/// all zero), and the t-test would then read a negligible difference as certain; with the
+/// floor, differences below a few percent of a tile's mean are simply not resolved.
+pub const RELATIVE_SPREAD_FLOOR: f64 = 0.01;
+
+/// Welch's t of two sets of tile means, with the spread floor.
+fn tile_t(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let scale = a.iter().chain(b).map(|x| x.abs()).sum::<f64>() / (a.len() + b.len()) as f64;
+    welch_t(a, b, (RELATIVE_SPREAD_FLOOR * scale).powi(2))
+}
+
 /// The tile means of one run: `[tile][quantity]`.
 pub type TileMeans = Vec<[f64; QUANTITIES]>;
 
@@ -124,7 +136,7 @@ pub fn compare(
         for q in 0..QUANTITIES {
             let a: Vec<f64> = reference.1.iter().map(|run| run[t][q]).collect();
             let b: Vec<f64> = other.1.iter().map(|run| run[t][q]).collect();
-            let (tstat, df) = welch_t(&a, &b);
+            let (tstat, df) = tile_t(&a, &b);
             tests.push(TileTest {
                 tile_x: t as u32 % tx,
                 tile_y: t as u32 / tx,
@@ -168,7 +180,7 @@ pub fn heat(reference: &[TileMeans], other: &[TileMeans], params: &RenderParams)
         for q in 0..QUANTITIES {
             let a: Vec<f64> = reference.iter().map(|run| run[t][q]).collect();
             let b: Vec<f64> = other.iter().map(|run| run[t][q]).collect();
-            let (tstat, df) = welch_t(&a, &b);
+            let (tstat, df) = tile_t(&a, &b);
             *score = score.max(-t_two_sided_p(tstat, df).max(1e-300).log10());
         }
     }
