@@ -200,3 +200,57 @@ fn after_a_move_area_mode_converges_towards_the_new_pose() {
         "error did not fall with passes: {errors:?}"
     );
 }
+
+/// The harness's same-seed comparison passes on a compensated frame: both backends run the
+/// same move (area mode, deferred region passes, testing and guided photons) and agree.
+#[test]
+fn both_backends_agree_on_a_compensated_frame() {
+    let Some(mut gpu) = backend_wgpu::backend_or_skip("both_backends_agree_on_a_compensated_frame")
+    else {
+        return;
+    };
+    let (scene, mut p) = cornell(48, 20_000);
+    p.direct_samples = 8;
+    let dynamic = DynamicParams {
+        compensation_passes: 2,
+        region_photons: 16_384,
+        ..DynamicParams::default()
+    };
+    let run = |backend: &mut dyn ppm_core::passes::DynamicBackend, mode: Mode| {
+        let name = backend.name().to_owned();
+        let mut render = Progressive::start(backend, scene.at_frame(0), &p, &dynamic).unwrap();
+        for _ in 0..3 {
+            render.ordinary_pass().unwrap();
+        }
+        let moved = render.move_to(scene.at_frame(1), mode).unwrap();
+        for _ in 0..4 {
+            render.step().unwrap();
+        }
+        let image = render.resolve().unwrap();
+        let hit_points = render.backend().read_hit_points().unwrap();
+        (
+            harness::diff::Recording {
+                backend: name,
+                passes: vec![hit_points],
+                image,
+            },
+            moved,
+        )
+    };
+    for mode in [Mode::Area, Mode::Thesis] {
+        let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
+        let (wgpu, wgpu_move) = run(&mut gpu, mode);
+        assert_eq!(
+            cpu_move.updated, wgpu_move.updated,
+            "{mode:?}: different hit points updated"
+        );
+        let report = harness::diff::same_seed::compare(&cpu, &wgpu, &p, 5);
+        println!(
+            "{mode:?}: recorded {} vs {} paths\n{}",
+            cpu_move.recorded_paths,
+            wgpu_move.recorded_paths,
+            harness::diff_command::format_same_seed(&report)
+        );
+        assert!(report.agree, "{mode:?}");
+    }
+}

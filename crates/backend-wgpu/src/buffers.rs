@@ -11,10 +11,11 @@ const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
-/// A storage buffer holding `data` (at least 16 bytes, since empty bindings are invalid).
+/// A storage buffer holding `data`; an empty slice still gets one zeroed element (and at
+/// least 16 bytes), since a binding must hold a whole element.
 pub fn storage_init<T: Pod>(ctx: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
     let mut bytes = bytemuck::cast_slice::<T, u8>(data).to_vec();
-    bytes.resize(bytes.len().max(16), 0);
+    bytes.resize(bytes.len().max(16).max(size_of::<T>()), 0);
     ctx.device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),

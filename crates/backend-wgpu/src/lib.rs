@@ -23,21 +23,24 @@ pub mod shaders {
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
+use layout::{Emitter, UpdateParams, emission_kind};
 use passes::{
-    CheckKernel, DirectLightKernel, EyePassKernel, GatherInputs, GatherKernel, PhotonPassKernel,
-    PhotonTargets, ResolveKernel, RngVectorsKernel, Slots,
+    CheckKernel, DirectLightKernel, EyePassKernel, GatherInputs, GatherKernel,
+    HitPointUpdateKernel, LandingPathsKernel, PhotonPassKernel, PhotonTargets, ResolveKernel,
+    RngVectorsKernel, Slots,
 };
 use photon_grid::{PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
-    ResolveParams,
+    DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
-    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
+    GuidedPhotonPass, HitPointUpdate, LandingPaths, PhotonPass, PhotonStats, RandomSource,
+    ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats,
 };
 use scan::Scan;
 
@@ -58,6 +61,8 @@ struct Kernels {
     resolve: ResolveKernel,
     check: CheckKernel,
     rng: RngVectorsKernel,
+    update: HitPointUpdateKernel,
+    landing: LandingPathsKernel,
     scan: Scan,
 }
 
@@ -68,12 +73,18 @@ pub struct WgpuBackend {
     counters: wgpu::Buffer,
     scene: Option<SceneBuffers>,
     hit_points: Option<(wgpu::Buffer, u32)>,
-    /// Per hit point: photons found and their power so far in the current pass.
+    /// Per hit point: photons found, their power and weight so far in the current pass.
     accumulated: Option<wgpu::Buffer>,
+    /// Per hit point: deferred region photons (area mode).
+    pending: Option<wgpu::Buffer>,
+    /// Uniform vec4 whose x is the initial squared radius of the last eye pass.
+    r2_initial: Option<wgpu::Buffer>,
     path_offsets: Option<wgpu::Buffer>,
     map: Option<PhotonMap>,
     /// Batches the last photon pass took.
     batches: u32,
+    /// Path indices of the last photon pass end here.
+    last_pass_paths: u32,
     /// Cap on the bytes of one photon batch (see [`WgpuBackend::set_photon_buffer_limit`]).
     photon_buffer_limit: u64,
 }
@@ -91,6 +102,8 @@ impl WgpuBackend {
             resolve: ResolveKernel::new(&ctx),
             check: CheckKernel::new(&ctx),
             rng: RngVectorsKernel::new(&ctx),
+            update: HitPointUpdateKernel::new(&ctx),
+            landing: LandingPathsKernel::new(&ctx),
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
@@ -101,9 +114,12 @@ impl WgpuBackend {
             scene: None,
             hit_points: None,
             accumulated: None,
+            pending: None,
+            r2_initial: None,
             path_offsets: None,
             map: None,
             batches: 0,
+            last_pass_paths: 0,
             photon_buffer_limit: u64::MAX,
         })
     }
@@ -198,6 +214,18 @@ impl SceneUpload for WgpuBackend {
         self.scene = Some(buffers);
         self.hit_points = None;
         self.accumulated = None;
+        self.pending = None;
+        self.map = None;
+        Ok(())
+    }
+}
+
+impl SceneUpdate for WgpuBackend {
+    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        let buffers = self
+            .ctx
+            .scoped("scene update", || SceneBuffers::new(&self.ctx, scene))??;
+        self.scene = Some(buffers);
         self.map = None;
         Ok(())
     }
@@ -228,7 +256,13 @@ impl EyePass for WgpuBackend {
             Ok(())
         })?;
         self.hit_points = Some((hit_points, slots));
-        self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 16)?);
+        self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
+        self.pending = Some(storage_zeroed(&self.ctx, "pending", slots64 * 16)?);
+        self.r2_initial = Some(buffers::uniform(
+            &self.ctx,
+            "r2_initial",
+            &[params.r2_initial, 0.0, 0.0, 0.0],
+        ));
         self.map = None;
         self.check("eye", &counters)?;
         Ok(EyeStats {
@@ -262,11 +296,17 @@ impl DirectLight for WgpuBackend {
     }
 }
 
-impl PhotonPass for WgpuBackend {
-    /// Traces the pass in as few batches as the device's binding limit allows (one, unless the
-    /// deposits would not fit one buffer) and accumulates each batch into the hit points'
-    /// accumulators, so the gather that follows makes one update from the whole pass.
-    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+impl WgpuBackend {
+    /// Traces a pass whose photons start as `emitter` says, in as few batches as the device's
+    /// binding limit allows (one, unless the deposits would not fit one buffer), and
+    /// accumulates each batch into the hit points' accumulators, so the gather that follows
+    /// makes one update from the whole pass.
+    fn trace_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        emitter: &Emitter,
+        paths: &[RecordedPath],
+    ) -> Result<PhotonStats, BackendError> {
         let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
         let max_deposits = (limit / size_of::<Photon>() as u64).max(1);
         // Start from a little under one deposit per path (the common case); a batch that
@@ -291,11 +331,24 @@ impl PhotonPass for WgpuBackend {
             counters: &self.counters,
             count: *slots,
         };
+        let (pending, r2_initial) = match (&self.pending, &self.r2_initial) {
+            (Some(p), Some(r)) => (p, r),
+            _ => {
+                return Err(BackendError::OutOfOrder {
+                    pass: "photon",
+                    needs: "an eye pass",
+                });
+            }
+        };
         let gather = GatherInputs {
             params: &GatherParams::default(),
             materials: &scene.materials,
             accumulated,
+            pending,
+            r2_initial,
         };
+        let emitter = buffers::uniform(&self.ctx, "emitter", emitter);
+        let recorded = buffers::storage_init(&self.ctx, "recorded", paths);
         let mut stats = PhotonStats {
             emitted: u64::from(params.photon_count),
             ..Default::default()
@@ -314,10 +367,14 @@ impl PhotonPass for WgpuBackend {
                 ..*params
             };
             let no_photons = storage_zeroed(&self.ctx, "photons", photon_bytes(0))?;
+            let no_weights = storage_zeroed(&self.ctx, "weights", 4)?;
             let targets = PhotonTargets {
                 path_offsets: &offsets,
                 photons: &no_photons,
                 counters: &self.counters,
+                emitter: &emitter,
+                recorded: &recorded,
+                weights: &no_weights,
             };
             let counted = self.run("photon count", |encoder| {
                 self.kernels
@@ -336,10 +393,14 @@ impl PhotonPass for WgpuBackend {
                 continue;
             }
             let photons = storage_zeroed(&self.ctx, "photons", photon_bytes(deposited))?;
+            let weights = storage_zeroed(&self.ctx, "weights", u64::from(deposited.max(1)) * 4)?;
             let targets = PhotonTargets {
                 path_offsets: &offsets,
                 photons: &photons,
                 counters: &self.counters,
+                emitter: &emitter,
+                recorded: &recorded,
+                weights: &weights,
             };
             self.run("photon map", |encoder| {
                 self.kernels
@@ -349,7 +410,7 @@ impl PhotonPass for WgpuBackend {
                     &self.ctx,
                     encoder,
                     &self.kernels.scan,
-                    (photons.clone(), deposited),
+                    (photons.clone(), weights.clone(), deposited),
                     (hit_points, slots.count),
                 )?;
                 self.kernels
@@ -365,19 +426,145 @@ impl PhotonPass for WgpuBackend {
         }
         self.map = map;
         self.batches = batches;
+        self.last_pass_paths = params.first_path + params.photon_count;
         self.path_offsets = Some(offsets);
         Ok(stats)
     }
 }
 
-impl GatherPass for WgpuBackend {
-    fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
-        if params.kind != ppm_core::layout::gather_kind::ORDINARY {
-            return Err(BackendError::Unsupported(format!(
-                "the wgpu backend gathers ordinary photon passes only (gather kind {:#x})",
-                params.kind
+impl PhotonPass for WgpuBackend {
+    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        self.trace_pass(params, &Emitter::default(), &[])
+    }
+}
+
+impl RegionPhotonPass for WgpuBackend {
+    fn region_photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        region: &EmissionRegion,
+    ) -> Result<PhotonStats, BackendError> {
+        let emitter = Emitter {
+            kind: emission_kind::REGION,
+            region: *region,
+            ..Default::default()
+        };
+        self.trace_pass(params, &emitter, &[])
+    }
+}
+
+impl GuidedPhotonPass for WgpuBackend {
+    fn guided_photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        guide: &GuidedEmission,
+        paths: &[RecordedPath],
+    ) -> Result<PhotonStats, BackendError> {
+        let emitter = Emitter {
+            kind: emission_kind::GUIDED,
+            guide: GuidedEmission {
+                paths: paths.len() as u32,
+                ..*guide
+            },
+            ..Default::default()
+        };
+        self.trace_pass(params, &emitter, paths)
+    }
+}
+
+impl HitPointUpdate for WgpuBackend {
+    fn update_hit_points(
+        &mut self,
+        params: &EyePassParams,
+        epsilon: f32,
+    ) -> Result<UpdateStats, BackendError> {
+        let scene = self.scene("hit-point update")?;
+        let (hit_points, slots) = self.hit_points("hit-point update")?;
+        let pending = self.pending.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "hit-point update",
+            needs: "an eye pass",
+        })?;
+        let fresh = storage_zeroed(
+            &self.ctx,
+            "fresh hit points",
+            u64::from(*slots) * size_of::<HitPoint>() as u64,
+        )?;
+        let eye_targets = Slots {
+            hit_points: &fresh,
+            counters: &self.counters,
+            count: *slots,
+        };
+        let targets = Slots {
+            hit_points,
+            counters: &self.counters,
+            count: *slots,
+        };
+        let eye = self.run("hit-point update eye", |encoder| {
+            self.kernels
+                .eye
+                .record(&self.ctx, encoder, params, scene, &eye_targets);
+            Ok(())
+        })?;
+        let update = UpdateParams {
+            epsilon,
+            ..Default::default()
+        };
+        let counters = self.run("hit-point update", |encoder| {
+            self.kernels
+                .update
+                .record(&self.ctx, encoder, &update, &fresh, pending, &targets);
+            self.kernels.check.record(&self.ctx, encoder, &targets);
+            Ok(())
+        })?;
+        let slots = *slots;
+        self.r2_initial = Some(buffers::uniform(
+            &self.ctx,
+            "r2_initial",
+            &[params.r2_initial, 0.0, 0.0, 0.0],
+        ));
+        self.check("hit-point update", &counters)?;
+        let updated = u64::from(counters[COUNTER_ITEMS]);
+        Ok(UpdateStats {
+            updated,
+            kept: u64::from(slots) - updated,
+            rays: u64::from(eye[COUNTER_RAYS]),
+        })
+    }
+}
+
+impl LandingPaths for WgpuBackend {
+    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
+        if self.batches > 1 {
+            return Err(BackendError::Limit(format!(
+                "the last photon pass was split into {} batches; its landing paths were never in one map",
+                self.batches
             )));
         }
+        let (hit_points, slots) = self.hit_points("landing paths")?;
+        let map = self.map.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "landing paths",
+            needs: "a photon pass",
+        })?;
+        let paths = self.last_pass_paths;
+        let landed = storage_zeroed(&self.ctx, "landed", u64::from(paths.max(1)) * 4)?;
+        let targets = Slots {
+            hit_points,
+            counters: &self.counters,
+            count: *slots,
+        };
+        self.run("landing paths", |encoder| {
+            self.kernels
+                .landing
+                .record(&self.ctx, encoder, map, &targets, &landed);
+            Ok(())
+        })?;
+        let flags = read_back::<u32>(&self.ctx, &landed, paths as usize)?;
+        Ok((0..paths).filter(|&p| flags[p as usize] != 0).collect())
+    }
+}
+
+impl GatherPass for WgpuBackend {
+    fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let scene = self.scene("gather")?;
         let (hit_points, slots) = self.hit_points("gather")?;
         let needs_photons = BackendError::OutOfOrder {
@@ -394,10 +581,21 @@ impl GatherPass for WgpuBackend {
             counters: &self.counters,
             count: *slots,
         };
+        let (pending, r2_initial) = match (&self.pending, &self.r2_initial) {
+            (Some(p), Some(r)) => (p, r),
+            _ => {
+                return Err(BackendError::OutOfOrder {
+                    pass: "gather",
+                    needs: "an eye pass",
+                });
+            }
+        };
         let inputs = GatherInputs {
             params,
             materials: &scene.materials,
             accumulated,
+            pending,
+            r2_initial,
         };
         let counters = self.run("gather", |encoder| {
             self.kernels

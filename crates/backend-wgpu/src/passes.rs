@@ -121,6 +121,12 @@ pub struct PhotonTargets<'a> {
     pub photons: &'a wgpu::Buffer,
     /// Pass counters.
     pub counters: &'a wgpu::Buffer,
+    /// Where photons start (uniform `Emitter`).
+    pub emitter: &'a wgpu::Buffer,
+    /// Recorded paths for guided photons.
+    pub recorded: &'a wgpu::Buffer,
+    /// Path weight of each deposit.
+    pub weights: &'a wgpu::Buffer,
 }
 
 impl PhotonPassKernel {
@@ -128,7 +134,8 @@ impl PhotonPassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
-            Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite,
+            Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
+            ReadWrite,
         ];
         Self {
             count: Kernel::new(&ctx.device, &module, "photon_count_main", &slots, WORKGROUP),
@@ -159,6 +166,9 @@ impl PhotonPassKernel {
                 targets.path_offsets,
                 targets.photons,
                 targets.counters,
+                targets.emitter,
+                targets.recorded,
+                targets.weights,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);
@@ -173,12 +183,16 @@ pub struct GatherKernel {
 
 /// What the gather binds besides the hit points.
 pub struct GatherInputs<'a> {
-    /// Gather parameters (alpha, emitted increment).
+    /// Gather parameters (alpha, emitted increment, kind).
     pub params: &'a GatherParams,
     /// Materials, for the BRDF.
     pub materials: &'a wgpu::Buffer,
-    /// Per-hit-point running count and power of the pass's photons so far.
+    /// Per hit point: running power, count and weight of the pass's photons so far.
     pub accumulated: &'a wgpu::Buffer,
+    /// Per hit point: deferred region photons.
+    pub pending: &'a wgpu::Buffer,
+    /// Uniform vec4 whose x is the initial squared radius.
+    pub r2_initial: &'a wgpu::Buffer,
 }
 
 impl GatherKernel {
@@ -186,7 +200,8 @@ impl GatherKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
         let slots = [
-            Uniform, Read, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite,
+            Uniform, Read, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Read,
+            ReadWrite, Uniform,
         ];
         Self {
             accumulate: Kernel::new(
@@ -225,6 +240,9 @@ impl GatherKernel {
                 slots.hit_points,
                 inputs.accumulated,
                 slots.counters,
+                &map.weights,
+                inputs.pending,
+                inputs.r2_initial,
             ],
         );
         kernel.dispatch(encoder, &group, slots.count);
@@ -317,5 +335,82 @@ impl RngVectorsKernel {
     ) {
         let group = self.0.bind(&ctx.device, &[keys, bits]);
         self.0.dispatch(encoder, &group, count);
+    }
+}
+
+/// hit_point_update.wgsl.
+pub struct HitPointUpdateKernel(Kernel);
+
+impl HitPointUpdateKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "hit_point_update", shaders::HIT_POINT_UPDATE);
+        let slots = [Uniform, Read, ReadWrite, ReadWrite, ReadWrite];
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "hit_point_update_main",
+            &slots,
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the comparison of `fresh` (the new pose's eye pass) with the hit points.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        params: &crate::layout::UpdateParams,
+        fresh: &wgpu::Buffer,
+        pending: &wgpu::Buffer,
+        slots: &Slots,
+    ) {
+        let params = uniform(ctx, "update params", params);
+        let group = self.0.bind(
+            &ctx.device,
+            &[&params, fresh, slots.hit_points, pending, slots.counters],
+        );
+        self.0.dispatch(encoder, &group, slots.count);
+    }
+}
+
+/// landing_paths.wgsl.
+pub struct LandingPathsKernel(Kernel);
+
+impl LandingPathsKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "landing_paths", shaders::LANDING_PATHS);
+        let slots = [Read, Read, Read, Read, Read, ReadWrite];
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "landing_paths_main",
+            &slots,
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the flagging of paths that reached updated hit points into `landed`.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        map: &crate::photon_grid::PhotonMap,
+        slots: &Slots,
+        landed: &wgpu::Buffer,
+    ) {
+        let group = self.0.bind(
+            &ctx.device,
+            &[
+                &map.photons,
+                &map.grid,
+                &map.bucket_start,
+                &map.order,
+                slots.hit_points,
+                landed,
+            ],
+        );
+        self.0.dispatch(encoder, &group, slots.count);
     }
 }

@@ -22,6 +22,8 @@ pub struct PhotonMap {
     pub bucket_start: wgpu::Buffer,
     /// Photon indices grouped by bucket, ascending within each.
     pub order: wgpu::Buffer,
+    /// Path weight of each deposit.
+    pub weights: wgpu::Buffer,
 }
 
 /// Initial bounds keys: minima start at the largest key, maxima and r2 at the smallest.
@@ -61,7 +63,7 @@ impl PhotonGridKernels {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         scan: &Scan,
-        (photons, count): (wgpu::Buffer, u32),
+        (photons, weights, count): (wgpu::Buffer, wgpu::Buffer, u32),
         (hit_points, slots): (&wgpu::Buffer, u32),
     ) -> Result<PhotonMap, BackendError> {
         // The same bucket count as ppm_core::grid::grid_params.
@@ -104,6 +106,7 @@ impl PhotonGridKernels {
         self.sort.dispatch(encoder, &group, bucket_count);
         Ok(PhotonMap {
             photons,
+            weights,
             count,
             grid,
             bucket_start,

@@ -164,6 +164,47 @@ fn pass_parameters_match_their_wgsl_twins() {
 }
 
 #[test]
+fn dynamic_pass_structs_match_their_wgsl_twins() {
+    use backend_wgpu::layout::{Emitter, UpdateParams};
+    same_layout!(EmissionRegion {
+        light_point,
+        mode,
+        origin,
+        _pad1,
+        edge_u,
+        area,
+        edge_v,
+        _pad0
+    });
+    same_layout!(RecordedPath {
+        origin,
+        light,
+        direction,
+        _pad0
+    });
+    same_layout!(GuidedEmission {
+        cos_cone,
+        beta,
+        paths,
+        weighted
+    });
+    same_layout!(Emitter {
+        kind,
+        _pad0,
+        _pad1,
+        _pad2,
+        region,
+        guide
+    });
+    same_layout!(UpdateParams {
+        epsilon,
+        _pad0,
+        _pad1,
+        _pad2
+    });
+}
+
+#[test]
 fn backend_kernel_parameters_match_their_wgsl_twins() {
     use backend_wgpu::layout::{GridBuildParams, ScanParams};
     same_layout!(ScanParams {
@@ -194,6 +235,16 @@ fn shared_constants_agree() {
         ("NO_MATERIAL", NO_MATERIAL),
         ("FIRST_HIT_SKIP", first_hit::SKIP),
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),
+        ("REGION_AREA", region_mode::AREA),
+        ("REGION_POINT", region_mode::POINT),
+        ("GATHER_ORDINARY", gather_kind::ORDINARY),
+        ("GATHER_REGION_NEGATIVE", gather_kind::REGION_NEGATIVE),
+        ("GATHER_REGION_POSITIVE", gather_kind::REGION_POSITIVE),
+        ("GATHER_GUIDED", gather_kind::GUIDED),
+        ("GATHER_REGION_APPLY", gather_kind::REGION_APPLY),
+        ("GATHER_KIND_MASK", gather_kind::KIND_MASK),
+        ("GATHER_RAW_COUNT", gather_kind::RAW_COUNT),
+        ("GATHER_DEFERRED", gather_kind::DEFERRED),
     ] {
         let line = LAYOUT_WGSL
             .lines()

@@ -9,7 +9,7 @@ use harness::error_report::{self, ErrorSettings};
 use harness::render::{Progress, render};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::params::{DirectMode, RenderParams};
-use ppm_core::passes::Backend;
+use ppm_core::passes::{Backend, DynamicBackend};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -69,7 +69,7 @@ impl From<ModeChoice> for Mode {
 struct DynamicArgs {
     /// Built-in scene name or path to a TOML scene file (its [[moves]] define the motion).
     scene: String,
-    /// Backend (the dynamic passes run on the CPU backend so far).
+    /// Backend.
     #[arg(long, value_enum, default_value = "cpu")]
     backend: BackendChoice,
     /// Image width.
@@ -431,13 +431,20 @@ fn progress_bar(params: &RenderParams) -> ProgressBar {
     bar
 }
 
-/// The scene and render settings of a dynamic command, on the CPU backend.
+/// The backend a dynamic command asked for.
+fn dynamic_backend(choice: BackendChoice) -> Result<Box<dyn DynamicBackend>> {
+    Ok(match choice {
+        BackendChoice::Cpu => Box::new(CpuBackend::new()),
+        BackendChoice::Wgpu => {
+            let b = WgpuBackend::new().context("the wgpu backend cannot start")?;
+            eprintln!("wgpu adapter: {}", b.adapter_name());
+            Box::new(b)
+        }
+    })
+}
+
+/// The scene and render settings of a dynamic command.
 fn dynamic_setup(a: &DynamicArgs) -> Result<(ppm_core::scene::Scene, RenderParams)> {
-    if let BackendChoice::Wgpu = a.backend {
-        bail!(
-            "--backend wgpu: the wgpu backend does not run the dynamic passes yet; use --backend cpu"
-        );
-    }
     let scene = harness::load_scene(&a.scene)?;
     if scene.moves.is_empty() {
         bail!(
@@ -463,9 +470,11 @@ fn run_animate(args: AnimateArgs) -> Result<()> {
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
     let mode = Mode::from(args.mode);
-    let mut backend = CpuBackend::new();
+    let mut backend = dynamic_backend(args.common.backend)?;
+    let features = ppm_core::compile::compile_scene(&scene, params.width, params.height).features;
+    let left_out = harness::report::left_out(&features, &params, false);
     let mut render = Progressive::start(
-        &mut backend,
+        backend.as_mut(),
         scene.at_time(0.0),
         &params,
         &args.common.dynamic(),
@@ -493,7 +502,7 @@ fn run_animate(args: AnimateArgs) -> Result<()> {
         let report = serde_json::json!({
             "scene": scene.name, "frame": step, "steps": args.steps, "mode": mode,
             "passes": passes, "seconds": start.elapsed().as_secs_f64(), "move": moved,
-            "photons": render.counts,
+            "photons": render.counts, "left_out": left_out,
         });
         std::fs::write(
             stem.with_extension("json"),
@@ -519,16 +528,16 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
         seconds: args.seconds,
         reference_passes: args.reference_passes,
     };
-    let mut backend = CpuBackend::new();
+    let mut backend = dynamic_backend(args.common.backend)?;
     let cached = error_report::reference_path(&args.cache, &scene, &settings);
     eprintln!("reference: {}", cached.display());
-    let truth = error_report::reference(&mut backend, &scene, &settings, &cached)
+    let truth = error_report::reference(backend.as_mut(), &scene, &settings, &cached)
         .map_err(|e| anyhow::anyhow!("reference render: {e}"))?;
     let mut runs = Vec::new();
     for mode in Mode::ALL {
         eprintln!("measuring {}", mode.name());
         runs.push(error_report::run_mode(
-            &mut backend,
+            backend.as_mut(),
             &scene,
             mode,
             &settings,

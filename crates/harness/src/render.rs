@@ -62,7 +62,7 @@ pub fn render(
         ..PassTimes::default()
     };
     let mut report = RenderReport::new(backend.name(), &posed, frame, params, &compiled);
-    report.left_out = left_out(&compiled.features, params);
+    report.left_out = left_out(&compiled.features, params, true);
 
     let t = Instant::now();
     backend.load_scene(&compiled)?;

@@ -109,11 +109,18 @@ impl RenderReport {
 }
 
 /// The passes and code paths a render skips, each with the reason.
-pub fn left_out(features: &SceneFeatures, params: &RenderParams) -> Vec<String> {
+///
+/// `single_frame`: the render stays on one frame (`ppm render`), so even a scene that moves
+/// runs no compensation pass.
+pub fn left_out(
+    features: &SceneFeatures,
+    params: &RenderParams,
+    single_frame: bool,
+) -> Vec<String> {
     let mut out = Vec::new();
     if !features.moving_objects {
         out.push("compensation, region and guided photon passes: no object moves".to_owned());
-    } else {
+    } else if single_frame {
         out.push(
             "compensation passes: a single frame is rendered (moves apply between frames)"
                 .to_owned(),

@@ -117,6 +117,7 @@ pub fn region_emission(
 /// photons either way, so the weight is the ratio of direction densities
 /// `(cos/pi) / (beta cos/pi + (1-beta)/K sum_k [in cone k] / Omega_cone)`.
 /// Unweighted (the thesis): the recorded start point, the jittered direction, weight 1.
+/// Without recorded paths, an ordinary photon.
 pub fn guided_emission(
     lights: &[GpuLight],
     materials: &[GpuMaterial],

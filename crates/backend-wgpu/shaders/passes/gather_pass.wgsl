@@ -1,9 +1,11 @@
 // #import layout geometry sampling update grid
-// Gather pass (ALGORITHM.md 1.4): the twin of backend-cpu's gather_pass.rs, in two steps so
-// that a photon pass split into batches still makes one update: `gather_accumulate_main`
-// adds each batch's photons within the radius to a per-hit-point accumulator (count in w,
-// power in xyz), and `gather_apply_main` folds the accumulator into the statistics with the
-// stable update, then clears it.
+// Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
+// gather_pass.rs, in two steps so that a photon pass split into batches still makes one
+// update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
+// each hit point's radius to its accumulator: power and count, and path weight. Then
+// `gather_apply_main` (the gather pass) folds the accumulator in as the pass's kind says:
+// who gathers, the region scale `emitted / N_c`, eqs 1-3 or 5-7, or a deferred pending sum;
+// and clears it.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> materials: array<GpuMaterial>;
@@ -12,8 +14,13 @@
 @group(0) @binding(4) var<storage, read> bucket_start: array<u32>;
 @group(0) @binding(5) var<storage, read> order: array<u32>;
 @group(0) @binding(6) var<storage, read_write> hit_points: array<HitPoint>;
+// Per hit point, two rows: (power, count) and (weight sum, 0, 0, 0).
 @group(0) @binding(7) var<storage, read_write> accumulated: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(9) var<storage, read> weights: array<f32>;
+// Per hit point: deferred region flux (times BRDF and scale) and signed count.
+@group(0) @binding(10) var<storage, read_write> pending: array<vec4<f32>>;
+@group(0) @binding(11) var<uniform> r2_initial: vec4<f32>;
 
 @compute @workgroup_size(64)
 fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -28,19 +35,50 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     let g = grid;
     let buckets = buckets_around(hp.position, sqrt(hp.r2), g);
     var m = 0u;
+    var weight = 0.0;
     var flux = vec3<f32>(0.0);
     for (var k = 0u; k < buckets.count; k++) {
         let b = buckets.ids[k];
         for (var i = bucket_start[b]; i < bucket_start[b + 1u]; i++) {
-            let p = photons[order[i]];
+            let index = order[i];
+            let p = photons[index];
             let d = p.position - hp.position;
             if dot(d, d) < hp.r2 && dot(oct_decode(p.normal_oct), hp.normal) > 0.0 {
                 m++;
+                weight += weights[index];
                 flux += p.power;
             }
         }
     }
-    accumulated[slot] += vec4<f32>(flux, f32(m));
+    accumulated[2u * slot] += vec4<f32>(flux, f32(m));
+    accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);
+}
+
+fn gathers(hp: HitPoint, kind: u32) -> bool {
+    let updated = (hp.flags & HIT_UPDATED) != 0u;
+    if (hp.flags & HIT_VALID) == 0u {
+        return false;
+    }
+    switch kind & GATHER_KIND_MASK {
+        case GATHER_REGION_NEGATIVE, GATHER_REGION_POSITIVE: {
+            return !updated;
+        }
+        case GATHER_GUIDED: {
+            return updated;
+        }
+        default: {
+            return true;
+        }
+    }
+}
+
+fn store(slot: u32, hp_in: HitPoint, s: Statistics, emitted: f32) {
+    var hp = hp_in;
+    hp.n = s.n;
+    hp.r2 = s.r2;
+    hp.tau = s.tau;
+    hp.emitted = emitted;
+    hit_points[slot] = hp;
 }
 
 @compute @workgroup_size(64)
@@ -49,21 +87,60 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if slot >= arrayLength(&hit_points) {
         return;
     }
-    var hp = hit_points[slot];
-    if (hp.flags & HIT_VALID) == 0u {
+    let hp = hit_points[slot];
+    let acc = accumulated[2u * slot];
+    let weight_sum = accumulated[2u * slot + 1u].x;
+    accumulated[2u * slot] = vec4<f32>(0.0);
+    accumulated[2u * slot + 1u] = vec4<f32>(0.0);
+    let kind = params.kind & GATHER_KIND_MASK;
+    let s0 = Statistics(hp.n, hp.r2, hp.tau);
+    if kind == GATHER_REGION_APPLY {
+        let p = pending[slot];
+        pending[slot] = vec4<f32>(0.0);
+        if (hp.flags & HIT_VALID) == 0u || all(p == vec4<f32>(0.0)) {
+            return;
+        }
+        if p.w >= 0.0 {
+            let s = ppm_update(s0, p.w, p.xyz, params.alpha);
+            store(slot, hp, Statistics(s.n, s.r2, max(s.tau, vec3<f32>(0.0))), hp.emitted);
+        } else {
+            let s = compensation_update(s0, -p.w, p.xyz, params.alpha, r2_initial.x);
+            store(slot, hp, s, select(hp.emitted, 0.0, s.n == 0.0));
+        }
         return;
     }
-    let acc = accumulated[slot];
-    accumulated[slot] = vec4<f32>(0.0);
+    if !gathers(hp, params.kind) {
+        return;
+    }
+    let found = acc.w;
+    let region = kind == GATHER_REGION_NEGATIVE || kind == GATHER_REGION_POSITIVE;
+    var scale = 1.0;
+    if region {
+        scale = hp.emitted / params.region_photons;
+    }
+    var m = found;
+    if region && (params.kind & GATHER_RAW_COUNT) == 0u {
+        m = weight_sum * scale;
+    }
     let brdf = materials[hp.material].albedo * (1.0 / PI);
-    let s = ppm_update(Statistics(hp.n, hp.r2, hp.tau), acc.w, acc.xyz * brdf, params.alpha);
-    hp.n = s.n;
-    hp.r2 = s.r2;
-    hp.tau = s.tau;
-    hp.emitted += params.emitted_increment;
-    hit_points[slot] = hp;
-    if acc.w > 0.0 {
+    let dtau = acc.xyz * brdf * scale;
+    if found > 0.0 {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
-        atomicAdd(&counters[COUNTER_GATHERED], u32(acc.w));
+        atomicAdd(&counters[COUNTER_GATHERED], u32(found));
+    }
+    if (params.kind & GATHER_DEFERRED) != 0u {
+        let sign = select(1.0, -1.0, kind == GATHER_REGION_NEGATIVE);
+        pending[slot] += vec4<f32>(dtau, sign * m);
+        return;
+    }
+    var emitted = hp.emitted + params.emitted_increment;
+    if kind == GATHER_REGION_NEGATIVE {
+        let s = compensation_update(s0, m, dtau, params.alpha, r2_initial.x);
+        if m > 0.0 && s.n == 0.0 {
+            emitted = 0.0;
+        }
+        store(slot, hp, s, emitted);
+    } else {
+        store(slot, hp, ppm_update(s0, m, dtau, params.alpha), emitted);
     }
 }

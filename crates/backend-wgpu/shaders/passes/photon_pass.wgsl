@@ -1,12 +1,22 @@
-// #import layout rng sampling geometry bvh lights
-// Photon pass (ALGORITHM.md 1.3): the twin of backend-cpu's photon_pass.rs.
+// #import layout rng sampling geometry bvh lights emission
+// Photon pass (ALGORITHM.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Deposits land in path order, as on the CPU, without float atomics or an unordered append:
 // `photon_count_main` traces every path and stores its deposit count, an exclusive scan turns
 // the counts into offsets, and `photon_write_main` traces the same paths again (the generator
 // is counter-based, so they are identical) and writes each deposit at its path's offset.
 // A launch traces paths `first_path + i` for `i < photon_count`: the host splits a pass whose
-// deposits would not fit one binding into such batches.
+// deposits would not fit one binding into such batches. `emitter.kind` picks where photons
+// start: ordinary, through the emitting region, or guided around recorded paths.
+
+struct Emitter {
+    kind: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    region: EmissionRegion,
+    guide: GuidedEmission,
+}
 
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -16,23 +26,53 @@
 @group(0) @binding(5) var<storage, read_write> path_offsets: array<u32>;
 @group(0) @binding(6) var<storage, read_write> photons: array<Photon>;
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(8) var<uniform> emitter: Emitter;
+@group(0) @binding(9) var<storage, read> recorded: array<RecordedPath>;
+@group(0) @binding(10) var<storage, read_write> weights: array<f32>;
 
-const DIM_LIGHT: u32 = 0u;
 // Bounces start after the emission's dimensions (ppm_core::emission::EMISSION_DIMS).
 const DIM_BOUNCE: u32 = 8u;
 const DIMS_PER_BOUNCE: u32 = 3u;
 
+fn emit(key: StreamKey) -> Emission {
+    switch emitter.kind {
+        case EMISSION_REGION: {
+            return region_emission(key);
+        }
+        case EMISSION_GUIDED: {
+            return guided_emission(key);
+        }
+        default: {
+            return ordinary_emission(key);
+        }
+    }
+}
+
+fn pass_kind() -> u32 {
+    switch emitter.kind {
+        case EMISSION_REGION: {
+            return PASS_REGION;
+        }
+        case EMISSION_GUIDED: {
+            return PASS_GUIDED;
+        }
+        default: {
+            return PASS_PHOTON;
+        }
+    }
+}
+
 // Traces path `path`; writes its deposits from `photons[base]` on when `write` is set.
 // Returns (deposits, rays).
 fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
-    let key = StreamKey(params.seed, PASS_PHOTON, params.pass_index, path);
-    let light = lights[sample_light(stream_uniform(key, DIM_LIGHT))];
-    let b = uniform_triangle(stream_uniform(key, DIM_LIGHT + 1u), stream_uniform(key, DIM_LIGHT + 2u));
-    let start = light.v0 + light.e1 * b.x + light.e2 * b.y;
-    var dir = to_world(cosine_hemisphere(stream_uniform(key, DIM_LIGHT + 3u), stream_uniform(key, DIM_LIGHT + 4u)), light.normal);
-    var origin = start + light.normal * params.ray_epsilon;
-    let le = materials[light.material].emission;
-    var power = le * (PI * light.area / light.pdf * params.power_scale);
+    let key = StreamKey(params.seed, pass_kind(), params.pass_index, path);
+    let emission = emit(key);
+    if emission.weight <= 0.0 {
+        return vec2<u32>(0u, 0u);
+    }
+    var dir = emission.direction;
+    var origin = emission.origin + emission.normal * params.ray_epsilon;
+    var power = emission.power * params.power_scale;
     var deposits = 0u;
     var rays = 0u;
     for (var bounce = 0u; bounce < params.max_depth; bounce++) {
@@ -51,6 +91,7 @@ fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
             if bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT {
                 if write {
                     photons[base + deposits] = Photon(position, path, power, oct_encode(facing));
+                    weights[base + deposits] = emission.weight;
                 }
                 deposits++;
             }

@@ -136,6 +136,43 @@ struct GridParams {
     _pad2: u32,
 }
 
+struct EmissionRegion {
+    light_point: vec3<f32>,
+    mode: u32,
+    origin: vec3<f32>,
+    _pad1: u32,
+    edge_u: vec3<f32>,
+    area: f32,
+    edge_v: vec3<f32>,
+    _pad0: u32,
+}
+
+const REGION_AREA: u32 = 0u;
+const REGION_POINT: u32 = 1u;
+
+struct RecordedPath {
+    origin: vec3<f32>,
+    light: u32,
+    direction: vec3<f32>,
+    _pad0: u32,
+}
+
+struct GuidedEmission {
+    cos_cone: f32,
+    beta: f32,
+    paths: u32,
+    weighted: u32,
+}
+
+const GATHER_ORDINARY: u32 = 0u;
+const GATHER_REGION_NEGATIVE: u32 = 1u;
+const GATHER_REGION_POSITIVE: u32 = 2u;
+const GATHER_GUIDED: u32 = 3u;
+const GATHER_REGION_APPLY: u32 = 4u;
+const GATHER_KIND_MASK: u32 = 0xffu;
+const GATHER_RAW_COUNT: u32 = 0x100u;
+const GATHER_DEFERRED: u32 = 0x200u;
+
 struct ResolveParams {
     width: u32,
     height: u32,

@@ -3,6 +3,8 @@
 const PASS_EYE: u32 = 1u;
 const PASS_DIRECT_LIGHT: u32 = 2u;
 const PASS_PHOTON: u32 = 3u;
+const PASS_REGION: u32 = 4u;
+const PASS_GUIDED: u32 = 5u;
 
 struct StreamKey {
     seed: u32,

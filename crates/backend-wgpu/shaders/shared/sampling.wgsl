@@ -12,3 +12,10 @@ fn uniform_triangle(u1: f32, u2: f32) -> vec2<f32> {
     let s = sqrt(u1);
     return vec2<f32>(s * (1.0 - u2), s * u2);
 }
+
+fn uniform_cone(u1: f32, u2: f32, cos_max: f32) -> vec3<f32> {
+    let cos_t = 1.0 - u1 * (1.0 - cos_max);
+    let sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    let phi = 2.0 * PI * u2;
+    return vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}

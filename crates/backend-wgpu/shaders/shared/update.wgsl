@@ -25,3 +25,14 @@ fn radiance(tau: vec3<f32>, r2: f32, emitted: f32) -> vec3<f32> {
     let area = PI * r2;
     return (tau / emitted) / area;
 }
+
+fn compensation_update(s: Statistics, m: f32, dtau: vec3<f32>, alpha: f32, r2_initial: f32) -> Statistics {
+    if m <= 0.0 {
+        return s;
+    }
+    if m >= s.n {
+        return Statistics(0.0, r2_initial, vec3<f32>(0.0));
+    }
+    let ratio = 1.0 + (1.0 - alpha) * (m / (s.n - m));
+    return Statistics(s.n - alpha * m, min(s.r2 * ratio, r2_initial), max((s.tau + dtau) * ratio, vec3<f32>(0.0)));
+}
