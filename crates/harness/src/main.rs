@@ -67,7 +67,7 @@ impl From<ModeChoice> for Mode {
 
 #[derive(clap::Args)]
 struct DynamicArgs {
-    /// Built-in scene name or path to a TOML scene file (its [[moves]] define the motion).
+    /// Built-in scene name or path to a TOML scene file (its `[[moves]]` define the motion).
     scene: String,
     /// Backend.
     #[arg(long, value_enum, default_value = "cpu")]
