@@ -34,6 +34,19 @@ impl Kernel {
         slots: &[Slot],
         workgroup: u32,
     ) -> Self {
+        Self::specialised(device, module, entry, slots, workgroup, &[])
+    }
+
+    /// As [`Kernel::new`], with the shader's `override` constants set: code a specialisation
+    /// does not need is compiled out rather than branched over.
+    pub fn specialised(
+        device: &wgpu::Device,
+        module: &wgpu::ShaderModule,
+        entry: &'static str,
+        slots: &[Slot],
+        workgroup: u32,
+        constants: &[(&str, f64)],
+    ) -> Self {
         let entries: Vec<wgpu::BindGroupLayoutEntry> = slots
             .iter()
             .enumerate()
@@ -66,7 +79,10 @@ impl Kernel {
             layout: Some(&pipeline_layout),
             module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             cache: None,
         });
         Self {

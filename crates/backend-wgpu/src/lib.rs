@@ -340,13 +340,23 @@ impl WgpuBackend {
                 });
             }
         };
+        // The accumulation only needs to know whether deposits carry path weights.
+        let accumulate = GatherParams {
+            kind: if emitter.kind == emission_kind::REGION {
+                ppm_core::layout::gather_kind::REGION_POSITIVE
+            } else {
+                ppm_core::layout::gather_kind::ORDINARY
+            },
+            ..GatherParams::default()
+        };
         let gather = GatherInputs {
-            params: &GatherParams::default(),
+            params: &accumulate,
             materials: &scene.materials,
             accumulated,
             pending,
             r2_initial,
         };
+        let emission = emitter.kind;
         let emitter = buffers::uniform(&self.ctx, "emitter", emitter);
         let recorded = buffers::storage_init(&self.ctx, "recorded", paths);
         let mut stats = PhotonStats {
@@ -377,9 +387,9 @@ impl WgpuBackend {
                 weights: &no_weights,
             };
             let counted = self.run("photon count", |encoder| {
-                self.kernels
-                    .photon
-                    .record(&self.ctx, encoder, &launch, scene, &targets, false);
+                self.kernels.photon.record(
+                    &self.ctx, encoder, &launch, scene, &targets, emission, false,
+                );
                 self.kernels
                     .scan
                     .record(&self.ctx, encoder, &offsets, launch.photon_count)
@@ -405,7 +415,7 @@ impl WgpuBackend {
             self.run("photon map", |encoder| {
                 self.kernels
                     .photon
-                    .record(&self.ctx, encoder, &launch, scene, &targets, true);
+                    .record(&self.ctx, encoder, &launch, scene, &targets, emission, true);
                 let built = self.kernels.grid.record(
                     &self.ctx,
                     encoder,

@@ -107,10 +107,11 @@ impl DirectLightKernel {
     }
 }
 
-/// photon_pass.wgsl: a counting trace, then (after the scan) a writing trace.
+/// photon_pass.wgsl: a counting trace, then (after the scan) a writing trace, each
+/// specialised per emission kind (ordinary, region, guided).
 pub struct PhotonPassKernel {
-    count: Kernel,
-    write: Kernel,
+    count: [Kernel; 3],
+    write: [Kernel; 3],
 }
 
 /// The buffers a photon pass binds besides the scene.
@@ -137,13 +138,25 @@ impl PhotonPassKernel {
             Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
             ReadWrite,
         ];
+        let kernel = |entry, kind: u32| {
+            Kernel::specialised(
+                &ctx.device,
+                &module,
+                entry,
+                &slots,
+                WORKGROUP,
+                &[("EMISSION", f64::from(kind))],
+            )
+        };
         Self {
-            count: Kernel::new(&ctx.device, &module, "photon_count_main", &slots, WORKGROUP),
-            write: Kernel::new(&ctx.device, &module, "photon_write_main", &slots, WORKGROUP),
+            count: [0, 1, 2].map(|k| kernel("photon_count_main", k)),
+            write: [0, 1, 2].map(|k| kernel("photon_write_main", k)),
         }
     }
 
-    /// Records the counting trace (`write == false`) or the writing trace.
+    /// Records the counting trace (`write == false`) or the writing trace of photons emitted
+    /// as `emission` says (`layout::emission_kind`).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -151,9 +164,11 @@ impl PhotonPassKernel {
         params: &PhotonPassParams,
         scene: &SceneBuffers,
         targets: &PhotonTargets,
+        emission: u32,
         write: bool,
     ) {
-        let kernel = if write { &self.write } else { &self.count };
+        let kernels = if write { &self.write } else { &self.count };
+        let kernel = &kernels[emission as usize];
         let uniform_params = uniform(ctx, "photon params", params);
         let group = kernel.bind(
             &ctx.device,
@@ -175,9 +190,10 @@ impl PhotonPassKernel {
     }
 }
 
-/// gather_pass.wgsl: accumulate (once per photon batch), then apply (once per pass).
+/// gather_pass.wgsl: accumulate (once per photon batch; weighted or not), then apply (once
+/// per pass).
 pub struct GatherKernel {
-    accumulate: Kernel,
+    accumulate: [Kernel; 2],
     apply: Kernel,
 }
 
@@ -204,13 +220,16 @@ impl GatherKernel {
             ReadWrite, Uniform,
         ];
         Self {
-            accumulate: Kernel::new(
-                &ctx.device,
-                &module,
-                "gather_accumulate_main",
-                &slots,
-                WORKGROUP,
-            ),
+            accumulate: [false, true].map(|weighted| {
+                Kernel::specialised(
+                    &ctx.device,
+                    &module,
+                    "gather_accumulate_main",
+                    &slots,
+                    WORKGROUP,
+                    &[("WEIGHTED", f64::from(u8::from(weighted)))],
+                )
+            }),
             apply: Kernel::new(&ctx.device, &module, "gather_apply_main", &slots, WORKGROUP),
         }
     }
@@ -226,7 +245,13 @@ impl GatherKernel {
         slots: &Slots,
         apply: bool,
     ) {
-        let kernel = if apply { &self.apply } else { &self.accumulate };
+        let weighted = inputs.params.kind & ppm_core::layout::gather_kind::KIND_MASK
+            == ppm_core::layout::gather_kind::REGION_POSITIVE;
+        let kernel = if apply {
+            &self.apply
+        } else {
+            &self.accumulate[usize::from(weighted)]
+        };
         let params = uniform(ctx, "gather params", inputs.params);
         let group = kernel.bind(
             &ctx.device,

@@ -22,6 +22,10 @@
 @group(0) @binding(10) var<storage, read_write> pending: array<vec4<f32>>;
 @group(0) @binding(11) var<uniform> r2_initial: vec4<f32>;
 
+// Whether deposits carry path weights (region passes): one accumulate pipeline each way, so
+// other passes skip the extra reads.
+override WEIGHTED: bool = false;
+
 @compute @workgroup_size(64)
 fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let slot = item_index(gid, groups);
@@ -45,10 +49,15 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
             let d = p.position - hp.position;
             if dot(d, d) < hp.r2 && dot(oct_decode(p.normal_oct), hp.normal) > 0.0 {
                 m++;
-                weight += weights[index];
+                if WEIGHTED {
+                    weight += weights[index];
+                }
                 flux += p.power;
             }
         }
+    }
+    if !WEIGHTED {
+        weight = f32(m);
     }
     accumulated[2u * slot] += vec4<f32>(flux, f32(m));
     accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);

@@ -6,8 +6,8 @@
 // the counts into offsets, and `photon_write_main` traces the same paths again (the generator
 // is counter-based, so they are identical) and writes each deposit at its path's offset.
 // A launch traces paths `first_path + i` for `i < photon_count`: the host splits a pass whose
-// deposits would not fit one binding into such batches. `emitter.kind` picks where photons
-// start: ordinary, through the emitting region, or guided around recorded paths.
+// deposits would not fit one binding into such batches. The `EMISSION` override picks where
+// photons start: ordinary, through the emitting region, or guided around recorded paths.
 
 struct Emitter {
     kind: u32,
@@ -30,12 +30,16 @@ struct Emitter {
 @group(0) @binding(9) var<storage, read> recorded: array<RecordedPath>;
 @group(0) @binding(10) var<storage, read_write> weights: array<f32>;
 
+// The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
+// carry no region or guided code.
+override EMISSION: u32 = 0u;
+
 // Bounces start after the emission's dimensions (ppm_core::emission::EMISSION_DIMS).
 const DIM_BOUNCE: u32 = 8u;
 const DIMS_PER_BOUNCE: u32 = 3u;
 
 fn emit(key: StreamKey) -> Emission {
-    switch emitter.kind {
+    switch EMISSION {
         case EMISSION_REGION: {
             return region_emission(key);
         }
@@ -49,7 +53,7 @@ fn emit(key: StreamKey) -> Emission {
 }
 
 fn pass_kind() -> u32 {
-    switch emitter.kind {
+    switch EMISSION {
         case EMISSION_REGION: {
             return PASS_REGION;
         }
@@ -91,7 +95,9 @@ fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
             if bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT {
                 if write {
                     photons[base + deposits] = Photon(position, path, power, oct_encode(facing));
-                    weights[base + deposits] = emission.weight;
+                    if EMISSION == EMISSION_REGION {
+                        weights[base + deposits] = emission.weight;
+                    }
                 }
                 deposits++;
             }
