@@ -116,12 +116,11 @@ impl CpuBackend {
             .enumerate()
             .find(|(_, p)| !p.power.iter().chain(&p.position).all(|v| v.is_finite()))
         {
-            return Err(BackendError::NonFinite {
+            return Err(BackendError::NonFinitePhoton {
                 pass: "photon",
-                field: "photon power or position",
                 index: i,
-                pixel: p.path,
-                value: format!("{:?} at {:?}", p.power, p.position),
+                path: p.path,
+                value: format!("power {:?} at {:?}", p.power, p.position),
             });
         }
         let max_r2 = self

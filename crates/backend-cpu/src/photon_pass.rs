@@ -38,7 +38,12 @@ pub fn photon_pass_main(
     emit: &(dyn Fn(&StreamKey) -> Emission + Sync),
     keep_weights: bool,
 ) -> Deposits {
-    let chunks = params.photon_count.div_ceil(CHUNK);
+    // No light, no photon: the pass emits its count and deposits nothing.
+    let chunks = if scene.lights.is_empty() {
+        0
+    } else {
+        params.photon_count.div_ceil(CHUNK)
+    };
     let traced: Vec<(Vec<Photon>, Vec<f32>, u64)> = (0..chunks)
         .into_par_iter()
         .map(|c| {

@@ -107,6 +107,8 @@ pub struct SceneBuffers {
     pub lights: wgpu::Buffer,
     /// Camera as uploaded (resolution decides the hit-point count).
     pub camera_value: ppm_core::layout::GpuCamera,
+    /// Emitting triangles (the buffer holds a zeroed one when there are none).
+    pub light_count: usize,
 }
 
 /// Deepest BVH the shaders' fixed traversal stack (`STACK_SIZE` in bvh.wgsl) can walk.
@@ -128,6 +130,7 @@ impl SceneBuffers {
             materials: storage_init(ctx, "materials", &scene.materials),
             lights: storage_init(ctx, "lights", &scene.lights),
             camera_value: scene.camera,
+            light_count: scene.lights.len(),
         })
     }
 }

@@ -321,6 +321,8 @@ impl WgpuBackend {
             _ => storage_zeroed(&self.ctx, "path_offsets", path_bytes)?,
         };
         let scene = self.scene("photon")?;
+        // No light, no photon: the pass emits its count and its map stays empty.
+        let lit = scene.light_count > 0;
         let (hit_points, slots) = self.hit_points("photon")?;
         let accumulated = self.accumulated.as_ref().ok_or(BackendError::OutOfOrder {
             pass: "photon",
@@ -386,14 +388,18 @@ impl WgpuBackend {
                 recorded: &recorded,
                 weights: &no_weights,
             };
-            let counted = self.run("photon count", |encoder| {
-                self.kernels.photon.record(
-                    &self.ctx, encoder, &launch, scene, &targets, emission, false,
-                );
-                self.kernels
-                    .scan
-                    .record(&self.ctx, encoder, &offsets, launch.photon_count)
-            })?;
+            let counted = if lit {
+                self.run("photon count", |encoder| {
+                    self.kernels.photon.record(
+                        &self.ctx, encoder, &launch, scene, &targets, emission, false,
+                    );
+                    self.kernels
+                        .scan
+                        .record(&self.ctx, encoder, &offsets, launch.photon_count)
+                })?
+            } else {
+                [0; 4]
+            };
             let deposited = counted[COUNTER_ITEMS];
             if u64::from(deposited) > max_deposits {
                 // Shrink the batch to fit, with a tenth to spare; this count is discarded.

@@ -11,6 +11,7 @@ pub mod error_report;
 pub mod render;
 pub mod report;
 pub mod stats;
+pub mod stress;
 
 use ppm_core::scene::{Scene, SceneError, load_scene_file};
 use std::path::Path;

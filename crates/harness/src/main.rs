@@ -37,6 +37,31 @@ enum Command {
     /// Measurement reports.
     #[command(subcommand)]
     Report(ReportCommand),
+    /// Run the stress family (extreme scales, powers, geometry) and check every invariant.
+    Stress(StressArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StressBackends {
+    /// The CPU backend.
+    Cpu,
+    /// The wgpu backend.
+    Wgpu,
+    /// Both, one after the other.
+    Both,
+}
+
+#[derive(clap::Args)]
+struct StressArgs {
+    /// Backends to run.
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: StressBackends,
+    /// Run only this case (see the table for names).
+    #[arg(long)]
+    case: Option<String>,
+    /// JSON report.
+    #[arg(short, long, default_value = "out/stress.json")]
+    output: PathBuf,
 }
 
 #[derive(Subcommand)]
@@ -310,6 +335,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Diff(args) => harness::diff_command::run(&args.into()),
         Command::Animate(args) => run_animate(args),
         Command::Report(ReportCommand::ErrorVsTime(args)) => run_error_report(args),
+        Command::Stress(args) => run_stress(args),
     }
 }
 
@@ -569,5 +595,46 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
         }
     }
     println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn run_stress(args: StressArgs) -> Result<()> {
+    let cases: Vec<&scenes::stress::StressCase> = match &args.case {
+        Some(name) => vec![scenes::stress::stress_case(name).with_context(|| {
+            let names: Vec<&str> = scenes::stress::STRESS.iter().map(|c| c.name).collect();
+            format!("--case {name}: no such case (cases: {})", names.join(", "))
+        })?],
+        None => scenes::stress::STRESS.iter().collect(),
+    };
+    let mut backends: Vec<Box<dyn Backend>> = Vec::new();
+    if matches!(args.backend, StressBackends::Cpu | StressBackends::Both) {
+        backends.push(Box::new(CpuBackend::new()));
+    }
+    if matches!(args.backend, StressBackends::Wgpu | StressBackends::Both) {
+        let b = WgpuBackend::new().context("the wgpu backend cannot start")?;
+        eprintln!("wgpu adapter: {}", b.adapter_name());
+        backends.push(Box::new(b));
+    }
+    let mut results = Vec::new();
+    for case in cases {
+        for backend in &mut backends {
+            results.push(harness::stress::run_case(backend.as_mut(), case));
+        }
+    }
+    print!("{}", harness::stress::table(&results));
+    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(&args.output, serde_json::to_string_pretty(&results)?)
+        .with_context(|| format!("{}: cannot write", args.output.display()))?;
+    let failed = results.iter().filter(|r| !r.passed).count();
+    if failed > 0 {
+        bail!("{failed} of {} stress runs failed", results.len());
+    }
+    println!(
+        "all {} stress runs passed; wrote {}",
+        results.len(),
+        args.output.display()
+    );
     Ok(())
 }

@@ -32,6 +32,18 @@ pub enum BackendError {
         /// The value, printed.
         value: String,
     },
+    /// A photon pass produced a photon with NaN or infinite power or position.
+    #[error("{pass} pass: photon {index} (path {path}) is not finite: {value}")]
+    NonFinitePhoton {
+        /// Pass that produced it.
+        pass: &'static str,
+        /// Index of the deposit.
+        index: usize,
+        /// Path that made it.
+        path: u32,
+        /// Its power and position, printed.
+        value: String,
+    },
     /// A pass was called before what it needs (for example a gather before any photon pass).
     #[error("{pass} pass called out of order: {needs}")]
     OutOfOrder {

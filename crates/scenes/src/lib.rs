@@ -4,6 +4,7 @@
 pub mod analytic;
 pub mod canonical;
 pub mod meshes;
+pub mod stress;
 
 use ppm_core::scene::{Scene, SceneError, parse_scene};
 use std::path::Path;

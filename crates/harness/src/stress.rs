@@ -1,0 +1,171 @@
+//! Runs the stress family on a backend and checks what must hold on every case: finite
+//! fields, `tau >= 0`, `0 < r2 <= r2_initial`, `n >= 0`, a finite image, and the case's
+//! closed form where it has one.
+
+use crate::render::render;
+use ppm_core::passes::{Backend, BackendError};
+use scenes::stress::{Expected, StressCase};
+use serde::Serialize;
+use std::time::Instant;
+
+/// The extremes seen over a case's hit points.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Worst {
+    /// Largest flux channel.
+    pub max_tau: f32,
+    /// Smallest flux channel (must not be negative).
+    pub min_tau: f32,
+    /// Smallest `r2 / r2_initial` (must stay above 0).
+    pub min_r2_ratio: f32,
+    /// Largest `r2 / r2_initial` (must not exceed 1).
+    pub max_r2_ratio: f32,
+    /// Largest count.
+    pub max_n: f32,
+    /// Mean radiance of the image over all pixels and channels.
+    pub mean_radiance: f64,
+}
+
+/// One case on one backend.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseResult {
+    /// Case name.
+    pub case: String,
+    /// Backend name.
+    pub backend: String,
+    /// Whether every check held.
+    pub passed: bool,
+    /// `pass`, `refused: ...` (an accepted clear error), or what failed.
+    pub verdict: String,
+    /// Extremes of the fields.
+    pub worst: Worst,
+    /// Seconds the case took.
+    pub seconds: f64,
+}
+
+/// Runs `case` on `backend`.
+pub fn run_case(backend: &mut dyn Backend, case: &StressCase) -> CaseResult {
+    let start = Instant::now();
+    let setup = (case.build)();
+    let mut result = CaseResult {
+        case: case.name.to_owned(),
+        backend: backend.name().to_owned(),
+        passed: false,
+        verdict: String::new(),
+        worst: Worst::default(),
+        seconds: 0.0,
+    };
+    let outcome = setup
+        .params
+        .validate(case.name)
+        .map_err(|e| e.to_string())
+        .and_then(|()| {
+            render(backend, &setup.scene, 0, &setup.params, &mut |_, _| {})
+                .map_err(|e| e.to_string())
+        });
+    let verdict =
+        match outcome {
+            Err(e) => Err(format!("render failed: {e}")),
+            Ok(outcome) => match outcome.error {
+                Some(
+                    e @ (BackendError::NonFinite { .. } | BackendError::NonFinitePhoton { .. }),
+                ) if setup.expected == Expected::FiniteOrRefused => Ok(format!("refused: {e}")),
+                Some(e) => Err(format!("pass error: {e}")),
+                None => check(backend, &setup, &outcome.image, &mut result.worst),
+            },
+        };
+    result.passed = verdict.is_ok();
+    result.verdict = verdict.unwrap_or_else(|e| format!("FAIL: {e}"));
+    result.seconds = start.elapsed().as_secs_f64();
+    result
+}
+
+fn check(
+    backend: &mut dyn Backend,
+    setup: &scenes::stress::StressSetup,
+    image: &ppm_core::image::Image,
+    worst: &mut Worst,
+) -> Result<String, String> {
+    let hps = backend.read_hit_points().map_err(|e| e.to_string())?;
+    let r2_initial = setup.params.initial_radius * setup.params.initial_radius;
+    *worst = Worst {
+        min_tau: f32::INFINITY,
+        min_r2_ratio: f32::INFINITY,
+        ..Worst::default()
+    };
+    for (i, hp) in hps.iter().enumerate().filter(|(_, h)| h.is_valid()) {
+        let fields = hp
+            .tau
+            .iter()
+            .chain(&hp.direct)
+            .chain([&hp.r2, &hp.n, &hp.emitted]);
+        if let Some(v) = fields.clone().find(|v| !v.is_finite()) {
+            return Err(format!("hit point {i}: non-finite value {v}"));
+        }
+        let ratio = hp.r2 / r2_initial;
+        worst.max_tau = hp.tau.iter().copied().fold(worst.max_tau, f32::max);
+        worst.min_tau = hp.tau.iter().copied().fold(worst.min_tau, f32::min);
+        worst.min_r2_ratio = worst.min_r2_ratio.min(ratio);
+        worst.max_r2_ratio = worst.max_r2_ratio.max(ratio);
+        worst.max_n = worst.max_n.max(hp.n);
+        if hp.tau.iter().any(|t| *t < 0.0) {
+            return Err(format!("hit point {i}: negative flux {:?}", hp.tau));
+        }
+        if !(hp.r2 > 0.0 && hp.r2 <= r2_initial) {
+            return Err(format!(
+                "hit point {i}: r2 = {} outside (0, {r2_initial}]",
+                hp.r2
+            ));
+        }
+        if hp.n < 0.0 {
+            return Err(format!("hit point {i}: n = {}", hp.n));
+        }
+    }
+    if worst.min_tau == f32::INFINITY {
+        // No hit point at all (an empty view): nothing to bound.
+        worst.min_tau = 0.0;
+        worst.min_r2_ratio = 0.0;
+    }
+    if !image.is_finite() {
+        return Err("the image is not finite".into());
+    }
+    let count = (image.pixels.len() * 3).max(1) as f64;
+    worst.mean_radiance = image
+        .pixels
+        .iter()
+        .flatten()
+        .map(|v| f64::from(*v))
+        .sum::<f64>()
+        / count;
+    if let Expected::Radiance {
+        radiance,
+        tolerance,
+    } = setup.expected
+    {
+        let error = (worst.mean_radiance / f64::from(radiance) - 1.0).abs();
+        if error > f64::from(tolerance) {
+            return Err(format!(
+                "mean radiance {:.6e} is {:.2}% off the closed form {radiance:e} (tolerance {:.0}%)",
+                worst.mean_radiance,
+                100.0 * error,
+                100.0 * tolerance
+            ));
+        }
+    }
+    Ok("pass".into())
+}
+
+/// The results as a table.
+pub fn table(results: &[CaseResult]) -> String {
+    let mut s = format!(
+        "{:<22} {:<5} {:>10} {:>10} {:>10} {:>10} {:>10} {:>11} {:>7}  verdict\n",
+        "case", "back", "max tau", "min tau", "min r2/r0", "max r2/r0", "max n", "mean L", "time"
+    );
+    for r in results {
+        let w = &r.worst;
+        s.push_str(&format!(
+            "{:<22} {:<5} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e} {:>11.4e} {:>6.2}s  {}\n",
+            r.case, r.backend, w.max_tau, w.min_tau, w.min_r2_ratio, w.max_r2_ratio, w.max_n, w.mean_radiance, r.seconds, r.verdict
+        ));
+    }
+    s
+}

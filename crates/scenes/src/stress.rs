@@ -1,0 +1,437 @@
+//! The stress family (the stability issue): small scenes that push the renderer into corners,
+//! each saying in one line what it stresses, and what the result must be: a closed form where
+//! one exists, or at least finite statistics.
+
+use crate::analytic::{furnace, specular_furnace};
+use glam::Vec3;
+use ppm_core::params::RenderParams;
+use ppm_core::scene::{Material, MaterialKind, Object, Scene, quad_triangles};
+
+/// What a case must produce besides finite, in-range statistics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Expected {
+    /// Only the invariants (finite fields, tau >= 0, 0 < r2 <= r2_initial, n >= 0).
+    Finite,
+    /// The image's mean radiance within `tolerance` (relative) of `radiance`.
+    Radiance {
+        /// The closed-form value.
+        radiance: f32,
+        /// Relative tolerance.
+        tolerance: f32,
+    },
+    /// Either a finite image or a pass error naming a non-finite value: the case sits at the
+    /// f32 limit, where refusing is the honest answer.
+    FiniteOrRefused,
+}
+
+/// A ready-to-render case.
+pub struct StressSetup {
+    /// The scene.
+    pub scene: Scene,
+    /// Its render settings (small, for the test suite).
+    pub params: RenderParams,
+    /// What must come out.
+    pub expected: Expected,
+}
+
+/// One named case.
+pub struct StressCase {
+    /// Name on the command line.
+    pub name: &'static str,
+    /// What it stresses, in one line.
+    pub stresses: &'static str,
+    /// Builds it.
+    pub build: fn() -> StressSetup,
+}
+
+fn small(scene: &Scene) -> RenderParams {
+    let mut p = RenderParams::for_scene(scene);
+    p.width = 16;
+    p.height = 16;
+    p.passes = 4;
+    p.photons_per_pass = 20_000;
+    p.direct_samples = 64;
+    p
+}
+
+/// The grey furnace (albedo `rho`, Le `le`) scaled by `scale`, radius scaled alike.
+fn furnace_case(rho: f32, le: f32, scale: f32, tolerance: f32) -> StressSetup {
+    let mut scene = furnace(Vec3::splat(rho), le);
+    for v in scene
+        .objects
+        .iter_mut()
+        .flat_map(|o| o.triangles.iter_mut())
+        .flatten()
+    {
+        *v *= scale;
+    }
+    scene.camera.eye *= scale;
+    scene.camera.look_at *= scale;
+    let mut params = small(&scene);
+    params.initial_radius = 0.1 * scale;
+    StressSetup {
+        scene,
+        params,
+        expected: Expected::Radiance {
+            radiance: le / (1.0 - rho),
+            tolerance,
+        },
+    }
+}
+
+fn with<F: FnOnce(&mut StressSetup)>(mut s: StressSetup, f: F) -> StressSetup {
+    f(&mut s);
+    s
+}
+
+fn cornell() -> Scene {
+    crate::cornell_box_file().expect("the shipped cornell-box parses")
+}
+
+fn cornell_case(
+    expected: Expected,
+    edit: impl FnOnce(&mut Scene, &mut RenderParams),
+) -> StressSetup {
+    let mut scene = cornell();
+    let mut params = small(&scene);
+    edit(&mut scene, &mut params);
+    StressSetup {
+        scene,
+        params,
+        expected,
+    }
+}
+
+fn add_object(scene: &mut Scene, name: &str, kind: MaterialKind, triangles: Vec<[Vec3; 3]>) {
+    scene.materials.push(Material {
+        name: format!("{name}-material"),
+        kind,
+    });
+    scene.objects.push(Object {
+        name: name.into(),
+        material: scene.materials.len() - 1,
+        triangles,
+    });
+}
+
+fn box_triangles(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let (a, b) = (lo, hi);
+    [
+        [
+            c(a.x, a.y, a.z),
+            c(b.x, a.y, a.z),
+            c(b.x, a.y, b.z),
+            c(a.x, a.y, b.z),
+        ],
+        [
+            c(a.x, b.y, a.z),
+            c(a.x, b.y, b.z),
+            c(b.x, b.y, b.z),
+            c(b.x, b.y, a.z),
+        ],
+        [
+            c(a.x, a.y, a.z),
+            c(a.x, b.y, a.z),
+            c(b.x, b.y, a.z),
+            c(b.x, a.y, a.z),
+        ],
+        [
+            c(a.x, a.y, b.z),
+            c(b.x, a.y, b.z),
+            c(b.x, b.y, b.z),
+            c(a.x, b.y, b.z),
+        ],
+        [
+            c(a.x, a.y, a.z),
+            c(a.x, a.y, b.z),
+            c(a.x, b.y, b.z),
+            c(a.x, b.y, a.z),
+        ],
+        [
+            c(b.x, a.y, a.z),
+            c(b.x, b.y, a.z),
+            c(b.x, b.y, b.z),
+            c(b.x, a.y, b.z),
+        ],
+    ]
+    .into_iter()
+    .flat_map(quad_triangles)
+    .collect()
+}
+
+const WHITE: MaterialKind = MaterialKind::Diffuse {
+    albedo: Vec3::splat(0.7),
+};
+
+/// Every stress case, in the order `ppm stress` runs them.
+pub const STRESS: &[StressCase] = &[
+    StressCase {
+        name: "scale-1e-4",
+        stresses: "the furnace at 1e-4 scene units: r2 near 1e-10, radiance must not change",
+        build: || furnace_case(0.5, 1.0, 1e-4, 0.05),
+    },
+    StressCase {
+        name: "scale-1",
+        stresses: "the furnace at unit scale: the reference for the scale invariance",
+        build: || furnace_case(0.5, 1.0, 1.0, 0.05),
+    },
+    StressCase {
+        name: "scale-1e4",
+        stresses: "the furnace at 1e4 scene units: pi * r2 * emitted past 1e15",
+        build: || furnace_case(0.5, 1.0, 1e4, 0.05),
+    },
+    StressCase {
+        name: "power-1e-20",
+        stresses: "light radiance 1e-20: flux near the bottom of f32's normal range",
+        build: || furnace_case(0.5, 1e-20, 1.0, 0.05),
+    },
+    StressCase {
+        name: "power-1e20",
+        stresses: "light radiance 1e20: the image scales linearly",
+        build: || furnace_case(0.5, 1e20, 1.0, 0.05),
+    },
+    StressCase {
+        name: "power-1e30",
+        stresses: "light radiance 1e30: photon power 1e32, summed flux within 1e6 of f32's limit",
+        build: || furnace_case(0.5, 1e30, 1.0, 0.05),
+    },
+    StressCase {
+        name: "power-f32-limit",
+        stresses: "light radiance 3e37: a photon's power overflows f32; refuse clearly, never NaN",
+        build: || {
+            with(furnace_case(0.5, 3e37, 1.0, 0.05), |s| {
+                s.expected = Expected::FiniteOrRefused
+            })
+        },
+    },
+    StressCase {
+        name: "alpha-0.01",
+        stresses: "alpha 0.01: the radius collapses fastest, counts grow slowest",
+        build: || with(furnace_case(0.5, 1.0, 1.0, 0.08), |s| s.params.alpha = 0.01),
+    },
+    StressCase {
+        name: "alpha-0.99",
+        stresses: "alpha 0.99: the shrink ratio within 1e-2 of one",
+        build: || with(furnace_case(0.5, 1.0, 1.0, 0.05), |s| s.params.alpha = 0.99),
+    },
+    StressCase {
+        name: "furnace-0.99",
+        stresses: "albedo 0.99: photons bounce ~100 times, L = 100 Le",
+        build: || {
+            with(furnace_case(0.99, 1.0, 1.0, 0.08), |s| {
+                s.params.max_photon_depth = 4096;
+                s.params.photons_per_pass = 5_000;
+            })
+        },
+    },
+    StressCase {
+        name: "coincident-triangles",
+        stresses: "the Cornell floor and back wall twice, coincident: ties in the closest hit",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                for name in ["floor", "back-wall"] {
+                    let i = scene.object_index(name).expect("cornell-box object");
+                    let copy = scene.objects[i].triangles.clone();
+                    scene.objects[i].triangles.extend(copy);
+                }
+            })
+        },
+    },
+    StressCase {
+        name: "degenerate-triangles",
+        stresses: "zero-area and sliver triangles floating in the furnace: never hit, never NaN",
+        build: || {
+            with(furnace_case(0.5, 1.0, 1.0, 0.05), |s| {
+                let v = Vec3::new;
+                s.scene.objects[0].triangles.extend([
+                    [v(0.1, 0.1, 0.5), v(0.1, 0.1, 0.5), v(0.2, 0.3, 0.5)],
+                    [v(-0.5, 0.0, 0.6), v(0.5, 0.0, 0.6), v(0.0, 0.0, 0.6)],
+                    [v(-0.5, 0.2, 0.7), v(0.5, 0.2, 0.7), v(0.0, 0.2 + 1e-7, 0.7)],
+                ]);
+            })
+        },
+    },
+    StressCase {
+        name: "glass-ior-1.0",
+        stresses: "glass with ior 1: refraction without bending, Fresnel zero",
+        build: || specular_case(1.0),
+    },
+    StressCase {
+        name: "glass-ior-3.0",
+        stresses: "glass with ior 3: strong reflection and wide total internal reflection",
+        build: || specular_case(3.0),
+    },
+    StressCase {
+        name: "hall-of-mirrors",
+        stresses: "two facing lossless mirrors: eye chains past the depth limit end empty, finitely",
+        build: || {
+            with(furnace_case(0.5, 1.0, 1.0, 0.0), |s| {
+                let walls = std::mem::take(&mut s.scene.objects[0].triangles);
+                let (mirrors, rest): (Vec<_>, Vec<_>) = walls
+                    .into_iter()
+                    .partition(|t| t.iter().all(|v| v.z == t[0].z));
+                s.scene.objects[0].triangles = rest;
+                add_object(
+                    &mut s.scene,
+                    "mirrors",
+                    MaterialKind::Mirror {
+                        reflectance: Vec3::ONE,
+                    },
+                    mirrors,
+                );
+                s.params.max_eye_depth = 8;
+                s.expected = Expected::Finite;
+            })
+        },
+    },
+    StressCase {
+        name: "grazing-view",
+        stresses: "the floor seen at 89.9 degrees from its normal",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                scene.camera.eye = Vec3::new(278.0, 0.5, -800.0);
+                scene.camera.look_at =
+                    Vec3::new(278.0, 0.5 - 1359.2 * (0.1f32).to_radians().tan(), 559.2);
+            })
+        },
+    },
+    StressCase {
+        name: "grazing-light",
+        stresses: "a light tilted to 89.9 degrees: emission almost parallel to its plane",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                let light = scene.object_index("light").expect("cornell has a light");
+                let centre = scene.objects[light].bounds_centre();
+                let tilt = glam::Quat::from_rotation_x(89.9f32.to_radians());
+                for v in scene.objects[light].triangles.iter_mut().flatten() {
+                    *v = tilt * (*v - centre) + centre - Vec3::new(0.0, 60.0, 0.0);
+                }
+            })
+        },
+    },
+    StressCase {
+        name: "camera-inside-object",
+        stresses: "the camera inside a closed box: every eye ray meets its inside",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                let eye = scene.camera.eye;
+                add_object(
+                    scene,
+                    "cage",
+                    WHITE,
+                    box_triangles(eye - Vec3::splat(10.0), eye + Vec3::splat(10.0)),
+                );
+            })
+        },
+    },
+    StressCase {
+        name: "thin-slab",
+        stresses: "a slab 1e-3 mm thick: self-intersection at both faces",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                add_object(
+                    scene,
+                    "slab",
+                    WHITE,
+                    box_triangles(
+                        Vec3::new(100.0, 300.0, 100.0),
+                        Vec3::new(450.0, 300.001, 450.0),
+                    ),
+                );
+            })
+        },
+    },
+    StressCase {
+        name: "empty-view",
+        stresses: "the camera looks away from everything: an all-empty hit-point buffer",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                scene.camera.look_at = Vec3::new(278.0, 273.0, -2000.0);
+            })
+        },
+    },
+    StressCase {
+        name: "light-blocked",
+        stresses: "the light sealed in a box: photons deposit only inside it",
+        build: || {
+            cornell_case(Expected::Finite, |scene, _| {
+                add_object(
+                    scene,
+                    "seal",
+                    WHITE,
+                    box_triangles(
+                        Vec3::new(200.0, 500.0, 210.0),
+                        Vec3::new(360.0, 548.75, 350.0),
+                    ),
+                );
+            })
+        },
+    },
+    StressCase {
+        name: "image-1x1",
+        stresses: "a one-pixel image",
+        build: || {
+            cornell_case(Expected::Finite, |_, p| {
+                p.width = 1;
+                p.height = 1;
+            })
+        },
+    },
+    StressCase {
+        name: "image-1x4096",
+        stresses: "a 1 x 4096 image: one pixel wide, aspect 1/4096",
+        build: || {
+            cornell_case(Expected::Finite, |_, p| {
+                p.width = 1;
+                p.height = 4096;
+                p.photons_per_pass = 5_000;
+            })
+        },
+    },
+    StressCase {
+        name: "tiny-light-caustic",
+        stresses: "the wedding band lit by a light 0.01 wide: a caustic from a near-point source",
+        build: || {
+            let mut scene = crate::canonical::wedding_band().expect("wedding-band builds");
+            let light = scene
+                .object_index("light")
+                .expect("wedding-band has a light");
+            let centre = scene.objects[light].bounds_centre();
+            for v in scene.objects[light].triangles.iter_mut().flatten() {
+                *v = centre + (*v - centre) * 0.0025;
+            }
+            let mut params = small(&scene);
+            params.width = 24;
+            params.height = 24;
+            StressSetup {
+                scene,
+                params,
+                expected: Expected::Finite,
+            }
+        },
+    },
+];
+
+fn specular_case(ior: f32) -> StressSetup {
+    let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
+    for m in &mut scene.materials {
+        if let MaterialKind::Glass { ior: i } = &mut m.kind {
+            *i = ior;
+        }
+    }
+    let params = small(&scene);
+    StressSetup {
+        scene,
+        params,
+        expected: Expected::Radiance {
+            radiance: 2.0,
+            tolerance: 0.06,
+        },
+    }
+}
+
+/// The stress case called `name`.
+pub fn stress_case(name: &str) -> Option<&'static StressCase> {
+    STRESS.iter().find(|c| c.name == name)
+}

@@ -1,0 +1,50 @@
+//! The stress family (scenes::stress) on both backends: every invariant holds on every case,
+//! and the cases with a closed form meet it.
+
+use harness::stress::{run_case, table};
+use scenes::stress::STRESS;
+
+#[test]
+fn every_stress_case_holds_on_the_cpu_backend() {
+    let results: Vec<_> = STRESS
+        .iter()
+        .map(|c| run_case(&mut backend_cpu::CpuBackend::new(), c))
+        .collect();
+    println!("{}", table(&results));
+    assert!(results.iter().all(|r| r.passed), "{}", table(&results));
+}
+
+#[test]
+fn every_stress_case_holds_on_the_wgpu_backend() {
+    let Some(mut gpu) =
+        backend_wgpu::backend_or_skip("every_stress_case_holds_on_the_wgpu_backend")
+    else {
+        return;
+    };
+    let results: Vec<_> = STRESS.iter().map(|c| run_case(&mut gpu, c)).collect();
+    println!("{}", table(&results));
+    assert!(results.iter().all(|r| r.passed), "{}", table(&results));
+}
+
+/// Radiance is scale-invariant when the radius scales with the scene, and linear in the
+/// light: the furnace at 1e-4 and 1e4 units, and at 1e-20 and 1e20 radiance, gives the unit
+/// furnace's image, scaled, to rounding.
+#[test]
+fn scale_and_power_cases_reproduce_the_unit_furnace() {
+    let mean = |name: &str| {
+        let case = scenes::stress::stress_case(name).unwrap();
+        run_case(&mut backend_cpu::CpuBackend::new(), case)
+            .worst
+            .mean_radiance
+    };
+    let unit = mean("scale-1");
+    for (name, factor) in [
+        ("scale-1e-4", 1.0),
+        ("scale-1e4", 1.0),
+        ("power-1e-20", 1e-20),
+        ("power-1e20", 1e20),
+    ] {
+        let m = mean(name) / factor;
+        assert!((m / unit - 1.0).abs() < 1e-3, "{name}: {m} vs {unit}");
+    }
+}
