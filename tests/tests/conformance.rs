@@ -80,6 +80,9 @@ impl ReadBack for DropsOneInTen {
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
         self.0.read_photons()
     }
+    fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError> {
+        self.0.write_hit_points(hit_points)
+    }
 }
 impl RandomSource for DropsOneInTen {
     fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {

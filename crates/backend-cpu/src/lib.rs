@@ -295,6 +295,17 @@ impl ReadBack for CpuBackend {
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
         Ok(self.photons.clone())
     }
+
+    fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError> {
+        if hit_points.len() != self.hit_points.len() {
+            return Err(BackendError::OutOfOrder {
+                pass: "write hit points",
+                needs: "an eye pass with the same slot count",
+            });
+        }
+        self.hit_points.copy_from_slice(hit_points);
+        Ok(())
+    }
 }
 
 impl RandomSource for CpuBackend {

@@ -656,6 +656,20 @@ impl ReadBack for WgpuBackend {
         }
     }
 
+    fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError> {
+        let (buffer, slots) = self.hit_points("write hit points")?;
+        if hit_points.len() != *slots as usize {
+            return Err(BackendError::OutOfOrder {
+                pass: "write hit points",
+                needs: "an eye pass with the same slot count",
+            });
+        }
+        self.ctx
+            .queue
+            .write_buffer(buffer, 0, bytemuck::cast_slice(hit_points));
+        self.ctx.wait()
+    }
+
     /// The last photon pass's deposits; refused when that pass had to be split into batches,
     /// since its deposits never sat in one buffer.
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {

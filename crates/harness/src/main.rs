@@ -606,7 +606,7 @@ fn run_stress(args: StressArgs) -> Result<()> {
         })?],
         None => scenes::stress::STRESS.iter().collect(),
     };
-    let mut backends: Vec<Box<dyn Backend>> = Vec::new();
+    let mut backends: Vec<Box<dyn DynamicBackend>> = Vec::new();
     if matches!(args.backend, StressBackends::Cpu | StressBackends::Both) {
         backends.push(Box::new(CpuBackend::new()));
     }

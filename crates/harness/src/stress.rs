@@ -2,9 +2,11 @@
 //! fields, `tau >= 0`, `0 < r2 <= r2_initial`, `n >= 0`, a finite image, and the case's
 //! closed form where it has one.
 
-use crate::render::render;
-use ppm_core::passes::{Backend, BackendError};
-use scenes::stress::{Expected, StressCase};
+use crate::dynamic::{DynamicParams, Mode, Progressive};
+use crate::render::{Progress, render};
+use ppm_core::image::Image;
+use ppm_core::passes::{Backend, BackendError, DynamicBackend};
+use scenes::stress::{Expected, MoveStress, StressCase, StressSetup};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -42,8 +44,56 @@ pub struct CaseResult {
     pub seconds: f64,
 }
 
+/// Renders a moving case: frame 0, a compensated move, then as many passes again.
+fn render_move(
+    backend: &mut dyn DynamicBackend,
+    setup: &StressSetup,
+    m: MoveStress,
+) -> Result<Image, BackendError> {
+    let dynamic = DynamicParams {
+        compensation_passes: 2,
+        region_photons: m.region_photons,
+        ..DynamicParams::default()
+    };
+    let mut render = Progressive::start(backend, setup.scene.at_frame(0), &setup.params, &dynamic)?;
+    for _ in 0..setup.params.passes {
+        render.ordinary_pass()?;
+    }
+    let mode = if m.thesis { Mode::Thesis } else { Mode::Area };
+    render.move_to(setup.scene.at_frame(1), mode)?;
+    for _ in 0..setup.params.passes {
+        render.step()?;
+    }
+    render.resolve()
+}
+
+/// Renders a static case, seeding its state after direct light when it has one.
+fn render_still(
+    backend: &mut dyn Backend,
+    setup: &StressSetup,
+) -> Result<(Image, Option<BackendError>), String> {
+    let mut seeding_failed = None;
+    let mut observe = |p: Progress, b: &mut dyn Backend| {
+        if let (0, Some(seed)) = (p.pass, setup.seed) {
+            let seeded = b.read_hit_points().and_then(|mut hps| {
+                hps.iter_mut().filter(|h| h.is_valid()).for_each(seed);
+                b.write_hit_points(&hps)
+            });
+            if let Err(e) = seeded {
+                seeding_failed = Some(e.to_string());
+            }
+        }
+    };
+    let outcome =
+        render(backend, &setup.scene, 0, &setup.params, &mut observe).map_err(|e| e.to_string())?;
+    if let Some(e) = seeding_failed {
+        return Err(format!("seeding the state failed: {e}"));
+    }
+    Ok((outcome.image, outcome.error))
+}
+
 /// Runs `case` on `backend`.
-pub fn run_case(backend: &mut dyn Backend, case: &StressCase) -> CaseResult {
+pub fn run_case(backend: &mut dyn DynamicBackend, case: &StressCase) -> CaseResult {
     let start = Instant::now();
     let setup = (case.build)();
     let mut result = CaseResult {
@@ -58,19 +108,21 @@ pub fn run_case(backend: &mut dyn Backend, case: &StressCase) -> CaseResult {
         .params
         .validate(case.name)
         .map_err(|e| e.to_string())
-        .and_then(|()| {
-            render(backend, &setup.scene, 0, &setup.params, &mut |_, _| {})
-                .map_err(|e| e.to_string())
+        .and_then(|()| match setup.moves {
+            Some(m) => render_move(backend, &setup, m)
+                .map(|image| (image, None))
+                .map_err(|e| e.to_string()),
+            None => render_still(backend, &setup),
         });
     let verdict =
         match outcome {
             Err(e) => Err(format!("render failed: {e}")),
-            Ok(outcome) => match outcome.error {
+            Ok((image, error)) => match error {
                 Some(
                     e @ (BackendError::NonFinite { .. } | BackendError::NonFinitePhoton { .. }),
                 ) if setup.expected == Expected::FiniteOrRefused => Ok(format!("refused: {e}")),
                 Some(e) => Err(format!("pass error: {e}")),
-                None => check(backend, &setup, &outcome.image, &mut result.worst),
+                None => check(backend, &setup, &image, &mut result.worst),
             },
         };
     result.passed = verdict.is_ok();
@@ -80,9 +132,9 @@ pub fn run_case(backend: &mut dyn Backend, case: &StressCase) -> CaseResult {
 }
 
 fn check(
-    backend: &mut dyn Backend,
-    setup: &scenes::stress::StressSetup,
-    image: &ppm_core::image::Image,
+    backend: &mut dyn DynamicBackend,
+    setup: &StressSetup,
+    image: &Image,
     worst: &mut Worst,
 ) -> Result<String, String> {
     let hps = backend.read_hit_points().map_err(|e| e.to_string())?;

@@ -152,6 +152,9 @@ pub trait ReadBack {
     fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError>;
     /// The current photon map's deposits, in path order.
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError>;
+    /// Replaces the hit-point buffer (same slot count): seeds extreme states for the stress
+    /// suite and lets a debugging tool replay a recorded state.
+    fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError>;
 }
 
 /// The backend's own twin of [`crate::rng::random_bits`], so a conformance check can pin it

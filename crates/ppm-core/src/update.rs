@@ -88,14 +88,16 @@ pub fn compensation_update(
 /// Reflected radiance estimate `tau / (pi * r2 * emitted)` (thesis eq 4, ALGORITHM.md 1.5).
 ///
 /// Divides in two steps so the product `pi * r2 * emitted` is never formed: it overflows at
-/// huge scales or photon counts, and underflows at tiny ones. Zero while nothing was emitted.
+/// huge scales or photon counts, and underflows at tiny ones. Zero while nothing was emitted;
+/// a density beyond f32's range (a radius shrunk towards underflow) saturates at `f32::MAX`
+/// instead of becoming infinite.
 #[inline]
 pub fn radiance(tau: [f32; 3], r2: f32, emitted: f32) -> [f32; 3] {
     if emitted <= 0.0 || r2 <= 0.0 {
         return [0.0; 3];
     }
     let area = PI * r2;
-    tau.map(|t| (t / emitted) / area)
+    tau.map(|t| ((t / emitted) / area).min(f32::MAX))
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 
 use crate::analytic::{furnace, specular_furnace};
 use glam::Vec3;
+use ppm_core::layout::HitPoint;
 use ppm_core::params::RenderParams;
 use ppm_core::scene::{Material, MaterialKind, Object, Scene, quad_triangles};
 
@@ -24,6 +25,15 @@ pub enum Expected {
     FiniteOrRefused,
 }
 
+/// A move to run through compensation photons (ALGORITHM.md 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MoveStress {
+    /// Photons per compensation pass (two passes each way).
+    pub region_photons: u32,
+    /// Thesis mode (point light at the lights' centre) instead of area mode.
+    pub thesis: bool,
+}
+
 /// A ready-to-render case.
 pub struct StressSetup {
     /// The scene.
@@ -32,6 +42,10 @@ pub struct StressSetup {
     pub params: RenderParams,
     /// What must come out.
     pub expected: Expected,
+    /// Overwrites every valid hit point after direct light: a state seeded into the buffers.
+    pub seed: Option<fn(&mut HitPoint)>,
+    /// Renders frame 0, moves with compensation photons, continues: for moving scenes.
+    pub moves: Option<MoveStress>,
 }
 
 /// One named case.
@@ -76,6 +90,8 @@ fn furnace_case(rho: f32, le: f32, scale: f32, tolerance: f32) -> StressSetup {
             radiance: le / (1.0 - rho),
             tolerance,
         },
+        seed: None,
+        moves: None,
     }
 }
 
@@ -99,6 +115,8 @@ fn cornell_case(
         scene,
         params,
         expected,
+        seed: None,
+        moves: None,
     }
 }
 
@@ -408,10 +426,163 @@ pub const STRESS: &[StressCase] = &[
                 scene,
                 params,
                 expected: Expected::Finite,
+                seed: None,
+                moves: None,
             }
         },
     },
+    StressCase {
+        name: "count-past-2^24",
+        stresses: "n seeded at 3.4e7, past 2^24: n + alpha*M rounds back to n",
+        build: || {
+            with(furnace_case(0.5, 1.0, 1.0, 0.0), |s| {
+                s.expected = Expected::Finite;
+                s.seed = Some(|hp| {
+                    hp.n = 3.4e7;
+                    hp.emitted = 1e9;
+                    hp.tau = [2e5; 3];
+                });
+            })
+        },
+    },
+    StressCase {
+        name: "emitted-near-2^31",
+        stresses: "emitted seeded at 2.1e9 photons: the normaliser's ulp is 256",
+        build: || {
+            with(furnace_case(0.5, 1.0, 1.0, 0.0), |s| {
+                s.expected = Expected::Finite;
+                s.seed = Some(|hp| {
+                    hp.n = 1e4;
+                    hp.emitted = 2.1e9;
+                    hp.tau = [5e5; 3];
+                });
+            })
+        },
+    },
+    StressCase {
+        name: "r2-underflow",
+        stresses: "r2 seeded at 1e-38 (a million passes of shrinking): density past f32's range",
+        build: || {
+            with(furnace_case(0.5, 1.0, 1.0, 0.0), |s| {
+                s.expected = Expected::Finite;
+                s.seed = Some(|hp| {
+                    hp.r2 = 1e-38;
+                    hp.n = 1e6;
+                    hp.emitted = 1e6;
+                    hp.tau = [1.0; 3];
+                });
+            })
+        },
+    },
+    StressCase {
+        name: "negative-outnumbers-n",
+        stresses: "compensation photons standing for 20x what hit points hold: emptied, then refilled",
+        build: || {
+            move_case(
+                MoveStress {
+                    region_photons: 400_000,
+                    thesis: false,
+                },
+                2_000,
+            )
+        },
+    },
+    StressCase {
+        name: "region-thesis-mode",
+        stresses: "the thesis's point-light region with raw counts and unweighted guides",
+        build: || {
+            move_case(
+                MoveStress {
+                    region_photons: 20_000,
+                    thesis: true,
+                },
+                20_000,
+            )
+        },
+    },
+    StressCase {
+        name: "region-degenerate-line",
+        stresses: "a needle moving along the light's axis: the point light sees it as a line",
+        build: || {
+            let mut s = move_case(
+                MoveStress {
+                    region_photons: 20_000,
+                    thesis: true,
+                },
+                20_000,
+            );
+            let needle = vec![[
+                Vec3::new(278.0, 300.0, 279.5),
+                Vec3::new(278.0, 200.0, 279.5),
+                Vec3::new(278.0, 250.0, 279.5),
+            ]];
+            replace_mover(&mut s.scene, needle, Vec3::new(0.0, -50.0, 0.0));
+            s
+        },
+    },
+    StressCase {
+        name: "region-covers-light",
+        stresses: "a plate just under the light: the region spans the light's whole view",
+        build: || {
+            let mut s = move_case(
+                MoveStress {
+                    region_photons: 20_000,
+                    thesis: false,
+                },
+                20_000,
+            );
+            let plate = quad_triangles([
+                Vec3::new(100.0, 540.0, 100.0),
+                Vec3::new(100.0, 540.0, 460.0),
+                Vec3::new(460.0, 540.0, 460.0),
+                Vec3::new(460.0, 540.0, 100.0),
+            ]);
+            replace_mover(&mut s.scene, plate.to_vec(), Vec3::new(0.0, -10.0, 0.0));
+            s
+        },
+    },
+    StressCase {
+        name: "region-unbounded",
+        stresses: "a box around the light moves: no rectangle bounds it, the move restarts",
+        build: || {
+            let mut s = move_case(
+                MoveStress {
+                    region_photons: 20_000,
+                    thesis: false,
+                },
+                20_000,
+            );
+            let cage = box_triangles(
+                Vec3::new(190.0, 520.0, 200.0),
+                Vec3::new(366.0, 548.78, 360.0),
+            );
+            replace_mover(&mut s.scene, cage, Vec3::new(1.0, 0.0, 0.0));
+            s
+        },
+    },
 ];
+
+/// The Cornell box whose tall block moves, run through a compensated move.
+fn move_case(moves: MoveStress, photons: u32) -> StressSetup {
+    let scene = cornell();
+    let mut params = small(&scene);
+    params.photons_per_pass = photons;
+    params.passes = 2;
+    StressSetup {
+        scene,
+        params,
+        expected: Expected::Finite,
+        seed: None,
+        moves: Some(moves),
+    }
+}
+
+/// Makes `triangles` the moving object, moved by `translation` in frame 1.
+fn replace_mover(scene: &mut Scene, triangles: Vec<[Vec3; 3]>, translation: Vec3) {
+    let object = scene.moves[0].object;
+    scene.objects[object].triangles = triangles;
+    scene.moves[0].translation = translation;
+}
 
 fn specular_case(ior: f32) -> StressSetup {
     let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
@@ -428,6 +599,8 @@ fn specular_case(ior: f32) -> StressSetup {
             radiance: 2.0,
             tolerance: 0.06,
         },
+        seed: None,
+        moves: None,
     }
 }
 

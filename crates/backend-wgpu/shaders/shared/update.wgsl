@@ -23,7 +23,7 @@ fn radiance(tau: vec3<f32>, r2: f32, emitted: f32) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     let area = PI * r2;
-    return (tau / emitted) / area;
+    return min((tau / emitted) / area, vec3<f32>(3.4028235e38));
 }
 
 fn compensation_update(s: Statistics, m: f32, dtau: vec3<f32>, alpha: f32, r2_initial: f32) -> Statistics {
