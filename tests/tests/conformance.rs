@@ -94,6 +94,44 @@ impl Backend for DropsOneInTen {
         "broken"
     }
 }
+impl SceneUpdate for DropsOneInTen {
+    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        self.0.update_scene(scene)
+    }
+}
+impl HitPointUpdate for DropsOneInTen {
+    fn update_hit_points(
+        &mut self,
+        p: &EyePassParams,
+        epsilon: f32,
+    ) -> Result<UpdateStats, BackendError> {
+        self.0.update_hit_points(p, epsilon)
+    }
+}
+impl RegionPhotonPass for DropsOneInTen {
+    fn region_photon_pass(
+        &mut self,
+        p: &PhotonPassParams,
+        region: &EmissionRegion,
+    ) -> Result<PhotonStats, BackendError> {
+        self.0.region_photon_pass(p, region)
+    }
+}
+impl GuidedPhotonPass for DropsOneInTen {
+    fn guided_photon_pass(
+        &mut self,
+        p: &PhotonPassParams,
+        guide: &GuidedEmission,
+        paths: &[RecordedPath],
+    ) -> Result<PhotonStats, BackendError> {
+        self.0.guided_photon_pass(p, guide, paths)
+    }
+}
+impl LandingPaths for DropsOneInTen {
+    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
+        self.0.landing_paths()
+    }
+}
 
 fn cornell_params() -> (ppm_core::scene::Scene, RenderParams) {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();

@@ -48,3 +48,38 @@ fn scale_and_power_cases_reproduce_the_unit_furnace() {
         assert!((m / unit - 1.0).abs() < 1e-3, "{name}: {m} vs {unit}");
     }
 }
+
+/// CPU and wgpu agree on every case by the harness's independent-seed test. The false-alarm
+/// rate 0.01 is split among the cases (Bonferroni), so the whole family keeps it.
+#[test]
+fn both_backends_agree_on_every_stress_case() {
+    let Some(mut gpu) = backend_wgpu::backend_or_skip("both_backends_agree_on_every_stress_case")
+    else {
+        return;
+    };
+    let alpha = 0.01 / STRESS.len() as f64;
+    let mut failures = Vec::new();
+    for case in STRESS {
+        match harness::stress::agreement(&mut backend_cpu::CpuBackend::new(), &mut gpu, case, alpha)
+        {
+            Ok(Some(r)) => {
+                println!(
+                    "{:<24} {} of {} tests rejected, smallest p {:.2e}",
+                    case.name, r.rejected, r.tests, r.min_p
+                );
+                if !r.agree {
+                    failures.push(format!(
+                        "{}: {} rejected, min p {:.2e}",
+                        case.name, r.rejected, r.min_p
+                    ));
+                }
+            }
+            Ok(None) => println!(
+                "{:<24} refused on the f32 limit: nothing to compare",
+                case.name
+            ),
+            Err(e) => failures.push(format!("{}: {e}", case.name)),
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -14,14 +14,14 @@ use ppm_core::layout::{
     EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
 };
 use ppm_core::params::RenderParams;
-use ppm_core::passes::{Backend, BackendError};
+use ppm_core::passes::{Backend, BackendError, DynamicBackend};
 use ppm_core::rng::TEST_VECTORS;
 use ppm_core::scene::Scene;
 use ppm_core::update::{Statistics, ppm_update};
 use std::fmt;
 
 /// Makes a fresh backend for each check.
-pub type BackendFactory<'a> = &'a mut dyn FnMut() -> Result<Box<dyn Backend>, BackendError>;
+pub type BackendFactory<'a> = &'a mut dyn FnMut() -> Result<Box<dyn DynamicBackend>, BackendError>;
 
 /// Sizes the checks render at.
 #[derive(Clone, Debug)]
@@ -116,6 +116,7 @@ pub const CHECKS: &[(&str, Check)] = &[
     ("determinism", check_determinism),
     ("agreement/same-seed", check_same_seed),
     ("agreement/independent", check_independent),
+    ("stress-family", check_stress_family),
 ];
 
 /// Runs every check against backends made by `make`.
@@ -441,4 +442,23 @@ fn check_independent(make: BackendFactory, o: &ConformanceOptions) -> Result<Str
         details.push(line);
     }
     Ok(details.join(", "))
+}
+
+/// Every case of the stress family holds its invariants and closed forms.
+fn check_stress_family(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    let mut backend = make().map_err(err)?;
+    let results: Vec<_> = scenes::stress::STRESS
+        .iter()
+        .map(|case| crate::stress::run_case(backend.as_mut(), case))
+        .collect();
+    let failed: Vec<String> = results
+        .iter()
+        .filter(|r| !r.passed)
+        .map(|r| format!("{}: {}", r.case, r.verdict))
+        .collect();
+    if failed.is_empty() {
+        Ok(format!("{} cases hold", results.len()))
+    } else {
+        Err(failed.join("; "))
+    }
 }

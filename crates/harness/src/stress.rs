@@ -2,6 +2,8 @@
 //! fields, `tau >= 0`, `0 < r2 <= r2_initial`, `n >= 0`, a finite image, and the case's
 //! closed form where it has one.
 
+use crate::diff::independent::{IndependentReport, TileMeans, compare_at, tile_means};
+use crate::diff_command::OTHER_SEED_OFFSET;
 use crate::dynamic::{DynamicParams, Mode, Progressive};
 use crate::render::{Progress, render};
 use ppm_core::image::Image;
@@ -204,6 +206,62 @@ fn check(
         }
     }
     Ok("pass".into())
+}
+
+/// Runs of each backend in the agreement test.
+pub const AGREEMENT_RUNS: u32 = 4;
+
+/// Tile means of one run of `case` with `seed`, or `None` when the case refused (allowed at
+/// the f32 limit, and then nothing to compare).
+fn sample(
+    backend: &mut dyn DynamicBackend,
+    case: &StressCase,
+    seed: u32,
+) -> Result<Option<TileMeans>, String> {
+    let mut setup = (case.build)();
+    setup.params.seed = seed;
+    let image = match setup.moves {
+        Some(m) => render_move(backend, &setup, m).map_err(|e| e.to_string())?,
+        None => match render_still(backend, &setup)? {
+            (_, Some(_)) if setup.expected == Expected::FiniteOrRefused => return Ok(None),
+            (_, Some(e)) => return Err(e.to_string()),
+            (image, None) => image,
+        },
+    };
+    let hps = backend.read_hit_points().map_err(|e| e.to_string())?;
+    Ok(Some(tile_means(&image, &hps, &setup.params)))
+}
+
+/// Whether two backends agree on `case` by the independent-seed test (Welch t per tile and
+/// quantity, Holm-corrected at `alpha`), each rendering it [`AGREEMENT_RUNS`] times.
+pub fn agreement(
+    reference: &mut dyn DynamicBackend,
+    other: &mut dyn DynamicBackend,
+    case: &StressCase,
+    alpha: f64,
+) -> Result<Option<IndependentReport>, String> {
+    let runs =
+        |b: &mut dyn DynamicBackend, offset: u32| -> Result<Option<Vec<TileMeans>>, String> {
+            let mut out = Vec::new();
+            for k in 0..AGREEMENT_RUNS {
+                match sample(b, case, offset + k)? {
+                    Some(t) => out.push(t),
+                    None => return Ok(None),
+                }
+            }
+            Ok(Some(out))
+        };
+    let (Some(a), Some(b)) = (runs(reference, 0)?, runs(other, OTHER_SEED_OFFSET)?) else {
+        return Ok(None);
+    };
+    let params = (case.build)().params;
+    Ok(Some(compare_at(
+        (reference.name(), &a),
+        (other.name(), &b),
+        &params,
+        3,
+        alpha,
+    )))
 }
 
 /// The results as a table.

@@ -209,3 +209,69 @@ mod tests {
         assert!(big[0].is_finite() && big[0] > 0.0);
     }
 }
+
+/// The stable forms matter: the naive formulas, kept here in the tests only, fail on states
+/// the stress family reaches (`count-past-2^24`, `negative-outnumbers-n`, `r2-underflow`,
+/// `scale-1e4` with many photons), where the forms above stay finite and in range. The stress
+/// family runs those states on both backends (tests/tests/stress.rs).
+#[cfg(test)]
+mod naive_forms {
+    use super::*;
+
+    fn naive_compensation(s: Statistics, m: f32, dtau: f32, alpha: f32) -> Statistics {
+        let ratio = (s.n - alpha * m) / (s.n - m);
+        Statistics {
+            n: s.n - alpha * m,
+            r2: s.r2 * ratio,
+            tau: s.tau.map(|t| (t + dtau) * ratio),
+        }
+    }
+
+    #[test]
+    fn naive_eqs_5_to_7_break_when_negative_photons_outnumber_n_and_the_clamped_form_does_not() {
+        let s = Statistics {
+            n: 5.0,
+            r2: 100.0,
+            tau: [3.0; 3],
+        };
+        let naive = naive_compensation(s, 6.0, -4.0, 0.7);
+        assert!(naive.r2 < 0.0 && naive.tau[0] > 0.0, "naive: {naive:?}");
+        let at_n = naive_compensation(s, 5.0, -4.0, 0.7);
+        assert!(
+            !at_n.r2.is_finite(),
+            "naive at m = n divides by zero: {at_n:?}"
+        );
+        let stable = compensation_update(s, 6.0, [-4.0; 3], 0.7, 400.0);
+        assert_eq!((stable.n, stable.r2, stable.tau), (0.0, 400.0, [0.0; 3]));
+    }
+
+    #[test]
+    fn naive_radiance_overflows_where_the_two_step_form_does_not() {
+        // A huge radius (r2 = 1e24) after 2.1e15 photons: pi * r2 * emitted = 6.6e39 overflows
+        // f32 to infinity in the product, although the estimate itself is ordinary.
+        let (tau, r2, emitted) = (1e20f32, 1e24f32, 2.1e15f32);
+        let naive = tau / (std::f32::consts::PI * r2 * emitted);
+        assert_eq!(
+            naive, 0.0,
+            "the product overflowed to infinity and the quotient vanished"
+        );
+        let stable = radiance([tau; 3], r2, emitted)[0];
+        assert!(stable > 0.0 && stable.is_finite(), "{stable}");
+    }
+
+    #[test]
+    fn naive_ratio_is_less_accurate_past_2_24() {
+        // Past 2^24 the naive quotient's numerator stops growing: (n + alpha*M) rounds to n
+        // while the denominator grows, so the ratio mixes two roundings; the stable form
+        // computes the departure from 1 directly and stays in (alpha, 1].
+        let (n, m, alpha) = (3.4e7f32, 3.0f32, 0.7f32);
+        let naive = (n + alpha * m) / (n + m);
+        let stable = shrink_ratio(n, m, alpha);
+        let exact = 1.0 - (1.0 - f64::from(alpha)) * f64::from(m) / (f64::from(n) + f64::from(m));
+        assert!(
+            (f64::from(stable) - exact).abs() <= (f64::from(naive) - exact).abs(),
+            "naive {naive}, stable {stable}, exact {exact}"
+        );
+        assert!(stable <= 1.0 && stable > alpha);
+    }
+}

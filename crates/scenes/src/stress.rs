@@ -476,7 +476,7 @@ pub const STRESS: &[StressCase] = &[
     },
     StressCase {
         name: "negative-outnumbers-n",
-        stresses: "compensation photons standing for 20x what hit points hold: emptied, then refilled",
+        stresses: "compensation photons standing for ~5x what hit points hold: emptied, then refilled",
         build: || {
             move_case(
                 MoveStress {

@@ -129,6 +129,18 @@ pub fn compare(
     params: &RenderParams,
     worst_count: usize,
 ) -> IndependentReport {
+    compare_at(reference, other, params, worst_count, ALPHA)
+}
+
+/// As [`compare`], at family-wise false-alarm rate `alpha` (a caller testing many scenes
+/// divides its own rate among them).
+pub fn compare_at(
+    reference: (&str, &[TileMeans]),
+    other: (&str, &[TileMeans]),
+    params: &RenderParams,
+    worst_count: usize,
+    alpha: f64,
+) -> IndependentReport {
     let tx = tiles_per_side(params.width);
     let tiles = reference.1[0].len();
     let mut tests = Vec::new();
@@ -151,7 +163,7 @@ pub fn compare(
         }
     }
     let p: Vec<f64> = tests.iter().map(|t| t.p).collect();
-    for (test, rejected) in tests.iter_mut().zip(holm_rejections(&p, ALPHA)) {
+    for (test, rejected) in tests.iter_mut().zip(holm_rejections(&p, alpha)) {
         test.rejected = rejected;
     }
     let rejected = tests.iter().filter(|t| t.rejected).count();
@@ -163,7 +175,7 @@ pub fn compare(
         reference: reference.0.to_owned(),
         other: other.0.to_owned(),
         runs: reference.1.len().min(other.1.len()),
-        alpha: ALPHA,
+        alpha,
         tests: count,
         rejected,
         min_p,
