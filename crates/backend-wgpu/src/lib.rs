@@ -149,6 +149,21 @@ impl WgpuBackend {
         })
     }
 
+    /// The per-hit-point gather state the eye pass allocates: accumulator, pending sums and
+    /// the initial squared radius.
+    fn gather_state(
+        &self,
+        pass: &'static str,
+    ) -> Result<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer), BackendError> {
+        match (&self.accumulated, &self.pending, &self.r2_initial) {
+            (Some(a), Some(p), Some(r)) => Ok((a, p, r)),
+            _ => Err(BackendError::OutOfOrder {
+                pass,
+                needs: "an eye pass",
+            }),
+        }
+    }
+
     fn hit_points(&self, pass: &'static str) -> Result<&(wgpu::Buffer, u32), BackendError> {
         self.hit_points.as_ref().ok_or(BackendError::OutOfOrder {
             pass,
@@ -324,23 +339,11 @@ impl WgpuBackend {
         // No light, no photon: the pass emits its count and its map stays empty.
         let lit = scene.light_count > 0;
         let (hit_points, slots) = self.hit_points("photon")?;
-        let accumulated = self.accumulated.as_ref().ok_or(BackendError::OutOfOrder {
-            pass: "photon",
-            needs: "an eye pass",
-        })?;
+        let (accumulated, pending, r2_initial) = self.gather_state("photon")?;
         let slots = Slots {
             hit_points,
             counters: &self.counters,
             count: *slots,
-        };
-        let (pending, r2_initial) = match (&self.pending, &self.r2_initial) {
-            (Some(p), Some(r)) => (p, r),
-            _ => {
-                return Err(BackendError::OutOfOrder {
-                    pass: "photon",
-                    needs: "an eye pass",
-                });
-            }
         };
         // The accumulation only needs to know whether deposits carry path weights.
         let accumulate = GatherParams {
@@ -496,10 +499,7 @@ impl HitPointUpdate for WgpuBackend {
     ) -> Result<UpdateStats, BackendError> {
         let scene = self.scene("hit-point update")?;
         let (hit_points, slots) = self.hit_points("hit-point update")?;
-        let pending = self.pending.as_ref().ok_or(BackendError::OutOfOrder {
-            pass: "hit-point update",
-            needs: "an eye pass",
-        })?;
+        let (_, pending, _) = self.gather_state("hit-point update")?;
         let fresh = storage_zeroed(
             &self.ctx,
             "fresh hit points",
@@ -588,23 +588,11 @@ impl GatherPass for WgpuBackend {
             needs: "a photon pass",
         };
         let map = self.map.as_ref().ok_or(needs_photons)?;
-        let accumulated = self.accumulated.as_ref().ok_or(BackendError::OutOfOrder {
-            pass: "gather",
-            needs: "an eye pass",
-        })?;
+        let (accumulated, pending, r2_initial) = self.gather_state("gather")?;
         let targets = Slots {
             hit_points,
             counters: &self.counters,
             count: *slots,
-        };
-        let (pending, r2_initial) = match (&self.pending, &self.r2_initial) {
-            (Some(p), Some(r)) => (p, r),
-            _ => {
-                return Err(BackendError::OutOfOrder {
-                    pass: "gather",
-                    needs: "an eye pass",
-                });
-            }
         };
         let inputs = GatherInputs {
             params,
