@@ -1,7 +1,7 @@
 //! Compensation photons on the CPU backend (ALGORITHM.md 2 and 3): in an unchanged scene a
-//! negative region pass and a positive one cancel; after a move, area mode converges towards
-//! a from-scratch render of the new pose; the clamps hold when negative photons outnumber the
-//! count.
+//! negative region pass and a positive one cancel, and difference passes leave the statistics
+//! as they were; after a move, area and difference modes converge towards a from-scratch
+//! render of the new pose; the clamps hold when negative photons outnumber the count.
 
 use backend_cpu::CpuBackend;
 use harness::dynamic::{DynamicParams, Mode, Progressive};
@@ -22,6 +22,20 @@ fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
     (scene, p)
 }
 
+/// A CPU render of `scene` (at its own pose) after `passes` ordinary passes.
+fn warmed<'a>(
+    backend: &'a mut CpuBackend,
+    scene: Scene,
+    p: &RenderParams,
+    passes: u32,
+) -> Progressive<'a> {
+    let mut render = Progressive::start(backend, scene, p, &DynamicParams::default()).unwrap();
+    for _ in 0..passes {
+        render.ordinary_pass().unwrap();
+    }
+    render
+}
+
 fn mean_luminance(image: &Image) -> f64 {
     image
         .pixels
@@ -36,11 +50,7 @@ fn mean_luminance(image: &Image) -> f64 {
 fn cancel(neg_index: u32, pos_index: u32) -> (Image, Image) {
     let (scene, p) = cornell(64, 40_000);
     let mut backend = CpuBackend::new();
-    let mut render =
-        Progressive::start(&mut backend, scene.clone(), &p, &DynamicParams::default()).unwrap();
-    for _ in 0..8 {
-        render.ordinary_pass().unwrap();
-    }
+    let mut render = warmed(&mut backend, scene.clone(), &p, 8);
     let before = render.resolve().unwrap();
     let compiled = compile_scene(&scene, p.width, p.height);
     let region = emitting_region(
@@ -96,15 +106,37 @@ fn a_negative_then_positive_region_pass_in_an_unchanged_scene_leaves_the_image()
     assert!(change < 1e-2, "change {change}");
 }
 
+/// A "move" to the same pose in difference mode: every path is traced alike in both poses, so
+/// the negative and positive passes cancel photon by photon and no kept statistic moves.
+#[test]
+fn difference_passes_in_an_unchanged_scene_leave_the_statistics() {
+    let (scene, p) = cornell(64, 40_000);
+    let mut backend = CpuBackend::new();
+    let mut render = warmed(&mut backend, scene.clone(), &p, 8);
+    let before = render.backend().read_hit_points().unwrap();
+    let moved = render.move_to(scene, Mode::Difference).unwrap();
+    assert_eq!((moved.updated, &moved.restarted), (0, &None), "{moved:?}");
+    assert_eq!(render.counts.compensation.0, 8 * 40_000);
+    assert!(render.counts.compensation.1 > 0 && render.counts.region.1 > 0);
+    let after = render.backend().read_hit_points().unwrap();
+    let mut worst = 0.0f32;
+    for (b, a) in before.iter().zip(&after) {
+        assert_eq!((b.n, b.r2, b.emitted), (a.n, a.r2, a.emitted));
+        for c in 0..3 {
+            worst = worst.max((a.tau[c] - b.tau[c]).abs() / b.tau[c].max(1e-30));
+        }
+    }
+    println!("largest relative change of tau: {worst:.2e}");
+    assert!(worst < 1e-5, "tau moved by {worst}");
+}
+
 /// More negative photons than a hit point holds: every hit point stays finite, no flux
 /// channel goes negative, and no radius grows past its initial value.
 #[test]
 fn clamps_hold_when_negative_photons_outnumber_the_count() {
     let (scene, p) = cornell(48, 2_000);
     let mut backend = CpuBackend::new();
-    let mut render =
-        Progressive::start(&mut backend, scene.clone(), &p, &DynamicParams::default()).unwrap();
-    render.ordinary_pass().unwrap();
+    let mut render = warmed(&mut backend, scene.clone(), &p, 1);
     let compiled = compile_scene(&scene, p.width, p.height);
     let region = emitting_region(
         &compiled.lights,
@@ -154,10 +186,10 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
     assert!(render.resolve().unwrap().is_finite());
 }
 
-/// After the tall block moves, area mode's frame approaches a from-scratch render of the new
-/// pose as passes continue.
+/// After the tall block moves, area and difference modes' frames approach a from-scratch
+/// render of the new pose as passes continue.
 #[test]
-fn after_a_move_area_mode_converges_towards_the_new_pose() {
+fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
     let (scene, mut p) = cornell(64, 30_000);
     p.direct_samples = 64;
     let truth = {
@@ -166,43 +198,37 @@ fn after_a_move_area_mode_converges_towards_the_new_pose() {
         reference.seed = 99;
         tests::render_cpu(&scene, 1, &reference, 2).0.image
     };
-    let mut backend = CpuBackend::new();
-    let mut render = Progressive::start(
-        &mut backend,
-        scene.at_frame(0),
-        &p,
-        &DynamicParams::default(),
-    )
-    .unwrap();
-    for _ in 0..8 {
-        render.ordinary_pass().unwrap();
-    }
-    let stale = relative_rmse(&render.resolve().unwrap(), &truth);
-    let moved = render.move_to(scene.at_frame(1), Mode::Area).unwrap();
-    assert!(
-        moved.updated > 0 && moved.recorded_paths > 0 && moved.region_area > 0.0,
-        "{moved:?}"
-    );
-    let mut errors = vec![relative_rmse(&render.resolve().unwrap(), &truth)];
-    for _ in 0..3 {
-        for _ in 0..8 {
-            render.step().unwrap();
+    for mode in [Mode::Area, Mode::Difference] {
+        let mut backend = CpuBackend::new();
+        let mut render = warmed(&mut backend, scene.at_frame(0), &p, 8);
+        let stale = relative_rmse(&render.resolve().unwrap(), &truth);
+        let moved = render.move_to(scene.at_frame(1), mode).unwrap();
+        assert!(
+            moved.updated > 0 && moved.recorded_paths > 0 && moved.restarted.is_none(),
+            "{moved:?}"
+        );
+        let mut errors = vec![relative_rmse(&render.resolve().unwrap(), &truth)];
+        for _ in 0..3 {
+            for _ in 0..8 {
+                render.step().unwrap();
+            }
+            errors.push(relative_rmse(&render.resolve().unwrap(), &truth));
         }
-        errors.push(relative_rmse(&render.resolve().unwrap(), &truth));
+        println!("{mode:?}: stale frame 0: {stale:.4}; after the move, every 8 passes: {errors:?}");
+        assert!(
+            errors[0] < stale,
+            "{mode:?}: the move did not bring the frame closer to the new pose"
+        );
+        assert!(
+            errors[3] < errors[0],
+            "{mode:?}: error did not fall with passes: {errors:?}"
+        );
     }
-    println!("stale frame 0: {stale:.4}; after the move, every 8 passes: {errors:?}");
-    assert!(
-        errors[0] < stale,
-        "the move did not bring the frame closer to the new pose"
-    );
-    assert!(
-        errors[3] < errors[0],
-        "error did not fall with passes: {errors:?}"
-    );
 }
 
 /// The harness's same-seed comparison passes on a compensated frame: both backends run the
-/// same move (area mode, deferred region passes, testing and guided photons) and agree.
+/// same move (area, thesis and difference modes: compensation, testing and guided photons)
+/// and agree.
 #[test]
 fn both_backends_agree_on_a_compensated_frame() {
     let Some(mut gpu) = backend_wgpu::backend_or_skip("both_backends_agree_on_a_compensated_frame")
@@ -237,7 +263,7 @@ fn both_backends_agree_on_a_compensated_frame() {
             moved,
         )
     };
-    for mode in [Mode::Area, Mode::Thesis] {
+    for mode in [Mode::Area, Mode::Thesis, Mode::Difference] {
         let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
         let (wgpu, wgpu_move) = run(&mut gpu, mode);
         assert_eq!(

@@ -1,21 +1,30 @@
 //! Dynamic frames (ALGORITHM.md 2 and 3): a progressive render carried across object moves.
 //!
 //! [`Progressive`] owns the pass counters and the recorded paths of one render and drives a
-//! [`DynamicBackend`] through them: ordinary passes, a move with compensation photons (thesis
-//! or area mode), and the passes that follow a move (guided and ordinary, alternating). The
-//! restart mode is simply a new [`Progressive`] on the new pose.
+//! [`DynamicBackend`] through them: ordinary passes, a move with compensation photons (thesis,
+//! area or difference mode), and the passes that follow a move (guided and ordinary,
+//! alternating). The restart mode is simply a new [`Progressive`] on the new pose.
+//!
+//! Difference mode is ours (ALGORITHM.md 3, "Convergence", names the gap it closes): region
+//! photons only cover paths whose first segment crosses the emitting rectangle, so light that
+//! meets the object after a bounce stays stale. Ordinary photons traced in pose A (negative)
+//! and pose B (positive) with the same random numbers coincide wherever the move changed
+//! nothing, so their deferred sum is exactly the change of every path: unbiased, at the price
+//! of tracing the whole emission twice.
 
+use glam::Vec3;
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::emission::ordinary_emission;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
-    PhotonPassParams, RecordedPath, ResolveParams, first_hit, gather_kind, region_mode,
+    DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GpuLight, GpuMaterial,
+    GuidedEmission, PhotonPassParams, RecordedPath, ResolveParams, first_hit, gather_kind,
+    region_mode,
 };
 use ppm_core::params::{DirectMode, RenderParams};
 use ppm_core::passes::{BackendError, DynamicBackend};
 use ppm_core::region::{RegionError, emitting_region};
-use ppm_core::rng::{PassKind, StreamKey};
+use ppm_core::rng::{DIFFERENCE_PASS_BASE, PassKind, StreamKey};
 use ppm_core::scene::Scene;
 use serde::Serialize;
 use std::time::Instant;
@@ -30,11 +39,15 @@ pub enum Mode {
     Thesis,
     /// Ours: every light point, `M` in ordinary-photon units, defensively weighted guides.
     Area,
+    /// Ours, unbiased: area mode's guided passes, but the compensation traces ordinary photons
+    /// in both poses with the same random numbers, so every path the move changed is removed
+    /// and re-added, not only those whose first segment crosses the emitting rectangle.
+    Difference,
 }
 
 impl Mode {
     /// Every mode, in report order.
-    pub const ALL: [Mode; 3] = [Mode::Restart, Mode::Thesis, Mode::Area];
+    pub const ALL: [Mode; 4] = [Mode::Restart, Mode::Thesis, Mode::Area, Mode::Difference];
 
     /// The mode's name on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -42,14 +55,26 @@ impl Mode {
             Mode::Restart => "restart",
             Mode::Thesis => "thesis",
             Mode::Area => "area",
+            Mode::Difference => "difference",
         }
     }
+}
+
+/// What compensates a move: region photons through the emitting rectangle (thesis and area
+/// modes) or difference photons over the whole emission (difference mode).
+enum Compensation {
+    Region {
+        region: EmissionRegion,
+        /// Thesis mode's raw counts applied pass by pass; otherwise weighted and deferred.
+        raw: bool,
+    },
+    Difference,
 }
 
 /// Settings of the dynamic passes.
 #[derive(Clone, Debug, Serialize)]
 pub struct DynamicParams {
-    /// Compensation passes (and as many positive region passes) per move.
+    /// Compensation passes (and as many positive region passes) per move (thesis and area).
     pub compensation_passes: u32,
     /// Photons per compensation or region pass (the thesis: 256 x 256).
     pub region_photons: u32,
@@ -61,6 +86,8 @@ pub struct DynamicParams {
     pub max_recorded: usize,
     /// Distance beyond which a hit point counts as moved, relative to the scene's extent.
     pub update_epsilon: f32,
+    /// Difference passes per move (each one negative and one positive ordinary pass).
+    pub difference_passes: u32,
 }
 
 impl Default for DynamicParams {
@@ -72,6 +99,7 @@ impl Default for DynamicParams {
             beta: 0.25,
             max_recorded: 1024,
             update_epsilon: 1e-4,
+            difference_passes: 8,
         }
     }
 }
@@ -122,6 +150,7 @@ pub struct Progressive<'a> {
     frame: u32,
     photon_pass: u32,
     region_pass: u32,
+    difference_pass: u32,
     guided_pass: u32,
     steps_since_move: u32,
     guide: Option<(GuidedEmission, Vec<RecordedPath>)>,
@@ -151,6 +180,7 @@ impl<'a> Progressive<'a> {
             frame: 0,
             photon_pass: 0,
             region_pass: 0,
+            difference_pass: 0,
             guided_pass: 0,
             steps_since_move: 0,
             guide: None,
@@ -296,21 +326,8 @@ impl<'a> Progressive<'a> {
             .into_iter()
             .chain(next.moving_vertices())
             .collect();
-        let region_kind = if mode == Mode::Thesis {
-            region_mode::POINT
-        } else {
-            region_mode::AREA
-        };
-        let region = match (mode, emitting_region(&self.lights, &vertices, region_kind)) {
-            (Mode::Restart, _) => Err("restart mode".to_owned()),
-            (_, Err(RegionError::Empty)) => Err("nothing moves".to_owned()),
-            (_, Err(RegionError::Unbounded)) => {
-                Err("the moving object surrounds a light point".to_owned())
-            }
-            (_, Ok(region)) => Ok(region),
-        };
-        let region = match region {
-            Ok(r) => r,
+        let plan = match self.compensation_plan(mode, &vertices) {
+            Ok(plan) => plan,
             Err(why) => {
                 self.frame += 1;
                 self.reload(next)?;
@@ -319,27 +336,12 @@ impl<'a> Progressive<'a> {
                 return Ok(report);
             }
         };
-        report.region_area = region.area;
-        // Thesis mode: raw counts, each pass applied as it comes (eqs 5-7, then 1-3). Area
-        // mode: weighted counts, and the passes deferred and applied once as a net change.
-        let raw = if mode == Mode::Thesis {
-            gather_kind::RAW_COUNT
-        } else {
-            gather_kind::DEFERRED
-        };
-        let nc = self.dynamic.region_photons;
-        // All compensation passes together remove the region's share once: each gathers with
-        // the photons of all of them as N_c (and likewise the region passes re-add it once).
-        let total = (nc * self.dynamic.compensation_passes) as f32;
-        // Compensation photons in pose A, then (same random numbers) positive ones in pose B:
-        // where nothing changed their paths coincide and the two cancel almost exactly.
-        for k in 0..self.dynamic.compensation_passes {
-            let params = self.photon_params(self.region_pass + k, nc, -1.0);
-            let stats = self.backend.region_photon_pass(&params, &region)?;
-            self.counts.compensation.0 += stats.emitted;
-            self.counts.compensation.1 += stats.deposited;
-            self.gather(gather_kind::REGION_NEGATIVE | raw, 0.0, total)?;
+        if let Compensation::Region { region, .. } = &plan {
+            report.region_area = region.area;
         }
+        // Negative photons in pose A, then (same random numbers) positive ones in pose B:
+        // where nothing changed their paths coincide and the two cancel almost exactly.
+        self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
         let compiled = compile_scene(&next, self.params.width, self.params.height);
         self.backend.update_scene(&compiled)?;
         self.adopt(next, &compiled);
@@ -351,17 +353,21 @@ impl<'a> Progressive<'a> {
         report.updated = update.updated;
         report.kept = update.kept;
         self.direct_light()?;
-        for k in 0..self.dynamic.compensation_passes {
-            let params = self.photon_params(self.region_pass + k, nc, 1.0);
-            let stats = self.backend.region_photon_pass(&params, &region)?;
-            self.counts.region.0 += stats.emitted;
-            self.counts.region.1 += stats.deposited;
-            self.gather(gather_kind::REGION_POSITIVE | raw, 0.0, total)?;
+        self.compensate(&plan, gather_kind::REGION_POSITIVE)?;
+        // Deferred passes are applied once, as a net change (none when none ran).
+        let (ran, deferred) = match plan {
+            Compensation::Region { raw, .. } => {
+                self.region_pass += self.dynamic.compensation_passes;
+                (self.dynamic.compensation_passes, !raw)
+            }
+            Compensation::Difference => {
+                self.difference_pass += self.dynamic.difference_passes;
+                (self.dynamic.difference_passes, true)
+            }
+        };
+        if deferred && ran > 0 {
+            self.gather(gather_kind::REGION_APPLY, 0.0, 0.0)?;
         }
-        if mode == Mode::Area {
-            self.gather(gather_kind::REGION_APPLY, 0.0, total)?;
-        }
-        self.region_pass += self.dynamic.compensation_passes;
         // Testing photons: ordinary photons gathered by the updated hit points only; the
         // paths that reached them are rebuilt from their index and guide later passes.
         let n = self.params.photons_per_pass;
@@ -381,13 +387,89 @@ impl<'a> Progressive<'a> {
                 cos_cone: self.dynamic.cone_deg.to_radians().cos(),
                 beta: self.dynamic.beta,
                 paths: paths.len() as u32,
-                weighted: u32::from(mode == Mode::Area),
+                weighted: u32::from(mode != Mode::Thesis),
             };
             (guide, paths)
         });
         self.steps_since_move = 0;
         report.seconds = start.elapsed().as_secs_f64();
         Ok(report)
+    }
+
+    /// How `mode` compensates a move of `vertices` (both poses), or why it must restart.
+    fn compensation_plan(&self, mode: Mode, vertices: &[Vec3]) -> Result<Compensation, String> {
+        let kind = match mode {
+            Mode::Restart => return Err("restart mode".to_owned()),
+            Mode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
+            Mode::Difference => return Ok(Compensation::Difference),
+            Mode::Thesis => region_mode::POINT,
+            Mode::Area => region_mode::AREA,
+        };
+        match emitting_region(&self.lights, vertices, kind) {
+            Ok(region) => Ok(Compensation::Region {
+                region,
+                raw: mode == Mode::Thesis,
+            }),
+            Err(RegionError::Empty) => Err("nothing moves".to_owned()),
+            Err(RegionError::Unbounded) => {
+                Err("the moving object surrounds a light point".to_owned())
+            }
+        }
+    }
+
+    /// All negative (pose A) or all positive (pose B) passes of a move, gathered as `kind`.
+    /// Together the passes of one sign remove (or re-add) their share once: each gathers with
+    /// the photons of all of them as its `N_c`.
+    fn compensate(&mut self, plan: &Compensation, kind: u32) -> Result<(), BackendError> {
+        let sign = if kind == gather_kind::REGION_NEGATIVE {
+            -1.0
+        } else {
+            1.0
+        };
+        match plan {
+            Compensation::Region { region, raw } => {
+                // Thesis: raw counts, each pass applied as it comes (eqs 5-7, then 1-3). Area:
+                // weighted counts, deferred and applied once as a net change.
+                let flag = if *raw {
+                    gather_kind::RAW_COUNT
+                } else {
+                    gather_kind::DEFERRED
+                };
+                let nc = self.dynamic.region_photons;
+                let total = (nc * self.dynamic.compensation_passes) as f32;
+                for k in 0..self.dynamic.compensation_passes {
+                    let params = self.photon_params(self.region_pass + k, nc, sign);
+                    let stats = self.backend.region_photon_pass(&params, region)?;
+                    self.count_compensation(kind, stats.emitted, stats.deposited);
+                    self.gather(kind | flag, 0.0, total)?;
+                }
+            }
+            Compensation::Difference => {
+                // Ordinary photons, each standing for `emitted / total` ordinary photons (path
+                // weight 1); deferred, so only the paths the move changed leave a net change.
+                let n = self.params.photons_per_pass;
+                let total = (n * self.dynamic.difference_passes) as f32;
+                for k in 0..self.dynamic.difference_passes {
+                    let index = DIFFERENCE_PASS_BASE + self.difference_pass + k;
+                    let stats = self
+                        .backend
+                        .photon_pass(&self.photon_params(index, n, sign))?;
+                    self.count_compensation(kind, stats.emitted, stats.deposited);
+                    self.gather(kind | gather_kind::DEFERRED, 0.0, total)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn count_compensation(&mut self, kind: u32, emitted: u64, deposited: u64) {
+        let counts = if kind == gather_kind::REGION_NEGATIVE {
+            &mut self.counts.compensation
+        } else {
+            &mut self.counts.region
+        };
+        counts.0 += emitted;
+        counts.1 += deposited;
     }
 
     /// The emissions of the testing paths `landed`, rebuilt from their random numbers; a

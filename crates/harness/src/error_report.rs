@@ -4,7 +4,8 @@
 use crate::chart::{Series, loglog_chart};
 use crate::dynamic::{DynamicParams, Mode, MoveReport, PhotonCounts, Progressive};
 use crate::render::render;
-use ppm_core::image::{Image, relative_rmse};
+use ppm_core::image::{Image, relative_rmse, relative_rmse_parts};
+use ppm_core::layout::hit_flags;
 use ppm_core::params::RenderParams;
 use ppm_core::passes::{BackendError, DynamicBackend};
 use ppm_core::scene::Scene;
@@ -36,6 +37,10 @@ pub struct Measurement {
     pub seconds: f64,
     /// Relative RMSE against the reference.
     pub rel_rmse: f64,
+    /// Its part from pixels whose hit points the move kept (`kept^2 + reset^2 = rel_rmse^2`).
+    pub kept: f64,
+    /// Its part from pixels whose hit points the move reset.
+    pub reset: f64,
     /// Passes since the move.
     pub passes: u32,
 }
@@ -113,23 +118,48 @@ pub fn reference_path(cache: &Path, scene: &Scene, settings: &ErrorSettings) -> 
     ))
 }
 
+/// The pixels whose hit points the move from frame 0 to frame 1 resets (any of their slots).
+pub fn reset_pixels(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    settings: &ErrorSettings,
+) -> Result<Vec<bool>, BackendError> {
+    let dynamic = DynamicParams {
+        compensation_passes: 0,
+        ..settings.dynamic.clone()
+    };
+    let mut render = Progressive::start(backend, scene.at_frame(0), &settings.params, &dynamic)?;
+    render.move_to(scene.at_frame(1), Mode::Area)?;
+    let mut mask = vec![false; (settings.params.width * settings.params.height) as usize];
+    for hp in render.backend().read_hit_points()? {
+        if hp.flags & hit_flags::UPDATED != 0 {
+            mask[hp.pixel as usize] = true;
+        }
+    }
+    Ok(mask)
+}
+
 /// Runs `mode` after a move: warm-up on frame 0 (not for restart), the move, then passes until
-/// `settings.seconds`, measuring after each.
+/// `settings.seconds`, measuring after each; `reset` (from [`reset_pixels`]) splits the error.
 pub fn run_mode(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
     mode: Mode,
     settings: &ErrorSettings,
     truth: &Image,
+    reset: &[bool],
 ) -> Result<ModeRun, BackendError> {
     let mut measurements = Vec::new();
     let mut measure =
         |render: &mut Progressive, seconds: f64, passes: u32| -> Result<(), BackendError> {
             let image = render.resolve()?;
+            let (kept, reset) = relative_rmse_parts(&image, truth, reset);
             measurements.push(Measurement {
                 mode,
                 seconds,
                 rel_rmse: relative_rmse(&image, truth),
+                kept,
+                reset,
                 passes,
             });
             Ok(())
@@ -181,6 +211,34 @@ pub fn run_mode(
     })
 }
 
+/// The error a perfect compensation that costs nothing would reach, over time: its kept
+/// pixels as good as a from-scratch render of frame 1 for the warm-up time (every change
+/// removed, nothing stale, no compensation noise), its reset pixels as restart's. Unless
+/// guiding makes the reset pixels converge faster than restart's, no compensating mode gets
+/// below this curve: it says what the method can win on the scene at all.
+pub fn perfect_compensation(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    settings: &ErrorSettings,
+    truth: &Image,
+    reset: &[bool],
+    restart: &ModeRun,
+) -> Result<Vec<(f64, f64)>, BackendError> {
+    let mut params = settings.params.clone();
+    params.seed = params.seed.wrapping_add(1);
+    let mut render = Progressive::start(backend, scene.at_frame(1), &params, &settings.dynamic)?;
+    let warm = Instant::now();
+    while warm.elapsed().as_secs_f64() < settings.warmup_seconds {
+        render.ordinary_pass()?;
+    }
+    let (kept, _) = relative_rmse_parts(&render.resolve()?, truth, reset);
+    Ok(restart
+        .measurements
+        .iter()
+        .map(|m| (m.seconds, kept.hypot(m.reset)))
+        .collect())
+}
+
 /// Wall-clock time with pauses, so measuring is not charged to rendering.
 struct Stopwatch {
     running_since: Option<Instant>,
@@ -210,28 +268,31 @@ impl Stopwatch {
     }
 }
 
-/// The CSV of all measurements: `mode,seconds,rel_rmse`.
+/// The CSV of all measurements: `mode,seconds,rel_rmse,kept,reset`.
 pub fn csv(runs: &[ModeRun]) -> String {
-    let mut s = String::from("mode,seconds,rel_rmse\n");
+    let mut s = String::from("mode,seconds,rel_rmse,kept,reset\n");
     for m in runs.iter().flat_map(|r| &r.measurements) {
         s.push_str(&format!(
-            "{},{:.6},{:.6}\n",
+            "{},{:.6},{:.6},{:.6},{:.6}\n",
             m.mode.name(),
             m.seconds,
-            m.rel_rmse
+            m.rel_rmse,
+            m.kept,
+            m.reset
         ));
     }
     s
 }
 
-/// The log-log chart of the runs.
-pub fn chart(scene: &str, runs: &[ModeRun]) -> Image {
+/// The log-log chart of the runs, with the perfect-compensation curve in grey.
+pub fn chart(scene: &str, runs: &[ModeRun], perfect: &[(f64, f64)]) -> Image {
     let colour = |m: Mode| match m {
         Mode::Restart => [0.8, 0.1, 0.1],
         Mode::Thesis => [0.1, 0.3, 0.9],
         Mode::Area => [0.1, 0.6, 0.2],
+        Mode::Difference => [0.9, 0.6, 0.0],
     };
-    let series: Vec<Series> = runs
+    let mut series: Vec<Series> = runs
         .iter()
         .map(|r| Series {
             name: r.mode.name(),
@@ -243,6 +304,11 @@ pub fn chart(scene: &str, runs: &[ModeRun]) -> Image {
                 .collect(),
         })
         .collect();
+    series.push(Series {
+        name: "perfect",
+        colour: [0.55; 3],
+        points: perfect.to_vec(),
+    });
     loglog_chart(
         &format!("{scene}: error after the move"),
         "seconds since the move",
@@ -302,35 +368,39 @@ pub fn tables(runs: &[ModeRun], triangles: usize) -> String {
     s
 }
 
-/// Seconds each mode needs to reach restart's final error (linear interpolation between
-/// measurements; `None` if it never does within the run).
-pub fn time_to_restart_error(runs: &[ModeRun]) -> Vec<(Mode, Option<f64>)> {
-    let Some(target) = runs
-        .iter()
+/// Restart's final error: the level every other curve is timed against.
+pub fn restart_final_error(runs: &[ModeRun]) -> Option<f64> {
+    runs.iter()
         .find(|r| r.mode == Mode::Restart)
         .and_then(|r| r.measurements.last())
         .map(|m| m.rel_rmse)
-    else {
+}
+
+/// Seconds each mode needs to reach restart's final error (`None` if it never does).
+pub fn time_to_restart_error(runs: &[ModeRun]) -> Vec<(Mode, Option<f64>)> {
+    let Some(target) = restart_final_error(runs) else {
         return Vec::new();
     };
     runs.iter()
         .map(|r| {
-            let t = r.measurements.windows(2).find_map(|w| {
-                (w[1].rel_rmse <= target).then(|| {
-                    if w[0].rel_rmse <= target {
-                        w[0].seconds
-                    } else {
-                        let f = (w[0].rel_rmse - target) / (w[0].rel_rmse - w[1].rel_rmse);
-                        w[0].seconds + f * (w[1].seconds - w[0].seconds)
-                    }
-                })
-            });
-            let first = r
+            let points: Vec<_> = r
                 .measurements
-                .first()
-                .filter(|m| m.rel_rmse <= target)
-                .map(|m| m.seconds);
-            (r.mode, first.or(t))
+                .iter()
+                .map(|m| (m.seconds, m.rel_rmse))
+                .collect();
+            (r.mode, time_to_reach(&points, target))
         })
         .collect()
+}
+
+/// When the curve `points` (seconds, error) first reaches `target`, interpolating linearly
+/// between measurements; `None` if it never does.
+pub fn time_to_reach(points: &[(f64, f64)], target: f64) -> Option<f64> {
+    if let Some(&(t, _)) = points.first().filter(|p| p.1 <= target) {
+        return Some(t);
+    }
+    points.windows(2).find_map(|w| {
+        let ((t0, e0), (t1, e1)) = (w[0], w[1]);
+        (e1 <= target).then(|| t0 + (e0 - target) / (e0 - e1) * (t1 - t0))
+    })
 }

@@ -78,6 +78,8 @@ enum ModeChoice {
     Thesis,
     /// Ours: compensation from the whole area light, weighted counts and guides.
     Area,
+    /// Ours, unbiased: every light path traced in both poses; the difference compensates.
+    Difference,
 }
 
 impl From<ModeChoice> for Mode {
@@ -86,6 +88,7 @@ impl From<ModeChoice> for Mode {
             ModeChoice::Restart => Mode::Restart,
             ModeChoice::Thesis => Mode::Thesis,
             ModeChoice::Area => Mode::Area,
+            ModeChoice::Difference => Mode::Difference,
         }
     }
 }
@@ -122,6 +125,10 @@ struct DynamicArgs {
     /// Half-angle of the guided photons' cone, degrees.
     #[arg(long, default_value_t = 10.0)]
     cone_deg: f32,
+    /// Difference passes per move in difference mode (each a negative and a positive pass
+    /// of the ordinary photon count).
+    #[arg(long, default_value_t = 8)]
+    difference_passes: u32,
 }
 
 impl DynamicArgs {
@@ -130,6 +137,7 @@ impl DynamicArgs {
             compensation_passes: self.compensation_passes,
             region_photons: self.region_photons,
             cone_deg: self.cone_deg,
+            difference_passes: self.difference_passes,
             ..DynamicParams::default()
         }
     }
@@ -559,6 +567,8 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
     eprintln!("reference: {}", cached.display());
     let truth = error_report::reference(backend.as_mut(), &scene, &settings, &cached)
         .map_err(|e| anyhow::anyhow!("reference render: {e}"))?;
+    eprintln!("finding the pixels the move resets");
+    let reset = error_report::reset_pixels(backend.as_mut(), &scene, &settings)?;
     let mut runs = Vec::new();
     for mode in Mode::ALL {
         eprintln!("measuring {}", mode.name());
@@ -568,28 +578,46 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
             mode,
             &settings,
             &truth,
+            &reset,
         )?);
     }
+    eprintln!("measuring the perfect-compensation bound");
+    let perfect = error_report::perfect_compensation(
+        backend.as_mut(),
+        &scene,
+        &settings,
+        &truth,
+        &reset,
+        runs.iter()
+            .find(|r| r.mode == Mode::Restart)
+            .context("the restart run is missing")?,
+    )?;
+    let target = error_report::restart_final_error(&runs);
+    let perfect_time = target.and_then(|t| error_report::time_to_reach(&perfect, t));
     let triangles = scene.triangle_count();
     let out = &args.output;
     std::fs::write(out.join("error-vs-time.csv"), error_report::csv(&runs))?;
     let json = serde_json::json!({ "scene": scene.name, "settings": settings, "runs": runs,
-        "seconds_to_restart_error": error_report::time_to_restart_error(&runs) });
+        "reset_pixels": reset.iter().filter(|&&r| r).count(),
+        "perfect_compensation": perfect,
+        "seconds_to_restart_error": error_report::time_to_restart_error(&runs),
+        "perfect_seconds_to_restart_error": perfect_time });
     std::fs::write(
         out.join("error-vs-time.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    error_report::chart(&scene.name, &runs).write_png(&out.join("error-vs-time.png"), 1.0)?;
+    error_report::chart(&scene.name, &runs, &perfect)
+        .write_png(&out.join("error-vs-time.png"), 1.0)?;
     print!("{}", error_report::tables(&runs, triangles));
-    for (mode, t) in error_report::time_to_restart_error(&runs) {
+    let reached = error_report::time_to_restart_error(&runs)
+        .into_iter()
+        .map(|(mode, t)| (mode.name(), t))
+        .chain([("perfect", perfect_time)]);
+    for (name, t) in reached {
         match t {
-            Some(t) => println!(
-                "{:<8} reaches restart's final error after {t:.2}s",
-                mode.name()
-            ),
+            Some(t) => println!("{name:<10} reaches restart's final error after {t:.2}s"),
             None => println!(
-                "{:<8} does not reach restart's final error within {:.1}s",
-                mode.name(),
+                "{name:<10} does not reach restart's final error within {:.1}s",
                 args.seconds
             ),
         }

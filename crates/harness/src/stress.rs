@@ -8,7 +8,7 @@ use crate::dynamic::{DynamicParams, Mode, Progressive};
 use crate::render::{Progress, render};
 use ppm_core::image::Image;
 use ppm_core::passes::{Backend, BackendError, DynamicBackend};
-use scenes::stress::{Expected, MoveStress, StressCase, StressSetup};
+use scenes::stress::{Compensating, Expected, MoveStress, StressCase, StressSetup};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -61,7 +61,11 @@ fn render_move(
     for _ in 0..setup.params.passes {
         render.ordinary_pass()?;
     }
-    let mode = if m.thesis { Mode::Thesis } else { Mode::Area };
+    let mode = match m.mode {
+        Compensating::Thesis => Mode::Thesis,
+        Compensating::Area => Mode::Area,
+        Compensating::Difference => Mode::Difference,
+    };
     render.move_to(setup.scene.at_frame(1), mode)?;
     for _ in 0..setup.params.passes {
         render.step()?;

@@ -140,10 +140,47 @@ pub fn relative_rmse(image: &Image, reference: &Image) -> f64 {
     if mean > 0.0 { e / mean } else { e }
 }
 
+/// [`relative_rmse`] split by a pixel mask: the parts from pixels outside and inside `mask`
+/// (both over the whole image's pixel count and mean, so their squares sum to the whole's).
+pub fn relative_rmse_parts(image: &Image, reference: &Image, mask: &[bool]) -> (f64, f64) {
+    let whole = relative_rmse(image, reference);
+    let inside = Image {
+        pixels: image
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .zip(mask)
+            .map(|((a, b), &m)| if m { *a } else { *b })
+            .collect(),
+        width: image.width,
+        height: image.height,
+    };
+    let inside = relative_rmse(&inside, reference);
+    ((whole * whole - inside * inside).max(0.0).sqrt(), inside)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn rmse_parts_split_the_error_by_mask() {
+        let reference = Image {
+            pixels: vec![[1.0; 3]; 4],
+            width: 2,
+            height: 2,
+        };
+        let mut image = reference.clone();
+        image.pixels[0] = [2.0; 3];
+        image.pixels[3] = [3.0; 3];
+        let mask = [true, false, false, false];
+        let (outside, inside) = relative_rmse_parts(&image, &reference, &mask);
+        assert_relative_eq!(inside, (1.0f64 / 4.0).sqrt(), epsilon = 1e-12);
+        assert_relative_eq!(outside, (4.0f64 / 4.0).sqrt(), epsilon = 1e-12);
+        let whole = relative_rmse(&image, &reference);
+        assert_relative_eq!(outside.hypot(inside), whole, epsilon = 1e-12);
+    }
 
     #[test]
     fn rmse_of_a_constant_offset_is_the_offset() {

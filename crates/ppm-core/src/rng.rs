@@ -22,6 +22,10 @@ pub enum PassKind {
     Guided = 5,
 }
 
+/// First pass index of difference photons (ordinary photons traced in both poses of a move):
+/// far above any ordinary pass count, so they share no numbers with ordinary or testing passes.
+pub const DIFFERENCE_PASS_BASE: u32 = 1 << 31;
+
 /// The key of one random stream: everything but the dimension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StreamKey {

@@ -25,13 +25,24 @@ pub enum Expected {
     FiniteOrRefused,
 }
 
+/// How a moving case compensates (the harness's compensating modes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compensating {
+    /// Point light at the lights' centre, raw counts, unweighted guides.
+    Thesis,
+    /// Every light point, weighted counts and guides.
+    Area,
+    /// Ordinary photons traced in both poses.
+    Difference,
+}
+
 /// A move to run through compensation photons (ALGORITHM.md 2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MoveStress {
     /// Photons per compensation pass (two passes each way).
     pub region_photons: u32,
-    /// Thesis mode (point light at the lights' centre) instead of area mode.
-    pub thesis: bool,
+    /// The compensating mode.
+    pub mode: Compensating,
 }
 
 /// A ready-to-render case.
@@ -481,7 +492,7 @@ pub const STRESS: &[StressCase] = &[
             move_case(
                 MoveStress {
                     region_photons: 400_000,
-                    thesis: false,
+                    mode: Compensating::Area,
                 },
                 2_000,
             )
@@ -494,7 +505,7 @@ pub const STRESS: &[StressCase] = &[
             move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    thesis: true,
+                    mode: Compensating::Thesis,
                 },
                 20_000,
             )
@@ -507,7 +518,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    thesis: true,
+                    mode: Compensating::Thesis,
                 },
                 20_000,
             );
@@ -527,7 +538,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    thesis: false,
+                    mode: Compensating::Area,
                 },
                 20_000,
             );
@@ -548,7 +559,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    thesis: false,
+                    mode: Compensating::Area,
                 },
                 20_000,
             );
@@ -557,6 +568,26 @@ pub const STRESS: &[StressCase] = &[
                 Vec3::new(366.0, 548.78, 360.0),
             );
             replace_mover(&mut s.scene, cage, Vec3::new(1.0, 0.0, 0.0));
+            s
+        },
+    },
+    StressCase {
+        name: "difference-around-light",
+        stresses: "difference mode moves a hood (open below) around the light: no rectangle, no restart",
+        build: || {
+            let mut s = move_case(
+                MoveStress {
+                    region_photons: 20_000,
+                    mode: Compensating::Difference,
+                },
+                20_000,
+            );
+            let mut hood = box_triangles(
+                Vec3::new(190.0, 520.0, 200.0),
+                Vec3::new(366.0, 548.78, 360.0),
+            );
+            hood.drain(..2); // the bottom face: light leaves through it
+            replace_mover(&mut s.scene, hood, Vec3::new(1.0, 0.0, 0.0));
             s
         },
     },
