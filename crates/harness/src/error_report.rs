@@ -118,7 +118,8 @@ pub fn reference_path(cache: &Path, scene: &Scene, settings: &ErrorSettings) -> 
     ))
 }
 
-/// The pixels whose hit points the move from frame 0 to frame 1 resets (any of their slots).
+/// The pixels whose hit points the move from frame 0 to frame 1 resets (any of their slots),
+/// including slots that gain or lose their surface (an object's silhouette over the void).
 pub fn reset_pixels(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
@@ -129,11 +130,12 @@ pub fn reset_pixels(
         ..settings.dynamic.clone()
     };
     let mut render = Progressive::start(backend, scene.at_frame(0), &settings.params, &dynamic)?;
+    let before = render.backend().read_hit_points()?;
     render.move_to(scene.at_frame(1), Mode::Area)?;
     let mut mask = vec![false; (settings.params.width * settings.params.height) as usize];
-    for hp in render.backend().read_hit_points()? {
-        if hp.flags & hit_flags::UPDATED != 0 {
-            mask[hp.pixel as usize] = true;
+    for (a, b) in before.iter().zip(render.backend().read_hit_points()?) {
+        if b.flags & hit_flags::UPDATED != 0 || a.is_valid() != b.is_valid() {
+            mask[b.pixel as usize] = true;
         }
     }
     Ok(mask)
