@@ -345,12 +345,15 @@ impl WgpuBackend {
             counters: &self.counters,
             count: *slots,
         };
-        // The accumulation only needs to know whether deposits carry path weights.
+        // The accumulation needs to know whether deposits carry path weights (region photons)
+        // and who gathers: every hit point, the kept ones (region) or the updated ones (guided).
+        // Ordinary emission also serves testing and difference passes, so it accumulates
+        // everywhere and the gather pass filters.
         let accumulate = GatherParams {
-            kind: if emitter.kind == emission_kind::REGION {
-                ppm_core::layout::gather_kind::REGION_POSITIVE
-            } else {
-                ppm_core::layout::gather_kind::ORDINARY
+            kind: match emitter.kind {
+                emission_kind::REGION => ppm_core::layout::gather_kind::REGION_POSITIVE,
+                emission_kind::GUIDED => ppm_core::layout::gather_kind::GUIDED,
+                _ => ppm_core::layout::gather_kind::ORDINARY,
             },
             ..GatherParams::default()
         };

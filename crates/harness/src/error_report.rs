@@ -4,7 +4,7 @@
 use crate::chart::{Series, loglog_chart};
 use crate::dynamic::{DynamicParams, Mode, MoveReport, PhotonCounts, Progressive};
 use crate::render::render;
-use ppm_core::image::{Image, relative_rmse, relative_rmse_parts};
+use ppm_core::image::{Image, relative_rmse_parts};
 use ppm_core::layout::hit_flags;
 use ppm_core::params::RenderParams;
 use ppm_core::passes::{BackendError, DynamicBackend};
@@ -125,13 +125,15 @@ pub fn reset_pixels(
     scene: &Scene,
     settings: &ErrorSettings,
 ) -> Result<Vec<bool>, BackendError> {
+    // A move with no compensation passes: difference mode needs no emitting region, so the
+    // hit points are updated whatever the object's shape around the lights.
     let dynamic = DynamicParams {
-        compensation_passes: 0,
+        difference_passes: 0,
         ..settings.dynamic.clone()
     };
     let mut render = Progressive::start(backend, scene.at_frame(0), &settings.params, &dynamic)?;
     let before = render.backend().read_hit_points()?;
-    render.move_to(scene.at_frame(1), Mode::Area)?;
+    render.move_to(scene.at_frame(1), Mode::Difference)?;
     let mut mask = vec![false; (settings.params.width * settings.params.height) as usize];
     for (a, b) in before.iter().zip(render.backend().read_hit_points()?) {
         if b.flags & hit_flags::UPDATED != 0 || a.is_valid() != b.is_valid() {
@@ -159,7 +161,7 @@ pub fn run_mode(
             measurements.push(Measurement {
                 mode,
                 seconds,
-                rel_rmse: relative_rmse(&image, truth),
+                rel_rmse: kept.hypot(reset),
                 kept,
                 reset,
                 passes,

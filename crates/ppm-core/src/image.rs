@@ -119,9 +119,8 @@ pub fn rmse(image: &Image, reference: &Image) -> f64 {
     let sum: f64 = image
         .pixels
         .iter()
-        .flatten()
-        .zip(reference.pixels.iter().flatten())
-        .map(|(a, b)| (f64::from(*a) - f64::from(*b)).powi(2))
+        .zip(&reference.pixels)
+        .map(|(a, b)| squared_error(a, b))
         .sum();
     (sum / (image.pixels.len() * 3).max(1) as f64).sqrt()
 }
@@ -129,6 +128,39 @@ pub fn rmse(image: &Image, reference: &Image) -> f64 {
 /// [`rmse`] divided by the reference's mean value: scale-free, so scenes of any brightness
 /// compare on one axis. Zero when both images are black.
 pub fn relative_rmse(image: &Image, reference: &Image) -> f64 {
+    rmse(image, reference) / error_scale(reference)
+}
+
+/// [`relative_rmse`] split by a pixel mask: the parts from pixels outside and inside `mask`,
+/// both over the whole image's pixel count and mean, so their squares sum to the whole's.
+///
+/// Panics if the images or the mask differ in size, as [`rmse`] does.
+pub fn relative_rmse_parts(image: &Image, reference: &Image, mask: &[bool]) -> (f64, f64) {
+    assert!(
+        (image.width, image.height) == (reference.width, reference.height)
+            && mask.len() == reference.pixels.len(),
+        "rmse parts of images or a mask of different sizes"
+    );
+    let mut sums = [0.0f64; 2];
+    for ((a, b), &inside) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
+        sums[usize::from(inside)] += squared_error(a, b);
+    }
+    let count = (reference.pixels.len() * 3).max(1) as f64;
+    let scale = error_scale(reference);
+    let part = |sum: f64| (sum / count).sqrt() / scale;
+    (part(sums[0]), part(sums[1]))
+}
+
+/// Squared difference of two pixels, summed over the channels.
+fn squared_error(a: &[f32; 3], b: &[f32; 3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (f64::from(*a) - f64::from(*b)).powi(2))
+        .sum()
+}
+
+/// What relative errors divide by: the reference's mean value, or 1 for a black reference.
+fn error_scale(reference: &Image) -> f64 {
     let mean: f64 = reference
         .pixels
         .iter()
@@ -136,27 +168,7 @@ pub fn relative_rmse(image: &Image, reference: &Image) -> f64 {
         .map(|v| f64::from(*v))
         .sum::<f64>()
         / (reference.pixels.len() * 3).max(1) as f64;
-    let e = rmse(image, reference);
-    if mean > 0.0 { e / mean } else { e }
-}
-
-/// [`relative_rmse`] split by a pixel mask: the parts from pixels outside and inside `mask`
-/// (both over the whole image's pixel count and mean, so their squares sum to the whole's).
-pub fn relative_rmse_parts(image: &Image, reference: &Image, mask: &[bool]) -> (f64, f64) {
-    let whole = relative_rmse(image, reference);
-    let inside = Image {
-        pixels: image
-            .pixels
-            .iter()
-            .zip(&reference.pixels)
-            .zip(mask)
-            .map(|((a, b), &m)| if m { *a } else { *b })
-            .collect(),
-        width: image.width,
-        height: image.height,
-    };
-    let inside = relative_rmse(&inside, reference);
-    ((whole * whole - inside * inside).max(0.0).sqrt(), inside)
+    if mean > 0.0 { mean } else { 1.0 }
 }
 
 #[cfg(test)]

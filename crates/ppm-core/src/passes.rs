@@ -195,7 +195,9 @@ pub trait HitPointUpdate {
 /// Compensation and region photons (ALGORITHM.md 2.2, 2.5).
 pub trait RegionPhotonPass {
     /// Replaces the photon map with photons emitted through `region`; `params.power_scale`
-    /// is -1 for compensation photons. Each deposit keeps its path's weight for `M`.
+    /// is -1 for compensation photons. Each deposit keeps its path's weight for `M`. The map
+    /// is for the hit points that region passes reach (the kept ones, ALGORITHM.md 3): gather
+    /// it with a region kind.
     fn region_photon_pass(
         &mut self,
         params: &PhotonPassParams,
@@ -205,7 +207,8 @@ pub trait RegionPhotonPass {
 
 /// Guided photons around recorded paths (ALGORITHM.md 2.6).
 pub trait GuidedPhotonPass {
-    /// Replaces the photon map with guided photons.
+    /// Replaces the photon map with guided photons, for the updated hit points alone: gather
+    /// it with the guided kind.
     fn guided_photon_pass(
         &mut self,
         params: &PhotonPassParams,

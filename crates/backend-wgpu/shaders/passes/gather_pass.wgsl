@@ -2,7 +2,7 @@
 // Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
-// each hit point's radius to its accumulator: power and count, and path weight. Then
+// each gathering hit point's radius to its accumulator: power and count, and path weight. Then
 // `gather_apply_main` (the gather pass) folds the accumulator in as the pass's kind says:
 // who gathers, the region scale `emitted / N_c`, eqs 1-3 or 5-7, or a deferred pending sum;
 // and clears it.
@@ -32,8 +32,10 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     if slot >= arrayLength(&hit_points) {
         return;
     }
+    // Only hit points that gather the pass's kind search: a guided pass touches the updated
+    // ones alone, as on the CPU.
     let hp = hit_points[slot];
-    if (hp.flags & HIT_VALID) == 0u {
+    if !gathers(hp, params.kind) {
         return;
     }
     let g = grid;
