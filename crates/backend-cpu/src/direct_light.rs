@@ -1,17 +1,25 @@
 //! Direct light (ALGORITHM.md 1.2): emission seen at each hit point plus light reflected from
-//! the area lights, estimated with seeded shadow rays.
+//! the area lights. Each sample is a shadow ray to a point on a light and a cosine-sampled ray
+//! that may meet a light, weighted by the power heuristic: light sampling alone has unbounded
+//! variance next to an emitter (a corner of the furnace's glowing walls), where the cosine
+//! ray takes over.
 
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::layout::{DirectLightParams, HitPoint, hit_flags};
 use ppm_core::passes::DirectStats;
 use ppm_core::rng::{PassKind, StreamKey};
-use ppm_core::sampling::{sample_cdf, uniform_triangle};
+use ppm_core::geometry::to_world;
+use ppm_core::layout::NO_MATERIAL;
+use ppm_core::sampling::{cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle};
 use rayon::prelude::*;
-use std::f32::consts::FRAC_1_PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
-/// Random dimensions per shadow ray: light choice, then two for the point on it.
-const DIMS_PER_SAMPLE: u32 = 3;
+/// Random dimensions per sample: light choice, two for the point on it, two for the cosine ray.
+const DIMS_PER_SAMPLE: u32 = 5;
+
+/// Rays per sample: the shadow ray and the cosine ray.
+pub const RAYS_PER_SAMPLE: u32 = 2;
 
 /// Writes `direct` of every valid hit point; idempotent, so a frame can recompute it.
 pub fn direct_light_main(
@@ -45,14 +53,16 @@ pub fn direct_light_main(
                 direct += irradiance * albedo * FRAC_1_PI;
             }
             hp.direct = direct.into();
-            u64::from(params.samples)
+            u64::from(params.samples * RAYS_PER_SAMPLE)
         })
         .sum();
     DirectStats { rays }
 }
 
-/// Mean of `Le * cos_x * cos_l / d^2 / pdf(y)` over the shadow rays: the irradiance from the
-/// lights, with `pdf(y) = light.pdf / light.area` for a point chosen by power then by area.
+/// Irradiance from the lights, `E = integral of Le cos_x`: per sample, light sampling
+/// (`Le cos_x / p_light`, `p_light` the solid-angle density of a point chosen by power then by
+/// area) and cosine sampling (`Le pi` where the ray meets a light's front), each weighted by
+/// the power heuristic against the other.
 fn estimate_irradiance(
     params: &DirectLightParams,
     scene: &SceneData,
@@ -71,21 +81,32 @@ fn estimate_irradiance(
         let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
         let to_light = y - origin;
         let dist2 = to_light.length_squared();
-        if dist2 <= 0.0 {
-            continue;
+        if dist2 > 0.0 {
+            let dist = dist2.sqrt();
+            let w = to_light / dist;
+            let cos_x = n.dot(w);
+            let cos_l = -Vec3::from(light.normal).dot(w);
+            if cos_x > 0.0
+                && cos_l > 0.0
+                && !scene.occluded(origin, w, dist - 2.0 * params.ray_epsilon)
+            {
+                let le = Vec3::from(scene.materials[light.material as usize].emission);
+                let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
+                sum += le * (cos_x / pl * power_heuristic(pl, cos_x * FRAC_1_PI));
+            }
         }
-        let dist = dist2.sqrt();
-        let w = to_light / dist;
-        let cos_x = n.dot(w);
-        let cos_l = -Vec3::from(light.normal).dot(w);
-        if cos_x <= 0.0 || cos_l <= 0.0 {
-            continue;
+        let local = cosine_hemisphere(key.uniform(d0 + 3), key.uniform(d0 + 4));
+        let w = to_world(local, n);
+        if let Some(hit) = scene.closest_hit(origin, w, f32::INFINITY) {
+            let tri = &scene.triangles[hit.triangle as usize];
+            let cos_l = -Vec3::from(tri.normal).dot(w);
+            if tri.light != NO_MATERIAL && cos_l > 0.0 {
+                let light = &scene.lights[tri.light as usize];
+                let le = Vec3::from(scene.materials[light.material as usize].emission);
+                let pl = light_pdf(light.pdf, light.area, hit.t * hit.t, cos_l);
+                sum += le * (PI * power_heuristic(local.z * FRAC_1_PI, pl));
+            }
         }
-        if scene.occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
-            continue;
-        }
-        let le = Vec3::from(scene.materials[light.material as usize].emission);
-        sum += le * (cos_x * cos_l / dist2 * (light.area / light.pdf));
     }
     sum / params.samples as f32
 }

@@ -57,8 +57,8 @@ impl RenderParams {
             seed: 0,
             alpha: scene.render.alpha,
             initial_radius: scene.render.initial_radius,
-            max_eye_depth: 16,
-            max_photon_depth: 16,
+            max_eye_depth: 64,
+            max_photon_depth: 64,
             direct: DirectMode::Explicit,
             direct_samples: 16,
         }

@@ -27,6 +27,21 @@ pub fn uniform_cone(u1: f32, u2: f32, cos_max: f32) -> Vec3 {
     Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
 }
 
+/// Solid-angle density of choosing a point on a light whose selection probability is `pdf`
+/// and area `area` (uniform on it), seen at squared distance `dist2` under cosine `cos_l`.
+#[inline]
+pub fn light_pdf(pdf: f32, area: f32, dist2: f32, cos_l: f32) -> f32 {
+    pdf / area * dist2 / cos_l
+}
+
+/// Power-heuristic (beta = 2) weight of a sampling strategy with density `a` against one with
+/// density `b` (Veach 1997): the two weights of a sample sum to one.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
 /// Index of the first entry of a cumulative distribution that exceeds `u` (the last entry is 1).
 #[inline]
 pub fn sample_cdf(cdf: impl Fn(usize) -> f32, len: usize, u: f32) -> usize {

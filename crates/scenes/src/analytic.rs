@@ -127,11 +127,16 @@ pub fn specular_furnace(albedo: Vec3, le: f32) -> Scene {
         material: 1,
         triangles: mirror,
     });
+    // The furnace's walls face inwards; a closed glass body faces outwards, so the cube takes
+    // them with their winding reversed.
     let cube = furnace(albedo, le).objects.remove(0).triangles;
     scene.objects.push(Object {
         name: "glass-cube".into(),
         material: 2,
-        triangles: cube.into_iter().map(|t| t.map(|v| v * 0.3)).collect(),
+        triangles: cube
+            .into_iter()
+            .map(|t| [t[0], t[2], t[1]].map(|v| v * 0.3))
+            .collect(),
     });
     scene.camera.eye = Vec3::new(0.0, 0.0, -0.8);
     scene
@@ -145,6 +150,20 @@ pub fn furnace_radiance(albedo: Vec3, le: f32) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_glass_cube_faces_outwards() {
+        let scene = specular_furnace(Vec3::splat(0.5), 1.0);
+        let cube = scene
+            .objects
+            .iter()
+            .find(|o| o.name == "glass-cube")
+            .unwrap();
+        for t in &cube.triangles {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            assert!(n.dot(t[0] + t[1] + t[2]) > 0.0);
+        }
+    }
 
     #[test]
     fn furnace_walls_all_face_the_centre() {

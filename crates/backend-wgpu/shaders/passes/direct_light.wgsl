@@ -1,5 +1,6 @@
 // #import layout rng sampling geometry bvh lights
-// Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs.
+// Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
+// shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
 @group(0) @binding(0) var<uniform> params: DirectLightParams;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -9,7 +10,8 @@
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
-const DIMS_PER_SAMPLE: u32 = 3u;
+const DIMS_PER_SAMPLE: u32 = 5u;
+const RAYS_PER_SAMPLE: u32 = 2u;
 
 fn estimate_irradiance(hp: HitPoint, key: StreamKey) -> vec3<f32> {
     let origin = hp.position + hp.normal * params.ray_epsilon;
@@ -21,21 +23,30 @@ fn estimate_irradiance(hp: HitPoint, key: StreamKey) -> vec3<f32> {
         let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
         let to_light = y - origin;
         let dist2 = dot(to_light, to_light);
-        if dist2 <= 0.0 {
-            continue;
+        if dist2 > 0.0 {
+            let dist = sqrt(dist2);
+            let w = to_light / dist;
+            let cos_x = dot(hp.normal, w);
+            let cos_l = -dot(light.normal, w);
+            if cos_x > 0.0 && cos_l > 0.0 && !occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
+                let le = materials[light.material].emission;
+                let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
+                sum += le * (cos_x / pl * power_heuristic(pl, cos_x * (1.0 / PI)));
+            }
         }
-        let dist = sqrt(dist2);
-        let w = to_light / dist;
-        let cos_x = dot(hp.normal, w);
-        let cos_l = -dot(light.normal, w);
-        if cos_x <= 0.0 || cos_l <= 0.0 {
-            continue;
+        let local = cosine_hemisphere(stream_uniform(key, d0 + 3u), stream_uniform(key, d0 + 4u));
+        let w = to_world(local, hp.normal);
+        let hit = closest_hit(origin, w, T_MISS);
+        if hit.triangle != 0xffffffffu {
+            let tri = triangles[hit.triangle];
+            let cos_l = -dot(tri.normal, w);
+            if tri.light != NO_MATERIAL && cos_l > 0.0 {
+                let hit_light = lights[tri.light];
+                let le = materials[hit_light.material].emission;
+                let pl = light_pdf(hit_light.pdf, hit_light.area, hit.t * hit.t, cos_l);
+                sum += le * (PI * power_heuristic(local.z * (1.0 / PI), pl));
+            }
         }
-        if occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
-            continue;
-        }
-        let le = materials[light.material].emission;
-        sum += le * (cos_x * cos_l / dist2 * (light.area / light.pdf));
     }
     return sum / f32(params.samples);
 }
@@ -57,5 +68,5 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         direct += estimate_irradiance(hp, key) * material.albedo * (1.0 / PI);
     }
     hit_points[slot].direct = direct;
-    atomicAdd(&counters[COUNTER_RAYS], params.samples);
+    atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
 }

@@ -19,3 +19,19 @@ fn uniform_cone(u1: f32, u2: f32, cos_max: f32) -> vec3<f32> {
     let phi = 2.0 * PI * u2;
     return vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }
+
+// Solid-angle density of a point on a light (selection probability `pdf`, uniform on `area`)
+// seen at squared distance `dist2` under cosine `cos_l`.
+fn light_pdf(pdf: f32, area: f32, dist2: f32, cos_l: f32) -> f32 {
+    return pdf / area * dist2 / cos_l;
+}
+
+// Power-heuristic weight of a strategy with density `a` against one with density `b`.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    let b2 = b * b;
+    if a2 + b2 > 0.0 {
+        return a2 / (a2 + b2);
+    }
+    return 0.0;
+}
