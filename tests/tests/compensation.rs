@@ -6,8 +6,9 @@
 use backend_cpu::CpuBackend;
 use harness::dynamic::{DynamicParams, Mode, Progressive};
 use ppm_core::compile::compile_scene;
-use ppm_core::image::{Image, relative_rmse};
+use ppm_core::image::Image;
 use ppm_core::layout::{GatherParams, PhotonPassParams, first_hit, gather_kind, region_mode};
+use ppm_core::metrics::relative_rmse;
 use ppm_core::params::RenderParams;
 use ppm_core::region::emitting_region;
 use ppm_core::scene::Scene;

@@ -4,7 +4,8 @@
 //! accumulate, whichever way direct light is computed.
 
 use glam::Vec3;
-use ppm_core::image::{Image, rmse};
+use ppm_core::image::Image;
+use ppm_core::metrics::rmse;
 use ppm_core::params::{DirectMode, RenderParams};
 use scenes::analytic::{furnace, furnace_radiance, specular_furnace};
 use tests::render_cpu;

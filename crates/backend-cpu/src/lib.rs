@@ -12,7 +12,7 @@ mod hit_point_update;
 mod photon_grid;
 mod photon_pass;
 mod resolve;
-mod trace;
+pub mod trace;
 
 use gather_pass::{PhotonMap, for_photons_in_disc};
 use photon_grid::{PhotonGrid, build_photon_grid};
@@ -77,18 +77,9 @@ fn loaded<'a>(
     })
 }
 
-fn scene_data(scene: &CompiledScene) -> SceneData {
-    SceneData {
-        triangles: scene.triangles.clone(),
-        bvh: scene.bvh.clone(),
-        materials: scene.materials.clone(),
-        lights: scene.lights.clone(),
-    }
-}
-
 impl SceneUpload for CpuBackend {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        self.scene = Some((scene_data(scene), scene.camera));
+        self.scene = Some((SceneData::new(scene), scene.camera));
         self.hit_points.clear();
         self.photons.clear();
         self.weights = None;
@@ -99,7 +90,7 @@ impl SceneUpload for CpuBackend {
 
 impl SceneUpdate for CpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        self.scene = Some((scene_data(scene), scene.camera));
+        self.scene = Some((SceneData::new(scene), scene.camera));
         self.photons.clear();
         self.weights = None;
         self.grid = None;

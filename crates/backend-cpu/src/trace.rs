@@ -1,8 +1,11 @@
 //! Ray queries against the scene: obvhs traverses its BVH, ppm-core's test intersects triangles.
+//! Public so that other CPU code over a compiled scene (the harness's reference path tracer)
+//! asks the same questions of the same geometry.
 
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
+use ppm_core::compile::CompiledScene;
 use ppm_core::geometry::intersect_triangle;
 use ppm_core::layout::{GpuLight, GpuMaterial, GpuTriangle};
 
@@ -29,6 +32,16 @@ pub struct Hit {
 }
 
 impl SceneData {
+    /// The buffers of `scene`, copied.
+    pub fn new(scene: &CompiledScene) -> Self {
+        Self {
+            triangles: scene.triangles.clone(),
+            bvh: scene.bvh.clone(),
+            materials: scene.materials.clone(),
+            lights: scene.lights.clone(),
+        }
+    }
+
     /// Nearest hit with `tmin < t < tmax`.
     #[inline]
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {

@@ -1,16 +1,16 @@
-//! Error against run time (ALGORITHM.md 6): after a move, how fast each mode approaches a
-//! long from-scratch render of the new pose.
+//! Error against run time after a move (ALGORITHM.md 6): how fast each mode approaches the
+//! truth of the new pose (a path-traced reference, or another renderer's image).
 
 use crate::chart::{Series, loglog_chart};
+use crate::clock::Stopwatch;
 use crate::dynamic::{DynamicParams, Mode, MoveReport, PhotonCounts, Progressive};
-use crate::render::render;
-use ppm_core::image::{Image, relative_rmse_parts};
+use ppm_core::image::Image;
 use ppm_core::layout::hit_flags;
+use ppm_core::metrics::relative_rmse_parts;
 use ppm_core::params::RenderParams;
 use ppm_core::passes::{BackendError, DynamicBackend};
 use ppm_core::scene::Scene;
 use serde::Serialize;
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// What to measure.
@@ -24,8 +24,6 @@ pub struct ErrorSettings {
     pub warmup_seconds: f64,
     /// Seconds measured after the move.
     pub seconds: f64,
-    /// Photon passes of the from-scratch reference of the new pose.
-    pub reference_passes: u32,
 }
 
 /// One measurement.
@@ -58,64 +56,6 @@ pub struct ModeRun {
     pub r2_initial: f32,
     /// Measurements over time.
     pub measurements: Vec<Measurement>,
-}
-
-/// The reference image of `scene` at frame 1, from `path` when cached there, else rendered
-/// (seed offset so it shares no numbers with the runs) and cached.
-pub fn reference(
-    backend: &mut dyn DynamicBackend,
-    scene: &Scene,
-    settings: &ErrorSettings,
-    path: &Path,
-) -> Result<Image, Box<dyn std::error::Error>> {
-    if let Ok(img) = read_exr(path)
-        && (img.width, img.height) == (settings.params.width, settings.params.height)
-    {
-        return Ok(img);
-    }
-    let mut p = settings.params.clone();
-    p.passes = settings.reference_passes;
-    p.time_budget = None;
-    p.seed = p.seed.wrapping_add(0x5eed);
-    let outcome = render(backend, scene, 1, &p, &mut |_, _| {})?;
-    if let Some(e) = outcome.error {
-        return Err(e.into());
-    }
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir)?;
-    }
-    outcome.image.write_exr(path)?;
-    Ok(outcome.image)
-}
-
-fn read_exr(path: &Path) -> Result<Image, Box<dyn std::error::Error>> {
-    let read = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| Image::new(res.width() as u32, res.height() as u32),
-        |img: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let w = img.width as usize;
-            img.pixels[pos.y() * w + pos.x()] = [r, g, b]
-        },
-    )?;
-    Ok(read.layer_data.channel_data.pixels)
-}
-
-/// The cache file of a reference: keyed by scene name, resolution, passes, photons, seed,
-/// radius, alpha and shadow rays.
-pub fn reference_path(cache: &Path, scene: &Scene, settings: &ErrorSettings) -> PathBuf {
-    let p = &settings.params;
-    cache.join(format!(
-        "reference-{}-{}x{}-{}x{}-s{}-r{}-a{}-d{}.exr",
-        scene.name,
-        p.width,
-        p.height,
-        settings.reference_passes,
-        p.photons_per_pass,
-        p.seed,
-        p.initial_radius,
-        p.alpha,
-        p.direct_samples
-    ))
 }
 
 /// The pixels whose hit points the move from frame 0 to frame 1 resets (any of their slots),
@@ -241,35 +181,6 @@ pub fn perfect_compensation(
         .iter()
         .map(|m| (m.seconds, kept.hypot(m.reset)))
         .collect())
-}
-
-/// Wall-clock time with pauses, so measuring is not charged to rendering.
-struct Stopwatch {
-    running_since: Option<Instant>,
-    banked: f64,
-}
-
-impl Stopwatch {
-    fn start() -> Self {
-        Self {
-            running_since: Some(Instant::now()),
-            banked: 0.0,
-        }
-    }
-    fn pause(&mut self) {
-        if let Some(t) = self.running_since.take() {
-            self.banked += t.elapsed().as_secs_f64();
-        }
-    }
-    fn resume(&mut self) {
-        self.running_since.get_or_insert_with(Instant::now);
-    }
-    fn seconds(&self) -> f64 {
-        self.banked
-            + self
-                .running_since
-                .map_or(0.0, |t| t.elapsed().as_secs_f64())
-    }
 }
 
 /// The CSV of all measurements: `mode,seconds,rel_rmse,kept,reset`.

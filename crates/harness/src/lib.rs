@@ -3,11 +3,14 @@
 //! file. The `ppm` command is built on it.
 
 pub mod chart;
+pub mod clock;
 pub mod conformance;
+pub mod convergence;
 pub mod diff;
 pub mod diff_command;
 pub mod dynamic;
 pub mod error_report;
+pub mod reference;
 pub mod render;
 pub mod report;
 pub mod stats;

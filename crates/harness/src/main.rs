@@ -4,8 +4,11 @@ use anyhow::{Context, Result, bail};
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
 use clap::{Parser, Subcommand, ValueEnum};
+use harness::convergence;
 use harness::dynamic::{DynamicParams, Mode, Progressive};
 use harness::error_report::{self, ErrorSettings};
+use harness::reference::cache::{ReferenceRequest, cached_reference};
+use harness::reference::{ReferenceBudget, Truth, render_reference};
 use harness::render::{Progress, render};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::params::{DirectMode, RenderParams};
@@ -39,6 +42,70 @@ enum Command {
     Report(ReportCommand),
     /// Run the stress family (extreme scales, powers, geometry) and check every invariant.
     Stress(StressArgs),
+    /// Render the ground truth with the unbiased reference path tracer (CPU).
+    Reference(ReferenceArgs),
+    /// Measure an image against a reference image (EXR files from any renderer).
+    Compare(CompareArgs),
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// The image measured.
+    image: PathBuf,
+    /// The reference it is measured against (a NAME.var.exr beside it gives its noise).
+    reference: PathBuf,
+    /// Also write a heat map of the difference (red: per-pixel luminance difference over the
+    /// reference's mean luminance, full at 10%) as EXR and PNG.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct ReferenceArgs {
+    /// Built-in scene name or path to a TOML scene file.
+    scene: String,
+    /// Frame: 0 before the scene's move, 1 after it.
+    #[arg(long, default_value_t = 0)]
+    frame: u32,
+    /// Image width (default: the scene's).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (default: the scene's).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Samples per pixel (default 1024; unbounded when only --time-budget is given).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Stop after this many seconds.
+    #[arg(long)]
+    time_budget: Option<f64>,
+    /// Seed of the random generator.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output EXR; the PNG preview, the variance (NAME.var.exr) and a JSON summary are
+    /// written beside it.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Where an error report takes its truth from.
+#[derive(clap::Args)]
+struct TruthArgs {
+    /// Reference image to measure against: an EXR from any renderer, of the rendered size
+    /// with R, G and B channels (a NAME.var.exr beside it gives its noise). Default: the
+    /// project's reference path tracer, cached in --cache.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    reference_spp: u32,
+    /// Folder of cached path-traced references (file names are hashes of every setting that
+    /// changes the image).
+    #[arg(long, default_value = "out/cache")]
+    cache: PathBuf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -66,8 +133,48 @@ struct StressArgs {
 
 #[derive(Subcommand)]
 enum ReportCommand {
-    /// Relative RMSE against a from-scratch render of the new pose, over time, per mode.
+    /// Error against the truth of the new pose over time after a move, per mode.
     ErrorVsTime(ErrorArgs),
+    /// Error against the truth over time of a render from scratch.
+    Convergence(ConvergenceArgs),
+}
+
+#[derive(clap::Args)]
+struct ConvergenceArgs {
+    /// Built-in scene name or path to a TOML scene file.
+    scene: String,
+    /// Backend.
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: BackendChoice,
+    /// Frame: 0 before the scene's move, 1 after it.
+    #[arg(long, default_value_t = 1)]
+    frame: u32,
+    /// Image width.
+    #[arg(long, default_value_t = 256)]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 256)]
+    height: u32,
+    /// Seconds of rendering measured.
+    #[arg(long, default_value_t = 32.0)]
+    seconds: f64,
+    /// Photons per pass (default: the scene's).
+    #[arg(long)]
+    photons_per_pass: Option<u32>,
+    /// Eye samples per pixel.
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Shadow rays per hit point.
+    #[arg(long, default_value_t = 16)]
+    direct_samples: u32,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    #[command(flatten)]
+    truth: TruthArgs,
+    /// Output folder: convergence.csv, .json and .png.
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -171,12 +278,8 @@ struct ErrorArgs {
     /// Seconds measured after the move.
     #[arg(long, default_value_t = 8.0)]
     seconds: f64,
-    /// Photon passes of the from-scratch reference of frame 1 (cached).
-    #[arg(long, default_value_t = 400)]
-    reference_passes: u32,
-    /// Folder of cached references.
-    #[arg(long, default_value = "out/cache")]
-    cache: PathBuf,
+    #[command(flatten)]
+    truth: TruthArgs,
     /// Output folder: error-vs-time.csv, .json and .png.
     #[arg(short, long)]
     output: PathBuf,
@@ -343,7 +446,10 @@ fn run(cli: Cli) -> Result<()> {
         Command::Diff(args) => harness::diff_command::run(&args.into()),
         Command::Animate(args) => run_animate(args),
         Command::Report(ReportCommand::ErrorVsTime(args)) => run_error_report(args),
+        Command::Report(ReportCommand::Convergence(args)) => run_convergence(args),
         Command::Stress(args) => run_stress(args),
+        Command::Reference(args) => run_reference(args),
+        Command::Compare(args) => run_compare(args),
     }
 }
 
@@ -560,13 +666,10 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
         dynamic: args.common.dynamic(),
         warmup_seconds: args.warmup,
         seconds: args.seconds,
-        reference_passes: args.reference_passes,
     };
+    let truth = truth_for(&args.truth, &scene, 1, &settings.params)?;
+    let truth = &truth.image;
     let mut backend = dynamic_backend(args.common.backend)?;
-    let cached = error_report::reference_path(&args.cache, &scene, &settings);
-    eprintln!("reference: {}", cached.display());
-    let truth = error_report::reference(backend.as_mut(), &scene, &settings, &cached)
-        .map_err(|e| anyhow::anyhow!("reference render: {e}"))?;
     eprintln!("finding the pixels the move resets");
     let reset = error_report::reset_pixels(backend.as_mut(), &scene, &settings)?;
     let mut runs = Vec::new();
@@ -577,7 +680,7 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
             &scene,
             mode,
             &settings,
-            &truth,
+            truth,
             &reset,
         )?);
     }
@@ -586,7 +689,7 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
         backend.as_mut(),
         &scene,
         &settings,
-        &truth,
+        truth,
         &reset,
         runs.iter()
             .find(|r| r.mode == Mode::Restart)
@@ -664,5 +767,219 @@ fn run_stress(args: StressArgs) -> Result<()> {
         results.len(),
         args.output.display()
     );
+    Ok(())
+}
+
+/// The truth an error report measures against: `--reference FILE.exr`, or the cached
+/// path-traced reference of `frame` at the rendered size.
+fn truth_for(
+    args: &TruthArgs,
+    scene: &ppm_core::scene::Scene,
+    frame: u32,
+    params: &RenderParams,
+) -> Result<Truth> {
+    if let Some(path) = &args.reference {
+        let truth = Truth::from_exr(path, params.width, params.height)
+            .context("--reference: the image cannot serve as the truth")?;
+        eprintln!("reference: {}", truth.source);
+        return Ok(truth);
+    }
+    if args.reference_spp == 0 {
+        bail!("--reference-spp = 0: must be at least 1");
+    }
+    let request = ReferenceRequest {
+        frame,
+        width: params.width,
+        height: params.height,
+        spp: args.reference_spp,
+        seed: REFERENCE_SEED,
+    };
+    let bar = spp_bar(u64::from(args.reference_spp));
+    let truth = cached_reference(&args.cache, scene, &request, &mut |spp, s| {
+        bar.set_position(u64::from(spp));
+        bar.set_message(format!("{s:.1}s"));
+    })?;
+    bar.finish_and_clear();
+    eprintln!("reference: {}", truth.source);
+    Ok(truth)
+}
+
+/// Seed of cached references: apart from the renders they judge, which start at seed 0.
+const REFERENCE_SEED: u32 = 0x5eed;
+
+fn spp_bar(spp: u64) -> ProgressBar {
+    let bar = if spp == u64::MAX {
+        ProgressBar::new_spinner()
+    } else {
+        ProgressBar::new(spp)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} reference spp {pos}/{len} {bar:30} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+fn run_reference(args: ReferenceArgs) -> Result<()> {
+    let scene = harness::load_scene(&args.scene)?;
+    if args.frame > 1 {
+        bail!("--frame = {}: a scene has frames 0 and 1 only", args.frame);
+    }
+    let width = args.width.unwrap_or(scene.camera.width);
+    let height = args.height.unwrap_or(scene.camera.height);
+    if width == 0 || height == 0 {
+        bail!("--width {width} --height {height}: the image must be at least 1x1");
+    }
+    if args.spp == Some(0) {
+        bail!("--spp = 0: must be at least 1");
+    }
+    if let Some(t) = args.time_budget
+        && !(t.is_finite() && t > 0.0)
+    {
+        bail!("--time-budget = {t}: must be a positive number of seconds");
+    }
+    let budget = ReferenceBudget {
+        spp: args.spp.or(args.time_budget.is_none().then_some(1024)),
+        seconds: args.time_budget,
+    };
+    let paths = OutputPaths::new(&args.output)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let compiled = ppm_core::compile::compile_scene(&scene.at_frame(args.frame), width, height);
+    let bar = spp_bar(budget.spp.map_or(u64::MAX, u64::from));
+    let reference = pool.install(|| {
+        render_reference(&compiled, args.seed, budget, &mut |spp, s| {
+            bar.set_position(u64::from(spp));
+            bar.set_message(format!("{s:.1}s"));
+        })
+    });
+    bar.finish_and_clear();
+    let summary = reference.summary(&scene.name, args.frame, args.seed);
+    reference.write(&paths.exr, &summary)?;
+    println!(
+        "{}: {} spp in {:.2}s ({:.3e} paths/s), expected relative error {:.4} -> {}",
+        scene.name,
+        summary.spp,
+        summary.seconds,
+        summary.samples_per_second,
+        summary.relative_noise,
+        paths.exr.display()
+    );
+    if let Some(e) = reference.error {
+        bail!("the path tracer stopped early (the image holds the samples before it): {e}");
+    }
+    Ok(())
+}
+
+fn run_convergence(args: ConvergenceArgs) -> Result<()> {
+    let scene = harness::load_scene(&args.scene)?;
+    if args.frame > 1 {
+        bail!("--frame = {}: a scene has frames 0 and 1 only", args.frame);
+    }
+    let mut params = RenderParams::for_scene(&scene);
+    params.width = args.width;
+    params.height = args.height;
+    params.passes = u32::MAX;
+    params.time_budget = Some(args.seconds);
+    params.photons_per_pass = args.photons_per_pass.unwrap_or(params.photons_per_pass);
+    params.spp = args.spp;
+    params.direct_samples = args.direct_samples;
+    params.seed = args.seed;
+    params.validate("command line")?;
+    let out = &args.output;
+    std::fs::create_dir_all(out).with_context(|| format!("-o {}: cannot create", out.display()))?;
+    let truth = truth_for(&args.truth, &scene, args.frame, &params)?;
+    let mut backend: Box<dyn Backend> = match args.backend {
+        BackendChoice::Cpu => Box::new(CpuBackend::new()),
+        BackendChoice::Wgpu => {
+            let b = WgpuBackend::new().context("the wgpu backend cannot start")?;
+            eprintln!("wgpu adapter: {}", b.adapter_name());
+            Box::new(b)
+        }
+    };
+    eprintln!("rendering {} for {}s", scene.name, args.seconds);
+    let (points, report) = convergence::run(backend.as_mut(), &scene, args.frame, &params, &truth)?;
+    let noise = truth.noise();
+    let slope = convergence::fitted_slope(&points, args.seconds / 8.0);
+    std::fs::write(out.join("convergence.csv"), convergence::csv(&points))?;
+    let json = serde_json::json!({
+        "scene": scene.name, "frame": args.frame, "backend": report.backend,
+        "params": params, "reference": truth.source, "reference_noise": noise,
+        "fitted_slope": slope, "slope_from_seconds": args.seconds / 8.0,
+        "points": points, "report": report,
+    });
+    std::fs::write(
+        out.join("convergence.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    let title = format!("{} frame {}, {}", scene.name, args.frame, report.backend);
+    convergence::chart(&title, &points, noise).write_png(&out.join("convergence.png"), 1.0)?;
+    println!(
+        "{:>9} {:>7} {:>10} {:>10} {:>8}",
+        "seconds", "passes", "pixel", "8x8", "mean"
+    );
+    let decades = [0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0];
+    for p in points.iter().filter(|p| {
+        decades
+            .iter()
+            .any(|&t| t <= args.seconds && (p.seconds / t - 1.0).abs() < 0.03)
+    }) {
+        println!(
+            "{:>9.2} {:>7} {:>10.4} {:>10.4} {:>8.4}",
+            p.seconds, p.passes, p.rel_rmse, p.block_rel_rmse, p.mean_ratio
+        );
+    }
+    if let Some(last) = points.last() {
+        println!(
+            "final: {:.2}s, {} passes: pixel {:.4}, 8x8 {:.4}, mean ratio {:.4}",
+            last.seconds, last.passes, last.rel_rmse, last.block_rel_rmse, last.mean_ratio
+        );
+    }
+    match noise {
+        Some(n) => println!("reference noise (relative rmse floor): {n:.4}"),
+        None => println!("reference noise unknown (no variance beside the reference)"),
+    }
+    if let Some(s) = slope {
+        println!(
+            "fitted slope of log error against log time (from {:.1}s): {s:.3}",
+            args.seconds / 8.0
+        );
+    }
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn run_compare(args: CompareArgs) -> Result<()> {
+    let meta = exr::meta::MetaData::read_from_file(&args.reference, false)
+        .with_context(|| format!("{}: cannot read", args.reference.display()))?;
+    let size = meta
+        .headers
+        .first()
+        .map(|h| h.layer_size)
+        .with_context(|| format!("{}: no image layer", args.reference.display()))?;
+    let (width, height) = (size.width() as u32, size.height() as u32);
+    let truth = Truth::from_exr(&args.reference, width, height)?;
+    let image = ppm_core::image::Image::read_exr(&args.image, width, height)?;
+    let p = convergence::measure(&image, &truth, 0.0, 0);
+    if let Some(path) = &args.heatmap {
+        let heat = harness::diff::same_seed::heat(&truth.image, &image);
+        heat.write_exr(&path.with_extension("exr"))?;
+        heat.write_png(&path.with_extension("png"), 10.0)?;
+    }
+    println!(
+        "{}x{}: pixel relative rmse {:.5}, 8x8 block relative rmse {:.5}, mean ratio {:.5}",
+        width, height, p.rel_rmse, p.block_rel_rmse, p.mean_ratio
+    );
+    match (truth.noise(), p.rel_rmse_corrected) {
+        (Some(n), Some(c)) => {
+            println!("reference noise {n:.5}; pixel relative rmse without it {c:.5}")
+        }
+        _ => println!(
+            "reference noise unknown (no {} beside it)",
+            harness::reference::variance_path(&args.reference).display()
+        ),
+    }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! driven the same way: eye pass, direct light, then photon and gather passes until the pass
 //! count or the time budget runs out, then resolve.
 
+use crate::clock::Stopwatch;
 use crate::report::{PassTimes, RenderReport, left_out};
 use ppm_core::compile::compile_scene;
 use ppm_core::image::Image;
@@ -20,7 +21,7 @@ pub struct Progress {
     pub pass: u32,
     /// Photon passes planned (`u32::MAX` when only a time budget bounds the render).
     pub passes: u32,
-    /// Seconds since the photon passes began.
+    /// Seconds of photon passes so far (time spent in the observer is not counted).
     pub elapsed: f64,
 }
 
@@ -137,7 +138,8 @@ pub fn render(
     })
 }
 
-/// Photon and gather passes until the pass count or the time budget is spent.
+/// Photon and gather passes until the pass count or the time budget is spent; the budget
+/// counts rendering only, not the observer.
 fn photon_loop(
     backend: &mut dyn Backend,
     params: &RenderParams,
@@ -146,10 +148,10 @@ fn photon_loop(
     times: &mut PassTimes,
     on_pass: PassObserver,
 ) -> Result<(), BackendError> {
-    let start = Instant::now();
+    let mut clock = Stopwatch::start();
     for pass in 0..params.passes {
         if let Some(budget) = params.time_budget
-            && start.elapsed().as_secs_f64() >= budget
+            && clock.seconds() >= budget
         {
             break;
         }
@@ -182,14 +184,16 @@ fn photon_loop(
         times.gather += t.elapsed().as_secs_f64();
         report.photons_gathered += gathered.photons_gathered;
         report.passes += 1;
+        clock.pause();
         on_pass(
             Progress {
                 pass: pass + 1,
                 passes: params.passes,
-                elapsed: start.elapsed().as_secs_f64(),
+                elapsed: clock.seconds(),
             },
             &mut *backend,
         );
+        clock.resume();
     }
     Ok(())
 }

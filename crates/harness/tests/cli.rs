@@ -109,3 +109,70 @@ fn bad_scene_file_is_named_in_the_error() {
         "{err}"
     );
 }
+
+#[test]
+fn reference_writes_image_variance_preview_and_summary() {
+    let dir = scratch("reference");
+    let exr = dir.join("ref.exr");
+    let out = ppm(&[
+        "reference",
+        "cornell-box",
+        "--width",
+        "12",
+        "--height",
+        "10",
+        "--spp",
+        "16",
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for name in ["ref.exr", "ref.var.exr", "ref.png", "ref.json"] {
+        assert!(dir.join(name).is_file(), "{name} missing");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("ref.json")).unwrap()).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(summary["spp"], 16);
+    assert!(summary["relative_noise"].as_f64().unwrap() > 0.0);
+}
+
+/// A reference of another size cannot judge a render: the report stops before rendering and
+/// says which file, which size, and which size it needed.
+#[test]
+fn a_report_refuses_a_reference_of_the_wrong_size() {
+    let dir = scratch("wrong-size");
+    let reference = dir.join("small.exr");
+    let made = ppm(&[
+        "reference",
+        "cornell-box",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "8",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let out = ppm(&[
+        "report",
+        "convergence",
+        "cornell-box",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--seconds",
+        "0.1",
+        "--reference",
+        reference.to_str().unwrap(),
+        "-o",
+        dir.join("report").to_str().unwrap(),
+    ]);
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(!out.status.success());
+    let err = stderr(&out).replace(dir.to_str().unwrap(), "DIR");
+    insta::assert_snapshot!(err.trim_end());
+}

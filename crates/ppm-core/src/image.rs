@@ -3,14 +3,25 @@
 use std::path::Path;
 use thiserror::Error;
 
-/// Why an image could not be written.
+/// Why an image could not be written or read.
 #[derive(Debug, Error)]
-#[error("{path}: cannot write image: {reason}")]
-pub struct ImageError {
-    /// Target file.
-    pub path: String,
-    /// What went wrong.
-    pub reason: String,
+pub enum ImageError {
+    /// Writing failed.
+    #[error("{path}: cannot write image: {reason}")]
+    Write {
+        /// Target file.
+        path: String,
+        /// What went wrong.
+        reason: String,
+    },
+    /// Reading failed, or the file is not the image the caller needs.
+    #[error("{path}: cannot read image: {reason}")]
+    Read {
+        /// Source file.
+        path: String,
+        /// What went wrong.
+        reason: String,
+    },
 }
 
 /// A linear-RGB float image, row-major from the top-left pixel.
@@ -66,15 +77,64 @@ impl Image {
             let p = self.pixels[y * w + x];
             (p[0], p[1], p[2])
         })
-        .map_err(|e| ImageError {
+        .map_err(|e| ImageError::Write {
             path: path.display().to_string(),
             reason: e.to_string(),
         })
     }
 
+    /// Reads the RGB channels of an EXR written by any renderer, refusing it (before its
+    /// pixels are read, so a huge file allocates nothing) unless it is `width` x `height`
+    /// and has R, G and B channels.
+    pub fn read_exr(path: &Path, width: u32, height: u32) -> Result<Image, ImageError> {
+        let err = |reason: String| ImageError::Read {
+            path: path.display().to_string(),
+            reason,
+        };
+        let meta =
+            exr::meta::MetaData::read_from_file(path, false).map_err(|e| err(e.to_string()))?;
+        let header = meta
+            .headers
+            .first()
+            .ok_or_else(|| err("the file holds no image layer".into()))?;
+        let size = header.layer_size;
+        if (size.width(), size.height()) != (width as usize, height as usize) {
+            return Err(err(format!(
+                "it is {}x{} pixels, the image it is compared with is {width}x{height}",
+                size.width(),
+                size.height()
+            )));
+        }
+        let names: Vec<String> = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect();
+        if let Some(missing) = ["R", "G", "B"]
+            .into_iter()
+            .find(|c| !names.iter().any(|n| n == c))
+        {
+            return Err(err(format!(
+                "it has no {missing} channel (channels: {})",
+                names.join(", ")
+            )));
+        }
+        let read = exr::prelude::read_first_rgba_layer_from_file(
+            path,
+            |res, _| Image::new(res.width() as u32, res.height() as u32),
+            |img: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let w = img.width as usize;
+                img.pixels[pos.y() * w + pos.x()] = [r, g, b]
+            },
+        )
+        .map_err(|e| err(e.to_string()))?;
+        Ok(read.layer_data.channel_data.pixels)
+    }
+
     /// Writes an 8-bit sRGB PNG preview: radiance times `exposure`, clamped, sRGB-encoded.
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
-        let err = |reason: String| ImageError {
+        let err = |reason: String| ImageError::Write {
             path: path.display().to_string(),
             reason,
         };
@@ -107,103 +167,9 @@ pub fn srgb_encode(v: f32) -> f32 {
     }
 }
 
-/// Root-mean-square difference over all pixels and channels.
-///
-/// Panics if the images differ in size: comparing mismatched renders is a caller bug.
-pub fn rmse(image: &Image, reference: &Image) -> f64 {
-    assert_eq!(
-        (image.width, image.height),
-        (reference.width, reference.height),
-        "rmse of images of different sizes"
-    );
-    let sum: f64 = image
-        .pixels
-        .iter()
-        .zip(&reference.pixels)
-        .map(|(a, b)| squared_error(a, b))
-        .sum();
-    (sum / (image.pixels.len() * 3).max(1) as f64).sqrt()
-}
-
-/// [`rmse`] divided by the reference's mean value: scale-free, so scenes of any brightness
-/// compare on one axis. Zero when both images are black.
-pub fn relative_rmse(image: &Image, reference: &Image) -> f64 {
-    rmse(image, reference) / error_scale(reference)
-}
-
-/// [`relative_rmse`] split by a pixel mask: the parts from pixels outside and inside `mask`,
-/// both over the whole image's pixel count and mean, so their squares sum to the whole's.
-///
-/// Panics if the images or the mask differ in size, as [`rmse`] does.
-pub fn relative_rmse_parts(image: &Image, reference: &Image, mask: &[bool]) -> (f64, f64) {
-    assert!(
-        (image.width, image.height) == (reference.width, reference.height)
-            && mask.len() == reference.pixels.len(),
-        "rmse parts of images or a mask of different sizes"
-    );
-    let mut sums = [0.0f64; 2];
-    for ((a, b), &inside) in image.pixels.iter().zip(&reference.pixels).zip(mask) {
-        sums[usize::from(inside)] += squared_error(a, b);
-    }
-    let count = (reference.pixels.len() * 3).max(1) as f64;
-    let scale = error_scale(reference);
-    let part = |sum: f64| (sum / count).sqrt() / scale;
-    (part(sums[0]), part(sums[1]))
-}
-
-/// Squared difference of two pixels, summed over the channels.
-fn squared_error(a: &[f32; 3], b: &[f32; 3]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(a, b)| (f64::from(*a) - f64::from(*b)).powi(2))
-        .sum()
-}
-
-/// What relative errors divide by: the reference's mean value, or 1 for a black reference.
-fn error_scale(reference: &Image) -> f64 {
-    let mean: f64 = reference
-        .pixels
-        .iter()
-        .flatten()
-        .map(|v| f64::from(*v))
-        .sum::<f64>()
-        / (reference.pixels.len() * 3).max(1) as f64;
-    if mean > 0.0 { mean } else { 1.0 }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use approx::assert_relative_eq;
-
-    #[test]
-    fn rmse_parts_split_the_error_by_mask() {
-        let reference = Image {
-            pixels: vec![[1.0; 3]; 4],
-            width: 2,
-            height: 2,
-        };
-        let mut image = reference.clone();
-        image.pixels[0] = [2.0; 3];
-        image.pixels[3] = [3.0; 3];
-        let mask = [true, false, false, false];
-        let (outside, inside) = relative_rmse_parts(&image, &reference, &mask);
-        assert_relative_eq!(inside, (1.0f64 / 4.0).sqrt(), epsilon = 1e-12);
-        assert_relative_eq!(outside, (4.0f64 / 4.0).sqrt(), epsilon = 1e-12);
-        let whole = relative_rmse(&image, &reference);
-        assert_relative_eq!(outside.hypot(inside), whole, epsilon = 1e-12);
-    }
-
-    #[test]
-    fn rmse_of_a_constant_offset_is_the_offset() {
-        let mut a = Image::new(4, 3);
-        let mut b = Image::new(4, 3);
-        a.pixels.iter_mut().for_each(|p| *p = [1.5; 3]);
-        b.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
-        assert_relative_eq!(rmse(&a, &b), 0.5, epsilon = 1e-12);
-        assert_relative_eq!(relative_rmse(&a, &b), 0.5, epsilon = 1e-12);
-        assert_eq!(rmse(&b, &b), 0.0);
-    }
 
     #[test]
     fn exr_round_trips_exact_floats() {
@@ -222,6 +188,14 @@ mod tests {
         )
         .unwrap();
         assert_eq!(read.layer_data.channel_data.pixels, a.pixels);
+        assert_eq!(Image::read_exr(&path, 3, 2).unwrap(), a);
+        let wrong = Image::read_exr(&path, 4, 2).unwrap_err().to_string();
+        assert!(
+            wrong.ends_with(
+                "cannot read image: it is 3x2 pixels, the image it is compared with is 4x2"
+            ),
+            "{wrong}"
+        );
         a.write_png(&dir.join("a.png"), 1.0).unwrap();
         std::fs::remove_dir_all(&dir).ok();
     }

@@ -7,7 +7,8 @@
 //! - [`rng`], [`sampling`], [`geometry`]: math that exists once here and once in WGSL.
 //! - [`scene`], [`compile`]: the scene model, its file format, and its flattening into buffers.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping.
-//! - [`params`], [`image`]: render settings and the image with its error metrics.
+//! - [`params`], [`image`], [`metrics`]: render settings, images and their EXR/PNG files, and
+//!   the distances error reports measure.
 
 pub mod check;
 pub mod compile;
@@ -16,6 +17,7 @@ pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod layout;
+pub mod metrics;
 pub mod params;
 pub mod passes;
 pub mod region;

@@ -11,8 +11,9 @@
 //! outright: the verdict requires `required_share` of hit points to agree on each field.
 
 use super::{Recording, heat_map, luminance, slot_pixel};
-use ppm_core::image::{Image, relative_rmse};
+use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
+use ppm_core::metrics::relative_rmse;
 use ppm_core::params::RenderParams;
 use serde::Serialize;
 

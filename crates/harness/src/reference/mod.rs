@@ -1,0 +1,282 @@
+//! The ground truth of every error report: an image from any renderer, or the project's own
+//! unbiased path tracer ([`path_tracer`]) rendered progressively and cached on disk
+//! ([`cache`]), with the variance of each pixel's mean so that the truth's own noise is known.
+
+pub mod cache;
+pub mod path_tracer;
+pub mod sampler;
+
+use crate::clock::Stopwatch;
+use backend_cpu::trace::SceneData;
+use glam::Vec3;
+use path_tracer::PathTracer;
+use ppm_core::compile::CompiledScene;
+use ppm_core::image::{Image, ImageError};
+use ppm_core::metrics::reference_noise;
+use rayon::prelude::*;
+use sampler::BATCHES;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Offset of new ray origins, relative to the scene's extent (as the photon passes use).
+const RAY_EPSILON_RELATIVE: f32 = 1e-5;
+
+/// How long a reference renders: whichever limit comes first (at least one is set).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ReferenceBudget {
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Seconds.
+    pub seconds: Option<f64>,
+}
+
+/// A path-traced image with the variance of each pixel's mean.
+#[derive(Clone, Debug)]
+pub struct ReferenceImage {
+    /// Mean radiance per pixel.
+    pub image: Image,
+    /// Variance of each pixel's mean, per channel: its sample variance over the sample count.
+    pub variance: Image,
+    /// Samples per pixel taken.
+    pub spp: u32,
+    /// Seconds spent.
+    pub seconds: f64,
+    /// Why the render stopped before its budget, if it did (a non-finite sample).
+    pub error: Option<String>,
+}
+
+impl ReferenceImage {
+    /// The relative RMSE this reference is expected to have against the truth.
+    pub fn noise(&self) -> f64 {
+        reference_noise(&self.image, &self.variance)
+    }
+
+    /// The summary written beside the image.
+    pub fn summary(&self, scene: &str, frame: u32, seed: u32) -> ReferenceSummary {
+        let samples = u64::from(self.spp) * self.image.pixels.len() as u64;
+        ReferenceSummary {
+            renderer: "ppm reference (path tracer with next-event estimation and MIS)",
+            scene: scene.to_owned(),
+            frame,
+            width: self.image.width,
+            height: self.image.height,
+            seed,
+            spp: self.spp,
+            seconds: self.seconds,
+            samples_per_second: samples as f64 / self.seconds.max(1e-9),
+            max_bounces: path_tracer::MAX_BOUNCES,
+            relative_noise: self.noise(),
+            error: self.error.clone(),
+        }
+    }
+
+    /// Writes `path` (the mean, EXR), its PNG preview, its variance ([`variance_path`]) and
+    /// `summary` as JSON beside it.
+    pub fn write(&self, path: &Path, summary: &ReferenceSummary) -> Result<(), ImageError> {
+        self.image.write_exr(path)?;
+        self.image.write_png(&path.with_extension("png"), 1.0)?;
+        self.variance.write_exr(&variance_path(path))?;
+        let json = serde_json::to_string_pretty(summary).expect("a summary serialises");
+        std::fs::write(path.with_extension("json"), json).map_err(|e| ImageError::Write {
+            path: path.with_extension("json").display().to_string(),
+            reason: e.to_string(),
+        })
+    }
+}
+
+/// What a reference's JSON file says about it.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReferenceSummary {
+    /// What rendered it.
+    pub renderer: &'static str,
+    /// Scene name.
+    pub scene: String,
+    /// Frame (0 before the scene's moves, 1 after).
+    pub frame: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Seed.
+    pub seed: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seconds of rendering.
+    pub seconds: f64,
+    /// Paths per second.
+    pub samples_per_second: f64,
+    /// Longest path.
+    pub max_bounces: u32,
+    /// Expected relative RMSE of the image against the truth (its own noise).
+    pub relative_noise: f64,
+    /// Why it stopped early, if it did.
+    pub error: Option<String>,
+}
+
+/// Where the variance of the reference at `path` is stored: `NAME.var.exr` beside `NAME.exr`.
+pub fn variance_path(path: &Path) -> PathBuf {
+    path.with_extension("var.exr")
+}
+
+/// Renders `compiled` by path tracing until `budget` is spent, in rounds of one sample per
+/// batch ([`sampler::BATCHES`]) per pixel, so a sample count is rounded up to a multiple of
+/// it; `on_round(spp, seconds)` is called after each round.
+///
+/// Each pixel sums its own samples in order, so the result does not depend on the thread
+/// count. A non-finite sample stops the render: the complete rounds before it are returned,
+/// with the pixel and sample named in `error`.
+pub fn render_reference(
+    compiled: &CompiledScene,
+    seed: u32,
+    budget: ReferenceBudget,
+    on_round: &mut dyn FnMut(u32, f64),
+) -> ReferenceImage {
+    let scene = SceneData::new(compiled);
+    let camera = &compiled.camera;
+    let tracer = PathTracer {
+        scene: &scene,
+        camera,
+        ray_epsilon: RAY_EPSILON_RELATIVE * compiled.extent,
+    };
+    let (width, height) = (camera.width, camera.height);
+    let mut sums = vec![BatchSums::default(); width as usize * height as usize];
+    let clock = Stopwatch::start();
+    let mut spp = 0;
+    let mut error = None;
+    while budget.spp.is_none_or(|n| spp < n) && budget.seconds.is_none_or(|s| clock.seconds() < s) {
+        let round: Vec<[Vec3; BATCHES as usize]> = (0..sums.len() as u32)
+            .into_par_iter()
+            .with_min_len(16)
+            .map(|pixel| {
+                let (x, y) = (pixel % width, pixel / width);
+                std::array::from_fn(|b| tracer.sample(seed, x, y, spp + b as u32))
+            })
+            .collect();
+        let bad = round
+            .iter()
+            .enumerate()
+            .find_map(|(p, ls)| ls.iter().position(|l| !l.is_finite()).map(|b| (p, b)));
+        if let Some((pixel, b)) = bad {
+            let (x, y) = (pixel as u32 % width, pixel as u32 / width);
+            error = Some(format!(
+                "sample {} of pixel ({x}, {y}) is not finite: {}",
+                spp + b as u32,
+                round[pixel][b]
+            ));
+            break;
+        }
+        sums.par_iter_mut().zip(&round).for_each(|(acc, ls)| {
+            for (batch, l) in acc.0.iter_mut().zip(ls) {
+                for c in 0..3 {
+                    batch[c] += f64::from(l[c]);
+                }
+            }
+        });
+        spp += BATCHES;
+        on_round(spp, clock.seconds());
+    }
+    let (image, variance) = mean_and_variance(&sums, width, height, spp / BATCHES);
+    ReferenceImage {
+        image,
+        variance,
+        spp,
+        seconds: clock.seconds(),
+        error,
+    }
+}
+
+/// One pixel's sums of the samples of each batch, per channel.
+#[derive(Clone, Copy, Debug, Default)]
+struct BatchSums([[f64; 3]; BATCHES as usize]);
+
+/// Per-pixel means, and variances of the means from the spread of the batch means (each
+/// batch an independent estimate of `per_batch` samples).
+fn mean_and_variance(
+    sums: &[BatchSums],
+    width: u32,
+    height: u32,
+    per_batch: u32,
+) -> (Image, Image) {
+    let mut mean = Image::new(width, height);
+    let mut variance = Image::new(width, height);
+    if per_batch == 0 {
+        return (mean, variance);
+    }
+    let (n, k) = (f64::from(per_batch), f64::from(BATCHES));
+    for (i, s) in sums.iter().enumerate() {
+        for c in 0..3 {
+            let batch_means = s.0.map(|b| b[c] / n);
+            let m = batch_means.iter().sum::<f64>() / k;
+            let spread = batch_means.iter().map(|b| (b - m).powi(2)).sum::<f64>();
+            mean.pixels[i][c] = m as f32;
+            variance.pixels[i][c] = (spread / (k * (k - 1.0))) as f32;
+        }
+    }
+    (mean, variance)
+}
+
+/// The image an error report measures against.
+#[derive(Clone, Debug)]
+pub struct Truth {
+    /// The reference image.
+    pub image: Image,
+    /// Variance of its pixels' means, when known (path-traced references store it).
+    pub variance: Option<Image>,
+    /// Where it came from, for reports.
+    pub source: String,
+}
+
+impl Truth {
+    /// The reference's own expected relative RMSE against the truth, when its variance is known.
+    pub fn noise(&self) -> Option<f64> {
+        self.variance
+            .as_ref()
+            .map(|v| reference_noise(&self.image, v))
+    }
+
+    /// Reads a reference EXR from any renderer, refusing it unless it is `width` x `height`
+    /// with R, G and B channels; a variance file beside it ([`variance_path`]) is read too.
+    pub fn from_exr(path: &Path, width: u32, height: u32) -> Result<Self, ImageError> {
+        let image = Image::read_exr(path, width, height)?;
+        let var = variance_path(path);
+        let variance = if var.is_file() {
+            Some(Image::read_exr(&var, width, height)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            image,
+            variance,
+            source: path.display().to_string(),
+        })
+    }
+}
+
+impl From<(&ReferenceImage, String)> for Truth {
+    fn from((r, source): (&ReferenceImage, String)) -> Self {
+        Self {
+            image: r.image.clone(),
+            variance: Some(r.variance.clone()),
+            source,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    /// Batch means alternating 1 and 3 (two samples each): mean 2, spread of the batch
+    /// means 1 per batch, so the variance of their average is `8 / (8 * 7)`.
+    #[test]
+    fn variance_of_the_mean_comes_from_the_spread_of_the_batch_means() {
+        let mut sums = BatchSums::default();
+        for (b, batch) in sums.0.iter_mut().enumerate() {
+            *batch = [if b % 2 == 0 { 2.0 } else { 6.0 }; 3];
+        }
+        let (mean, var) = mean_and_variance(&[sums], 1, 1, 2);
+        assert_eq!(mean.pixels[0], [2.0; 3]);
+        assert_relative_eq!(var.pixels[0][0], 1.0 / 7.0, epsilon = 1e-7);
+    }
+}

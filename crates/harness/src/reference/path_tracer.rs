@@ -1,0 +1,236 @@
+//! An unbiased path tracer: the ground truth the photon mapper is measured against.
+//!
+//! It shares only the compiled scene and its ray queries with the photon passes; the light
+//! transport is written here on its own (light sampling, multiple importance sampling, the
+//! dielectric, Russian roulette), so a mistake in the passes' transport does not repeat here.
+//! Per sample: a point uniform in the pixel's area (a box filter), then at every diffuse
+//! surface next-event estimation towards a point on the area lights and a cosine-sampled
+//! bounce, the two weighted by the power heuristic; mirrors reflect, glass reflects with the
+//! Fresnel probability and otherwise refracts with radiance scaled by `(eta_i / eta_t)^2`;
+//! emission reached directly or after a specular bounce counts whole.
+
+use super::sampler::Sampler;
+use backend_cpu::trace::SceneData;
+use glam::Vec3;
+use ppm_core::compile::camera_ray;
+use ppm_core::geometry::{reflect, to_world};
+use ppm_core::layout::{GpuCamera, GpuLight, NO_MATERIAL, material_kind};
+use ppm_core::sampling::{cosine_hemisphere, sample_cdf, uniform_triangle};
+use std::f32::consts::FRAC_1_PI;
+
+/// Bounces after which a path stops. Russian roulette ends paths long before in any scene
+/// that absorbs: even the albedo-0.99 furnace loses only `0.99^1024 = 3e-5` of its light here.
+pub const MAX_BOUNCES: u32 = 1024;
+
+/// Bounces taken before Russian roulette may end a path.
+const ROULETTE_AFTER: u32 = 3;
+
+/// Dimension pairs of the sampler: the point in the pixel, then per bounce three pairs: the
+/// point on a light; the bounce direction (its first number picks at glass); the light and
+/// the roulette.
+const PAIRS_PER_BOUNCE: u32 = 3;
+
+/// The random numbers of one bounce.
+struct Bounce {
+    light_point: (f32, f32),
+    direction: (f32, f32),
+    light: f32,
+    roulette: f32,
+}
+
+impl Bounce {
+    fn new(sampler: &Sampler, bounce: u32) -> Self {
+        let pair = 1 + bounce * PAIRS_PER_BOUNCE;
+        let (light, roulette) = sampler.pair(pair + 2);
+        Self {
+            light_point: sampler.pair(pair),
+            direction: sampler.pair(pair + 1),
+            light,
+            roulette,
+        }
+    }
+}
+
+/// What one path needs to know besides its random numbers.
+pub struct PathTracer<'a> {
+    /// Geometry, materials and lights.
+    pub scene: &'a SceneData,
+    /// The camera.
+    pub camera: &'a GpuCamera,
+    /// Offset of new ray origins against self-intersection.
+    pub ray_epsilon: f32,
+}
+
+impl PathTracer<'_> {
+    /// Radiance of one path through pixel `(x, y)`, sample `sample` of run `seed`.
+    pub fn sample(&self, seed: u32, x: u32, y: u32, sample: u32) -> Vec3 {
+        let sampler = Sampler::new(seed, y * self.camera.width + x, sample);
+        let (jx, jy) = sampler.pair(0);
+        let ray = camera_ray(self.camera, x as f32 + jx, y as f32 + jy);
+        self.radiance(Vec3::from(self.camera.eye), ray, &sampler)
+    }
+
+    fn radiance(&self, mut origin: Vec3, mut dir: Vec3, sampler: &Sampler) -> Vec3 {
+        let mut radiance = Vec3::ZERO;
+        let mut throughput = Vec3::ONE;
+        // Solid-angle density of the last bounce's direction; `None` after the camera or a
+        // specular bounce, which light sampling cannot produce, so emission counts whole.
+        let mut bsdf_pdf: Option<f32> = None;
+        for bounce in 0..MAX_BOUNCES {
+            let Some(hit) = self.scene.closest_hit(origin, dir, f32::INFINITY) else {
+                break;
+            };
+            let tri = &self.scene.triangles[hit.triangle as usize];
+            let material = &self.scene.materials[tri.material as usize];
+            let normal = Vec3::from(tri.normal);
+            let position = origin + dir * hit.t;
+            let cos_front = -dir.dot(normal);
+            let front = cos_front > 0.0;
+            let facing = if front { normal } else { -normal };
+            let emission = Vec3::from(material.emission);
+            if front && emission.max_element() > 0.0 {
+                let weight = match (bsdf_pdf, tri.light) {
+                    (Some(pb), light) if light != NO_MATERIAL => {
+                        let pl =
+                            self.light_pdf(&self.scene.lights[light as usize], hit.t, cos_front);
+                        power_heuristic(pb, pl)
+                    }
+                    _ => 1.0,
+                };
+                radiance += throughput * emission * weight;
+            }
+            let u = Bounce::new(sampler, bounce);
+            let albedo = Vec3::from(material.albedo);
+            match material.kind {
+                material_kind::DIFFUSE => {
+                    if albedo.max_element() <= 0.0 {
+                        break;
+                    }
+                    let x = position + facing * self.ray_epsilon;
+                    radiance += throughput * albedo * FRAC_1_PI * self.light_sample(x, facing, &u);
+                    let local = cosine_hemisphere(u.direction.0, u.direction.1);
+                    bsdf_pdf = Some(local.z * FRAC_1_PI);
+                    dir = to_world(local, facing);
+                    origin = x;
+                    throughput *= albedo;
+                }
+                material_kind::MIRROR => {
+                    dir = reflect(dir, facing);
+                    origin = position + facing * self.ray_epsilon;
+                    throughput *= albedo;
+                    bsdf_pdf = None;
+                }
+                _ => {
+                    let eta = if front {
+                        1.0 / material.ior
+                    } else {
+                        material.ior
+                    };
+                    let (fresnel, refracted) = dielectric(dir, facing, eta);
+                    match refracted {
+                        Some(t) if u.direction.0 >= fresnel => {
+                            dir = t;
+                            origin = position - facing * self.ray_epsilon;
+                            throughput *= eta * eta;
+                        }
+                        _ => {
+                            dir = reflect(dir, facing);
+                            origin = position + facing * self.ray_epsilon;
+                        }
+                    }
+                    bsdf_pdf = None;
+                }
+            }
+            if bounce >= ROULETTE_AFTER {
+                let survive = throughput.max_element().min(0.95);
+                if u.roulette >= survive {
+                    break;
+                }
+                throughput /= survive;
+            }
+        }
+        radiance
+    }
+
+    /// Irradiance-like estimate `Le cos_x cos_l / (d^2 p_area)` from one point on the lights,
+    /// weighted against the cosine bounce by the power heuristic.
+    fn light_sample(&self, x: Vec3, n: Vec3, u: &Bounce) -> Vec3 {
+        let lights = &self.scene.lights;
+        if lights.is_empty() {
+            return Vec3::ZERO;
+        }
+        let light = &lights[sample_cdf(|i| lights[i].cdf, lights.len(), u.light)];
+        let (b1, b2) = uniform_triangle(u.light_point.0, u.light_point.1);
+        let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
+        let to_light = y - x;
+        let dist2 = to_light.length_squared();
+        let dist = dist2.sqrt();
+        if dist <= 0.0 || dist.is_nan() {
+            return Vec3::ZERO;
+        }
+        let w = to_light / dist;
+        let (cos_x, cos_l) = (n.dot(w), -Vec3::from(light.normal).dot(w));
+        if cos_x <= 0.0 || cos_l <= 0.0 {
+            return Vec3::ZERO;
+        }
+        if self.scene.occluded(x, w, dist - 2.0 * self.ray_epsilon) {
+            return Vec3::ZERO;
+        }
+        let pl = self.light_pdf(light, dist, cos_l);
+        let le = Vec3::from(self.scene.materials[light.material as usize].emission);
+        le * (cos_x / pl) * power_heuristic(pl, cos_x * FRAC_1_PI)
+    }
+
+    /// Solid-angle density with which light sampling picks a point of `light` seen at
+    /// distance `dist` under cosine `cos_l`: by power, then uniform on the area.
+    fn light_pdf(&self, light: &GpuLight, dist: f32, cos_l: f32) -> f32 {
+        light.pdf / light.area * dist * dist / cos_l
+    }
+}
+
+/// The power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+/// Fresnel reflectance of a smooth dielectric for unpolarised light and the refracted
+/// direction (`None` under total internal reflection). `n` faces the incident side and `eta`
+/// is the incident index over the transmitted one.
+fn dielectric(dir: Vec3, n: Vec3, eta: f32) -> (f32, Option<Vec3>) {
+    let cos_i = (-dir.dot(n)).clamp(0.0, 1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return (1.0, None);
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let fresnel = 0.5 * (parallel * parallel + perpendicular * perpendicular);
+    let refracted = (dir * eta + n * (eta * cos_i - cos_t)).normalize();
+    (fresnel, Some(refracted))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    /// At normal incidence from air into glass of index 1.5 the reflectance is
+    /// `((1.5 - 1) / (1.5 + 1))^2 = 0.04`; past the critical angle inside, reflection is total.
+    #[test]
+    fn dielectric_matches_the_normal_incidence_reflectance_and_reflects_totally_inside() {
+        let (f, t) = dielectric(-Vec3::Y, Vec3::Y, 1.0 / 1.5);
+        assert_relative_eq!(f, 0.04, epsilon = 1e-6);
+        assert_relative_eq!(t.unwrap().y, -1.0, epsilon = 1e-6);
+        let grazing = Vec3::new(0.9, -0.3, 0.0).normalize();
+        assert_eq!(dielectric(grazing, Vec3::Y, 1.5), (1.0, None));
+    }
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        for (a, b) in [(1.0, 3.0), (0.2, 0.0), (5.0, 5.0)] {
+            assert_relative_eq!(power_heuristic(a, b) + power_heuristic(b, a), 1.0);
+        }
+    }
+}
