@@ -1,25 +1,35 @@
 //! Helpers shared by the workspace-level integration tests in `tests/tests/`.
 
 use backend_cpu::CpuBackend;
-use harness::render::{RenderOutcome, render};
-use ppm_core::params::RenderParams;
+use harness::driver::{Budget, Outcome, Schedule, run};
+use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::scene::Scene;
 
-/// Renders `scene` at `frame` on the CPU backend in a pool of `threads` workers; panics on a
-/// pass error, since a test render must not fail.
+/// Renders `scene` at `frame` for `params.passes` iterations on the CPU backend in a pool of
+/// `threads` workers; panics on a pass error, since a test render must not fail.
 pub fn render_cpu(
     scene: &Scene,
     frame: u32,
     params: &RenderParams,
     threads: usize,
-) -> (RenderOutcome, CpuBackend) {
+) -> (Outcome, CpuBackend) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .expect("thread pool");
     let mut backend = CpuBackend::new();
+    let schedule = Schedule::frame(frame, Budget::iterations(params.passes));
     let outcome = pool
-        .install(|| render(&mut backend, scene, frame, params, &mut |_, _| {}))
+        .install(|| {
+            run(
+                &mut backend,
+                scene,
+                params,
+                &MoveParams::default(),
+                &schedule,
+                &mut (),
+            )
+        })
         .expect("render");
     if let Some(e) = &outcome.error {
         panic!("pass failed: {e}");

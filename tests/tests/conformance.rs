@@ -3,8 +3,8 @@
 
 use backend_cpu::CpuBackend;
 use harness::conformance::{ConformanceOptions, run_conformance};
+use harness::diff::{OTHER_SEED_OFFSET, runs_of};
 use harness::diff::{independent, record, same_seed};
-use harness::diff_command::{OTHER_SEED_OFFSET, runs_of};
 use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::*;
@@ -151,16 +151,16 @@ fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let broken = record(&mut DropsOneInTen(CpuBackend::new()), &scene, 0, &p).unwrap();
     let good = same_seed::compare(&reference, &honest, &p, 5);
     let bad = same_seed::compare(&reference, &broken, &p, 5);
-    println!("{}", harness::diff_command::format_same_seed(&bad));
+    println!("{}", harness::diff::same_seed::format(&bad));
     insta::assert_snapshot!(
         "same_seed_table_broken",
-        harness::diff_command::format_same_seed(&bad)
+        harness::diff::same_seed::format(&bad)
     );
     insta::assert_json_snapshot!("same_seed_json_broken", bad);
     let rows = harness::diff::history::pixel_history(&[&reference, &broken], &p, 31, 44);
     insta::assert_snapshot!(
         "pixel_history_broken",
-        harness::diff_command::format_history(&rows)
+        harness::diff::history::format(&rows)
     );
     assert!(good.agree && good.all_fields_share == 1.0);
     assert!(!bad.agree, "the broken gather went unnoticed");
@@ -190,10 +190,10 @@ fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     .unwrap();
     let good = independent::compare(("cpu", &reference), ("cpu", &honest), &p, 5);
     let bad = independent::compare(("cpu", &reference), ("broken", &broken), &p, 5);
-    println!("{}", harness::diff_command::format_independent(&bad));
+    println!("{}", harness::diff::independent::format(&bad));
     insta::assert_snapshot!(
         "independent_table_broken",
-        harness::diff_command::format_independent(&bad)
+        harness::diff::independent::format(&bad)
     );
     assert!(good.agree, "false alarm on two honest CPU runs: {good:?}");
     assert!(!bad.agree, "the broken gather went unnoticed");

@@ -31,7 +31,7 @@ fn a_photon_pass_split_into_batches_matches_the_unsplit_pass() {
         split.last_pass_batches()
     );
     let report = same_seed::compare(&a, &b, &p, 5);
-    println!("{}", harness::diff_command::format_same_seed(&report));
+    println!("{}", harness::diff::same_seed::format(&report));
     assert!(report.agree);
     let n = report.fields.iter().find(|f| f.field == "n").unwrap();
     assert_eq!(

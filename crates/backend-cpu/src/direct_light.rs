@@ -6,12 +6,14 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
+use ppm_core::geometry::to_world;
+use ppm_core::layout::NO_MATERIAL;
 use ppm_core::layout::{DirectLightParams, HitPoint, hit_flags};
 use ppm_core::passes::DirectStats;
 use ppm_core::rng::{PassKind, StreamKey};
-use ppm_core::geometry::to_world;
-use ppm_core::layout::NO_MATERIAL;
-use ppm_core::sampling::{cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle};
+use ppm_core::sampling::{
+    cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle,
+};
 use rayon::prelude::*;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -21,7 +23,9 @@ const DIMS_PER_SAMPLE: u32 = 5;
 /// Rays per sample: the shadow ray and the cosine ray.
 pub const RAYS_PER_SAMPLE: u32 = 2;
 
-/// Writes `direct` of every valid hit point; idempotent, so a frame can recompute it.
+/// Adds one iteration's direct light to every slot's direct sum (or replaces the sum with it,
+/// `params.accumulate == 0`): emission seen plus reflected light from the area lights, times
+/// the eye path's throughput, zero where the slot has no visible point this iteration.
 pub fn direct_light_main(
     params: &DirectLightParams,
     scene: &SceneData,
@@ -32,31 +36,51 @@ pub fn direct_light_main(
         .enumerate()
         .with_min_len(256)
         .map(|(slot, hp)| {
-            if !hp.is_valid() {
-                return 0;
-            }
-            let material = &scene.materials[hp.material as usize];
-            let mut direct = if hp.flags & hit_flags::FRONT != 0 {
-                Vec3::from(material.emission)
+            let (estimate, rays) = if hp.is_valid() {
+                slot_direct(params, scene, hp, slot as u32)
             } else {
-                Vec3::ZERO
+                (Vec3::ZERO, 0)
             };
-            let albedo = Vec3::from(material.albedo);
-            if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
-                let key = StreamKey {
-                    seed: params.seed,
-                    kind: PassKind::DirectLight,
-                    pass_index: params.frame,
-                    path: slot as u32,
-                };
-                let irradiance = estimate_irradiance(params, scene, hp, &key);
-                direct += irradiance * albedo * FRAC_1_PI;
+            if params.accumulate != 0 {
+                hp.direct = (Vec3::from(hp.direct) + estimate).into();
+                hp.iterations += 1;
+            } else {
+                hp.direct = estimate.into();
+                hp.iterations = 1;
             }
-            hp.direct = direct.into();
-            u64::from(params.samples * RAYS_PER_SAMPLE)
+            rays
         })
         .sum();
     DirectStats { rays }
+}
+
+/// One visible point's direct radiance towards the eye, throughput included, and the rays
+/// traced for it.
+fn slot_direct(
+    params: &DirectLightParams,
+    scene: &SceneData,
+    hp: &HitPoint,
+    slot: u32,
+) -> (Vec3, u64) {
+    let material = &scene.materials[hp.material as usize];
+    let mut direct = if hp.flags & hit_flags::FRONT != 0 {
+        Vec3::from(material.emission)
+    } else {
+        Vec3::ZERO
+    };
+    let albedo = Vec3::from(material.albedo);
+    let mut rays = 0;
+    if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
+        let key = StreamKey {
+            seed: params.seed,
+            kind: PassKind::DirectLight,
+            pass_index: params.iteration,
+            path: slot,
+        };
+        direct += estimate_irradiance(params, scene, hp, &key) * albedo * FRAC_1_PI;
+        rays = u64::from(params.samples * RAYS_PER_SAMPLE);
+    }
+    (Vec3::from(hp.throughput) * direct, rays)
 }
 
 /// Irradiance from the lights, `E = integral of Le cos_x`: per sample, light sampling

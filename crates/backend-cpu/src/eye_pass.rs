@@ -1,11 +1,13 @@
-//! Eye pass (ALGORITHM.md 1.1): one hit point per slot where the eye path first meets a
+//! Eye pass (ALGORITHM.md 1.1): each slot's visible point, where its eye path first meets a
 //! non-specular surface, following mirror and glass chains iteratively.
 
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::compile::camera_ray;
 use ppm_core::geometry::specular_bounce;
-use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, hit_flags, material_kind};
+use ppm_core::layout::{
+    EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, eye_flags, hit_flags, material_kind,
+};
 use ppm_core::passes::EyeStats;
 use ppm_core::rng::{PassKind, StreamKey};
 use rayon::prelude::*;
@@ -13,7 +15,9 @@ use rayon::prelude::*;
 /// Random dimensions: 0 and 1 jitter the pixel; `2 + depth` picks glass reflection or refraction.
 const DIM_GLASS: u32 = 2;
 
-/// Fills `hit_points` (`width * height * spp` slots, slot = pixel * spp + sample).
+/// Writes the visible point of every slot of `hit_points` (`width * height * spp` slots,
+/// slot = pixel * spp + sample), starting the slots fresh or keeping their statistics as
+/// `params.flags` says.
 pub fn eye_pass_main(
     params: &EyePassParams,
     camera: &GpuCamera,
@@ -32,7 +36,7 @@ pub fn eye_pass_main(
     }
 }
 
-/// Traces one slot's eye path and writes its hit point; returns the rays traced.
+/// Traces one slot's eye path and writes its visible point; returns the rays traced.
 fn trace_eye_path(
     params: &EyePassParams,
     camera: &GpuCamera,
@@ -41,14 +45,28 @@ fn trace_eye_path(
     out: &mut HitPoint,
 ) -> u64 {
     let pixel = slot / params.spp;
-    *out = HitPoint::empty(pixel);
+    *out = if params.flags & eye_flags::KEEP_STATISTICS != 0 {
+        HitPoint {
+            position: [0.0; 3],
+            normal: [0.0; 3],
+            material: NO_MATERIAL,
+            throughput: [0.0; 3],
+            flags: out.flags & hit_flags::UPDATED,
+            ..*out
+        }
+    } else {
+        HitPoint {
+            r2: params.r2_initial,
+            ..HitPoint::empty(pixel)
+        }
+    };
     let key = StreamKey {
         seed: params.seed,
         kind: PassKind::Eye,
-        pass_index: params.frame,
+        pass_index: params.iteration,
         path: slot,
     };
-    let (jx, jy) = if params.spp == 1 {
+    let (jx, jy) = if params.spp == 1 && params.flags & eye_flags::JITTER == 0 {
         (0.5, 0.5)
     } else {
         (key.uniform(0), key.uniform(1))
@@ -70,19 +88,13 @@ fn trace_eye_path(
         let facing = if front { normal } else { -normal };
         match material.kind {
             material_kind::DIFFUSE => {
-                *out = HitPoint {
-                    position: position.into(),
-                    pixel,
-                    normal: facing.into(),
-                    material: tri.material,
-                    wo: (-dir).into(),
-                    r2: params.r2_initial,
-                    throughput: throughput.into(),
-                    flags: hit_flags::VALID
-                        | if front { hit_flags::FRONT } else { 0 }
-                        | (tri.object << hit_flags::OBJECT_SHIFT),
-                    ..HitPoint::default()
-                };
+                out.position = position.into();
+                out.normal = facing.into();
+                out.material = tri.material;
+                out.throughput = throughput.into();
+                out.flags |= hit_flags::VALID
+                    | if front { hit_flags::FRONT } else { 0 }
+                    | (tri.object << hit_flags::OBJECT_SHIFT);
                 return u64::from(depth) + 1;
             }
             _ => {

@@ -22,22 +22,27 @@ pub struct PhotonMap<'a> {
     pub weights: Option<&'a [f32]>,
 }
 
-/// Whether a hit point gathers a pass of `kind`.
-pub fn gathers(hp: &HitPoint, kind: u32) -> bool {
+/// Whether a slot belongs to the set a pass of `kind` serves (ALGORITHM.md 3, "Who gathers
+/// what"), visible point or not: such a slot counts the pass's photons in `emitted`.
+pub fn serves(hp: &HitPoint, kind: u32) -> bool {
     let updated = hp.flags & hit_flags::UPDATED != 0;
-    hp.is_valid()
-        && match kind & gather_kind::KIND_MASK {
-            gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE => !updated,
-            gather_kind::GUIDED => updated,
-            _ => true,
-        }
+    match kind & gather_kind::KIND_MASK {
+        gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE => !updated,
+        gather_kind::GUIDED => updated,
+        _ => true,
+    }
+}
+
+/// Whether a slot gathers a pass of `kind`: it is served and has a visible point.
+pub fn gathers(hp: &HitPoint, kind: u32) -> bool {
+    hp.is_valid() && serves(hp, kind)
 }
 
 /// Region photons gathered but not yet applied: signed count and flux (times BRDF) per hit
 /// point (area mode's deferred compensation).
 pub type Pending = [f32; 4];
 
-/// Updates every hit point that gathers this pass (or adds to its pending sum, or applies it).
+/// Updates every slot that gathers this pass (or adds to its pending sum, or applies it).
 pub fn gather_pass_main(
     params: &GatherParams,
     materials: &[GpuMaterial],
@@ -62,6 +67,9 @@ pub fn gather_pass_main(
         .with_min_len(256)
         .map(|(hp, pending)| {
             if !gathers(hp, params.kind) {
+                if serves(hp, params.kind) {
+                    hp.emitted += params.emitted_increment;
+                }
                 return (0, 0);
             }
             let (found, weight_sum, flux) = photons_in_disc(hp, map);
@@ -78,7 +86,7 @@ pub fn gather_pass_main(
                 found as f32
             };
             let brdf = Vec3::from(materials[hp.material as usize].albedo) * FRAC_1_PI;
-            let dtau: [f32; 3] = (flux * brdf * scale).into();
+            let dtau: [f32; 3] = (flux * Vec3::from(hp.throughput) * brdf * scale).into();
             if deferred {
                 let sign = if kind == gather_kind::REGION_NEGATIVE {
                     -1.0

@@ -1,10 +1,11 @@
 //! Hit-point update after a move (ALGORITHM.md 2.4): the eye pass runs again on the new pose,
-//! and only slots whose surface changed start over.
+//! and only slots whose visible point changed start over; every slot's direct sum restarts.
 
 use crate::eye_pass::eye_pass_main;
+use crate::gather_pass::Pending;
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, hit_flags};
+use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, eye_flags, hit_flags};
 use ppm_core::passes::UpdateStats;
 use rayon::prelude::*;
 
@@ -13,29 +14,39 @@ pub fn object_of(hp: &HitPoint) -> u32 {
     hp.flags >> hit_flags::OBJECT_SHIFT
 }
 
-/// Compares a fresh eye pass with `hit_points` and resets the slots that changed.
+/// Compares a fresh eye pass with `hit_points` and resets the slots that changed (and their
+/// pending region photons).
 pub fn update_hit_points_main(
     params: &EyePassParams,
     camera: &GpuCamera,
     scene: &SceneData,
     epsilon: f32,
     hit_points: &mut [HitPoint],
+    pending: &mut [Pending],
 ) -> UpdateStats {
     let mut fresh = vec![HitPoint::default(); hit_points.len()];
-    let eye = eye_pass_main(params, camera, scene, &mut fresh);
+    let fresh_params = EyePassParams {
+        flags: params.flags & !eye_flags::KEEP_STATISTICS,
+        ..*params
+    };
+    let eye = eye_pass_main(&fresh_params, camera, scene, &mut fresh);
     let updated: u64 = hit_points
         .par_iter_mut()
         .zip(&fresh)
-        .map(|(old, new)| {
+        .zip(pending.par_iter_mut())
+        .map(|((old, new), pending)| {
             let same = old.is_valid() == new.is_valid()
                 && (!new.is_valid()
                     || (object_of(old) == object_of(new)
                         && Vec3::from(old.position).distance(Vec3::from(new.position)) <= epsilon));
             if same {
                 old.flags &= !hit_flags::UPDATED;
+                old.direct = [0.0; 3];
+                old.iterations = 0;
                 0
             } else {
                 *old = *new;
+                *pending = [0.0; 4];
                 if new.is_valid() {
                     old.flags |= hit_flags::UPDATED;
                 }

@@ -25,7 +25,7 @@ use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
     ResolveParams,
 };
-use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, hit_flags};
+use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, eye_flags, hit_flags};
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
@@ -131,12 +131,21 @@ impl EyePass for CpuBackend {
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
         let (scene, camera) = loaded(&self.scene, "eye")?;
         let slots = camera.width as usize * camera.height as usize * params.spp as usize;
+        let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
+        if keep && self.hit_points.len() != slots {
+            return Err(BackendError::OutOfOrder {
+                pass: "eye",
+                needs: "an eye pass that starts the slots fresh",
+            });
+        }
         let mut hit_points = std::mem::take(&mut self.hit_points);
         hit_points.resize(slots, HitPoint::default());
         let stats = eye_pass::eye_pass_main(params, camera, scene, &mut hit_points);
         self.hit_points = hit_points;
-        self.pending = vec![[0.0; 4]; self.hit_points.len()];
-        self.r2_initial = params.r2_initial;
+        if !keep {
+            self.pending = vec![[0.0; 4]; slots];
+            self.r2_initial = params.r2_initial;
+        }
         check_hit_points("eye", &self.hit_points)?;
         Ok(stats)
     }
@@ -212,6 +221,7 @@ impl HitPointUpdate for CpuBackend {
             scene,
             epsilon,
             &mut self.hit_points,
+            &mut self.pending,
         );
         self.r2_initial = params.r2_initial;
         check_hit_points("hit-point update", &self.hit_points)?;

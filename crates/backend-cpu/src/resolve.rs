@@ -1,4 +1,5 @@
-//! Resolve (ALGORITHM.md 1.5): pixel = mean over its slots of `throughput * (direct + L)`.
+//! Resolve (ALGORITHM.md 1.5): pixel = mean over its slots of `direct / iterations + L`, the
+//! throughput already folded into both.
 
 use glam::Vec3;
 use ppm_core::image::Image;
@@ -14,10 +15,8 @@ pub fn resolve_main(params: &ResolveParams, hit_points: &[HitPoint]) -> Image {
         .map(|slots| {
             let sum = slots
                 .iter()
-                .filter(|hp| hp.is_valid())
                 .map(|hp| {
-                    let indirect = Vec3::from(radiance(hp.tau, hp.r2, hp.emitted));
-                    Vec3::from(hp.throughput) * (Vec3::from(hp.direct) + indirect)
+                    Vec3::from(hp.direct_mean()) + Vec3::from(radiance(hp.tau, hp.r2, hp.emitted))
                 })
                 .fold(Vec3::ZERO, |a, b| a + b);
             (sum / spp as f32).into()

@@ -35,7 +35,7 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams, eye_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
@@ -248,16 +248,26 @@ impl SceneUpdate for WgpuBackend {
 
 impl EyePass for WgpuBackend {
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
-        let scene = self.scene("eye")?;
-        let camera = scene.camera_value;
+        let camera = self.scene("eye")?.camera_value;
         let slots64 = u64::from(camera.width) * u64::from(camera.height) * u64::from(params.spp);
         let slots = u32::try_from(slots64)
             .map_err(|_| BackendError::Limit(format!("{slots64} hit-point slots exceed 2^32")))?;
-        let hit_points = storage_zeroed(
-            &self.ctx,
-            "hit_points",
-            slots64 * size_of::<HitPoint>() as u64,
-        )?;
+        let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
+        let hit_points = match self.hit_points.take() {
+            Some((buffer, count)) if keep && count == slots => buffer,
+            _ if keep => {
+                return Err(BackendError::OutOfOrder {
+                    pass: "eye",
+                    needs: "an eye pass that starts the slots fresh",
+                });
+            }
+            _ => storage_zeroed(
+                &self.ctx,
+                "hit_points",
+                slots64 * size_of::<HitPoint>() as u64,
+            )?,
+        };
+        let scene = self.scene("eye")?;
         let targets = Slots {
             hit_points: &hit_points,
             counters: &self.counters,
@@ -271,13 +281,15 @@ impl EyePass for WgpuBackend {
             Ok(())
         })?;
         self.hit_points = Some((hit_points, slots));
-        self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
-        self.pending = Some(storage_zeroed(&self.ctx, "pending", slots64 * 16)?);
-        self.r2_initial = Some(buffers::uniform(
-            &self.ctx,
-            "r2_initial",
-            &[params.r2_initial, 0.0, 0.0, 0.0],
-        ));
+        if !keep {
+            self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
+            self.pending = Some(storage_zeroed(&self.ctx, "pending", slots64 * 16)?);
+            self.r2_initial = Some(buffers::uniform(
+                &self.ctx,
+                "r2_initial",
+                &[params.r2_initial, 0.0, 0.0, 0.0],
+            ));
+        }
         self.map = None;
         self.check("eye", &counters)?;
         Ok(EyeStats {
@@ -518,10 +530,14 @@ impl HitPointUpdate for WgpuBackend {
             counters: &self.counters,
             count: *slots,
         };
+        let fresh_params = EyePassParams {
+            flags: params.flags & !eye_flags::KEEP_STATISTICS,
+            ..*params
+        };
         let eye = self.run("hit-point update eye", |encoder| {
             self.kernels
                 .eye
-                .record(&self.ctx, encoder, params, scene, &eye_targets);
+                .record(&self.ctx, encoder, &fresh_params, scene, &eye_targets);
             Ok(())
         })?;
         let update = UpdateParams {

@@ -52,14 +52,16 @@ fn buffer_elements_match_their_wgsl_twins() {
         pixel,
         normal,
         material,
-        wo,
-        r2,
         throughput,
-        n,
+        r2,
         tau,
-        emitted,
+        n,
         direct,
-        flags
+        emitted,
+        iterations,
+        flags,
+        _pad0,
+        _pad1
     });
     same_layout!(Photon {
         position,
@@ -117,17 +119,21 @@ fn pass_parameters_match_their_wgsl_twins() {
         seed,
         spp,
         max_depth,
-        frame,
+        iteration,
         r2_initial,
         ray_epsilon,
-        _pad0,
-        _pad1
+        flags,
+        _pad0
     });
     same_layout!(DirectLightParams {
         seed,
         samples,
-        frame,
-        ray_epsilon
+        iteration,
+        ray_epsilon,
+        accumulate,
+        _pad0,
+        _pad1,
+        _pad2
     });
     same_layout!(PhotonPassParams {
         seed,
@@ -232,6 +238,8 @@ fn shared_constants_agree() {
         ("HIT_FRONT", hit_flags::FRONT),
         ("HIT_UPDATED", hit_flags::UPDATED),
         ("HIT_OBJECT_SHIFT", hit_flags::OBJECT_SHIFT),
+        ("EYE_KEEP_STATISTICS", eye_flags::KEEP_STATISTICS),
+        ("EYE_JITTER", eye_flags::JITTER),
         ("NO_MATERIAL", NO_MATERIAL),
         ("FIRST_HIT_SKIP", first_hit::SKIP),
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),

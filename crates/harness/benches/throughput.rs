@@ -8,9 +8,9 @@
 
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
-use harness::render::render;
-use ppm_core::params::RenderParams;
-use ppm_core::passes::Backend;
+use harness::driver::{Budget, Schedule, run};
+use ppm_core::params::{MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
 
 fn main() {
     let scene = scenes::builtin("cornell-box")
@@ -53,12 +53,21 @@ fn main() {
         params.passes = 8;
         params.photons_per_pass = 200_000;
         let mut cpu = CpuBackend::new();
-        let mut backends: Vec<&mut dyn Backend> = vec![&mut cpu];
+        let mut backends: Vec<&mut dyn DynamicBackend> = vec![&mut cpu];
         if let Some(g) = gpu.as_mut() {
             backends.push(g);
         }
         for backend in backends {
-            let outcome = render(backend, &scene, 0, &params, &mut |_, _| {}).expect("render");
+            let schedule = Schedule::frame(0, Budget::iterations(params.passes));
+            let outcome = run(
+                backend,
+                &scene,
+                &params,
+                &MoveParams::default(),
+                &schedule,
+                &mut (),
+            )
+            .expect("render");
             let r = &outcome.report;
             let t = &r.times;
             let passes = f64::from(r.passes);

@@ -3,9 +3,8 @@
 //! gets a verdict per check; no check knows which backend it tests. The CPU backend is the
 //! reference for the checks that compare.
 
-use crate::diff::{independent, record, same_seed};
-use crate::diff_command::{OTHER_SEED_OFFSET, runs_of};
-use crate::render::render;
+use crate::diff::{OTHER_SEED_OFFSET, independent, record, runs_of, same_seed};
+use crate::driver::{Budget, Schedule, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
 use ppm_core::compile::compile_scene;
@@ -13,7 +12,7 @@ use ppm_core::geometry::oct_decode;
 use ppm_core::layout::{
     EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
 };
-use ppm_core::params::RenderParams;
+use ppm_core::params::{Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError, DynamicBackend};
 use ppm_core::rng::TEST_VECTORS;
 use ppm_core::scene::Scene;
@@ -167,7 +166,7 @@ fn eye_params(p: &RenderParams, extent: f32) -> EyePassParams {
         seed: p.seed,
         spp: p.spp,
         max_depth: p.max_eye_depth,
-        frame: 0,
+        iteration: 0,
         r2_initial: p.initial_radius * p.initial_radius,
         ray_epsilon: 1e-5 * extent,
         ..Default::default()
@@ -188,7 +187,9 @@ fn check_rng_vectors(make: BackendFactory, _: &ConformanceOptions) -> Result<Str
     Ok(format!("{} vectors reproduced", keys.len()))
 }
 
-/// Slot `i` belongs to pixel `i / spp`; empty slots say so; fresh hit points start at zero.
+/// Slot `i` belongs to pixel `i / spp`; empty slots say so; fresh slots start with the
+/// initial radius and every other statistic (direct sum and its iteration count included)
+/// at zero.
 fn check_hit_point_layout(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
     let scene = cornell()?;
     let mut p = params_for(&scene, o);
@@ -211,8 +212,12 @@ fn check_hit_point_layout(make: BackendFactory, o: &ConformanceOptions) -> Resul
             Some("pixel index")
         } else if !hp.is_valid() && hp.material != NO_MATERIAL {
             Some("empty slot without NO_MATERIAL")
-        } else if hp.is_valid()
-            && (hp.r2 != r2 || hp.n != 0.0 || hp.emitted != 0.0 || hp.tau != [0.0; 3])
+        } else if hp.r2 != r2
+            || hp.n != 0.0
+            || hp.emitted != 0.0
+            || hp.tau != [0.0; 3]
+            || hp.direct != [0.0; 3]
+            || hp.iterations != 0
         {
             Some("fresh statistics")
         } else if hp.is_valid() && (Vec3::from(hp.normal).length() - 1.0).abs() > 1e-3 {
@@ -304,8 +309,9 @@ fn check_photon_power(make: BackendFactory, o: &ConformanceOptions) -> Result<St
     ))
 }
 
-/// The gather applies eqs 1-3 to exactly the photons within each radius: recomputed on the
-/// host by brute force from the backend's own photons and hit points.
+/// The gather applies eqs 1-3 to exactly the photons within each radius, with flux times the
+/// eye path's throughput times the BRDF, and counts the pass in `emitted` of every slot:
+/// recomputed on the host by brute force from the backend's own photons and slots.
 fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
     let scene = cornell()?;
     let p = params_for(&scene, o);
@@ -334,7 +340,7 @@ fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result
     let after = b.read_hit_points().map_err(err)?;
     let mut checked = 0;
     let mut off = 0;
-    for (hp, got) in before.iter().zip(&after).filter(|(h, _)| h.is_valid()) {
+    for (hp, got) in before.iter().zip(&after) {
         let x = Vec3::from(hp.position);
         let n = Vec3::from(hp.normal);
         let (mut m, mut flux) = (0u32, Vec3::ZERO);
@@ -346,8 +352,12 @@ fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result
                 flux += Vec3::from(ph.power);
             }
         }
-        let albedo = Vec3::from(compiled.materials[hp.material as usize].albedo);
-        let dtau = flux * albedo * std::f32::consts::FRAC_1_PI;
+        let dtau = if hp.is_valid() {
+            let albedo = Vec3::from(compiled.materials[hp.material as usize].albedo);
+            flux * Vec3::from(hp.throughput) * albedo * std::f32::consts::FRAC_1_PI
+        } else {
+            Vec3::ZERO
+        };
         let s = ppm_update(
             Statistics {
                 n: hp.n,
@@ -382,36 +392,54 @@ fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result
 fn check_determinism(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
     let scene = cornell()?;
     let p = params_for(&scene, o);
-    let mut run = || -> Result<Vec<HitPoint>, String> {
+    let mut render = || -> Result<Vec<HitPoint>, String> {
         let mut b = make().map_err(err)?;
-        render(b.as_mut(), &scene, 0, &p, &mut |_, _| {}).map_err(err)?;
+        let schedule = Schedule::frame(0, Budget::iterations(p.passes));
+        run(
+            b.as_mut(),
+            &scene,
+            &p,
+            &MoveParams::default(),
+            &schedule,
+            &mut (),
+        )
+        .map_err(err)?;
         b.read_hit_points().map_err(err)
     };
-    let (a, b) = (run()?, run()?);
+    let (a, b) = (render()?, render()?);
     if bytemuck::cast_slice::<_, u8>(&a) != bytemuck::cast_slice::<_, u8>(&b) {
         return Err("two same-seed renders differ".into());
     }
     Ok(format!("{} hit points identical across two runs", a.len()))
 }
 
-/// Same seed: hit points agree with the CPU reference on every built-in scene.
+/// Same seed: slots agree with the CPU reference on every built-in scene, with either
+/// estimator.
 fn check_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
     let mut details = Vec::new();
     for builtin in scenes::BUILTIN {
         let scene = builtin.load().map_err(err)?;
-        let mut p = params_for(&scene, o);
-        p.initial_radius = scene.render.initial_radius;
-        let reference = record(&mut CpuBackend::new(), &scene, 0, &p).map_err(err)?;
-        let other = record(make().map_err(err)?.as_mut(), &scene, 0, &p).map_err(err)?;
-        let r = same_seed::compare(&reference, &other, &p, 3);
-        let line = format!("{}: {:.3}% agree", builtin.name, 100.0 * r.all_fields_share);
-        if !r.agree {
-            return Err(format!(
-                "{line}; {}",
-                crate::diff_command::format_same_seed(&r).replace('\n', "; ")
-            ));
+        for estimator in [Estimator::Sppm, Estimator::Ppm] {
+            let mut p = params_for(&scene, o);
+            p.estimator = estimator;
+            p.direct_samples = estimator.default_direct_samples();
+            let reference = record(&mut CpuBackend::new(), &scene, 0, &p).map_err(err)?;
+            let other = record(make().map_err(err)?.as_mut(), &scene, 0, &p).map_err(err)?;
+            let r = same_seed::compare(&reference, &other, &p, 3);
+            let line = format!(
+                "{} ({}): {:.3}% agree",
+                builtin.name,
+                estimator.name(),
+                100.0 * r.all_fields_share
+            );
+            if !r.agree {
+                return Err(format!(
+                    "{line}; {}",
+                    same_seed::format(&r).replace('\n', "; ")
+                ));
+            }
+            details.push(line);
         }
-        details.push(line);
     }
     Ok(details.join(", "))
 }

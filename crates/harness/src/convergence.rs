@@ -4,14 +4,14 @@
 //! energy (the ratio of the means).
 
 use crate::chart::{Series, loglog_chart};
+use crate::driver::schedule::EachIteration;
+use crate::driver::{Budget, Progress, Renderer, RunError, Schedule, run};
 use crate::reference::Truth;
-use crate::render::{Progress, render};
 use crate::report::RenderReport;
 use ppm_core::image::Image;
-use ppm_core::layout::ResolveParams;
 use ppm_core::metrics::{block_relative_rmse, mean_ratio, relative_rmse};
-use ppm_core::params::RenderParams;
-use ppm_core::passes::{Backend, BackendError};
+use ppm_core::params::{MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 use serde::Serialize;
 
@@ -27,7 +27,7 @@ const CHECKPOINT_GROWTH: f64 = 1.05;
 pub struct Point {
     /// Seconds of rendering (measuring not counted).
     pub seconds: f64,
-    /// Photon passes so far.
+    /// Iterations so far.
     pub passes: u32,
     /// Pixel relative RMSE against the truth.
     pub rel_rmse: f64,
@@ -55,45 +55,39 @@ pub fn measure(image: &Image, truth: &Truth, seconds: f64, passes: u32) -> Point
     }
 }
 
-/// Renders `scene` at `frame` from scratch on `backend` for `params.time_budget` seconds,
-/// measuring against `truth` after the first pass and whenever rendering time has grown by
-/// [`CHECKPOINT_GROWTH`], and after the last pass.
-pub fn run(
-    backend: &mut dyn Backend,
+/// Renders `scene` at `frame` from scratch on `backend` for `seconds` of rendering, measuring
+/// against `truth` after the first iteration, whenever rendering time has grown by
+/// [`CHECKPOINT_GROWTH`], and after the last.
+pub fn run_from_scratch(
+    backend: &mut dyn DynamicBackend,
     scene: &Scene,
     frame: u32,
     params: &RenderParams,
+    seconds: f64,
     truth: &Truth,
-) -> Result<(Vec<Point>, RenderReport), BackendError> {
-    let resolve = ResolveParams {
-        width: params.width,
-        height: params.height,
-        spp: params.spp,
-        _pad0: 0,
-    };
+) -> Result<(Vec<Point>, RenderReport), RunError> {
     let mut points = Vec::new();
     let mut next = 0.0;
-    let mut failure = None;
     let mut last = (0.0, 0);
-    let outcome = render(
+    let mut observer = EachIteration(|at: &Progress, r: &mut Renderer| {
+        last = (at.seconds, at.iterations);
+        if at.seconds >= next {
+            next = at.seconds * CHECKPOINT_GROWTH;
+            points.push(measure(&r.resolve()?, truth, at.seconds, at.iterations));
+        }
+        Ok(())
+    });
+    let schedule = Schedule::frame(frame, Budget::seconds(seconds));
+    let outcome = run(
         backend,
         scene,
-        frame,
         params,
-        &mut |p: Progress, b: &mut dyn Backend| {
-            last = (p.elapsed, p.pass);
-            if p.pass == 0 || p.elapsed < next {
-                return;
-            }
-            next = p.elapsed * CHECKPOINT_GROWTH;
-            match b.resolve(&resolve) {
-                Ok(image) => points.push(measure(&image, truth, p.elapsed, p.pass)),
-                Err(e) => failure = failure.take().or(Some(e)),
-            }
-        },
+        &MoveParams::default(),
+        &schedule,
+        &mut observer,
     )?;
-    if let Some(e) = failure.or(outcome.error) {
-        return Err(e);
+    if let Some(e) = outcome.error {
+        return Err(e.into());
     }
     if points.last().is_none_or(|p| p.passes != last.1) {
         points.push(measure(&outcome.image, truth, last.0, last.1));

@@ -2,24 +2,25 @@
 //! truth of the new pose (a path-traced reference, or another renderer's image).
 
 use crate::chart::{Series, loglog_chart};
-use crate::clock::Stopwatch;
-use crate::dynamic::{DynamicParams, Mode, MoveReport, PhotonCounts, Progressive};
+use crate::driver::{
+    Budget, MoveReport, Observer, ObserverResult, PhotonCounts, Progress, Renderer, RunError,
+    Schedule, Step, run,
+};
 use ppm_core::image::Image;
-use ppm_core::layout::hit_flags;
+use ppm_core::layout::{HitPoint, hit_flags};
 use ppm_core::metrics::relative_rmse_parts;
-use ppm_core::params::RenderParams;
-use ppm_core::passes::{BackendError, DynamicBackend};
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 use serde::Serialize;
-use std::time::Instant;
 
 /// What to measure.
 #[derive(Clone, Debug, Serialize)]
 pub struct ErrorSettings {
     /// Render settings (size, photons per pass, seed, radius, alpha).
     pub params: RenderParams,
-    /// Dynamic-pass settings.
-    pub dynamic: DynamicParams,
+    /// Settings of the passes that follow a move.
+    pub moves: MoveParams,
     /// Seconds of ordinary passes on the old pose before the move.
     pub warmup_seconds: f64,
     /// Seconds measured after the move.
@@ -30,7 +31,7 @@ pub struct ErrorSettings {
 #[derive(Clone, Debug, Serialize)]
 pub struct Measurement {
     /// Mode.
-    pub mode: Mode,
+    pub mode: MoveMode,
     /// Seconds since the move (rendering only; measuring is not counted).
     pub seconds: f64,
     /// Relative RMSE against the reference.
@@ -47,7 +48,7 @@ pub struct Measurement {
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeRun {
     /// Mode.
-    pub mode: Mode,
+    pub mode: MoveMode,
     /// The move (absent for restart).
     pub moved: Option<MoveReport>,
     /// Photons of each kind after the move (emitted, deposited).
@@ -58,100 +59,152 @@ pub struct ModeRun {
     pub measurements: Vec<Measurement>,
 }
 
-/// The pixels whose hit points the move from frame 0 to frame 1 resets (any of their slots),
-/// including slots that gain or lose their surface (an object's silhouette over the void).
+/// The pixels whose slots the move from frame 0 to frame 1 resets (any of their slots),
+/// including slots that gain or lose their visible point (an object's silhouette over the
+/// void), after one iteration on frame 0.
 pub fn reset_pixels(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
     settings: &ErrorSettings,
-) -> Result<Vec<bool>, BackendError> {
-    // A move with no compensation passes: difference mode needs no emitting region, so the
-    // hit points are updated whatever the object's shape around the lights.
-    let dynamic = DynamicParams {
-        difference_passes: 0,
-        ..settings.dynamic.clone()
-    };
-    let mut render = Progressive::start(backend, scene.at_frame(0), &settings.params, &dynamic)?;
-    let before = render.backend().read_hit_points()?;
-    render.move_to(scene.at_frame(1), Mode::Difference)?;
-    let mut mask = vec![false; (settings.params.width * settings.params.height) as usize];
-    for (a, b) in before.iter().zip(render.backend().read_hit_points()?) {
-        if b.flags & hit_flags::UPDATED != 0 || a.is_valid() != b.is_valid() {
-            mask[b.pixel as usize] = true;
+) -> Result<Vec<bool>, RunError> {
+    /// Compares the slots before and after the move.
+    struct Resets {
+        before: Vec<HitPoint>,
+        mask: Vec<bool>,
+    }
+    impl Observer for Resets {
+        fn step_done(&mut self, _: &Progress, r: &mut Renderer) -> ObserverResult {
+            self.before = r.backend().read_hit_points()?;
+            Ok(())
+        }
+        fn moved(&mut self, _: &Progress, _: &MoveReport, r: &mut Renderer) -> ObserverResult {
+            for (a, b) in self.before.iter().zip(r.backend().read_hit_points()?) {
+                if b.flags & hit_flags::UPDATED != 0 || a.is_valid() != b.is_valid() {
+                    self.mask[b.pixel as usize] = true;
+                }
+            }
+            Ok(())
         }
     }
-    Ok(mask)
+    // A move with no compensation passes: difference mode needs no emitting region, so the
+    // slots are updated whatever the object's shape around the lights.
+    let moves = MoveParams {
+        difference_passes: 0,
+        ..settings.moves.clone()
+    };
+    let schedule = Schedule {
+        start: 0.0,
+        steps: vec![
+            Step::Render(Budget::iterations(1)),
+            Step::Move {
+                time: 1.0,
+                mode: MoveMode::Difference,
+            },
+        ],
+    };
+    let p = &settings.params;
+    let mut resets = Resets {
+        before: Vec::new(),
+        mask: vec![false; (p.width * p.height) as usize],
+    };
+    run(backend, scene, p, &moves, &schedule, &mut resets)?;
+    Ok(resets.mask)
 }
 
-/// Runs `mode` after a move: warm-up on frame 0 (not for restart), the move, then passes until
-/// `settings.seconds`, measuring after each; `reset` (from [`reset_pixels`]) splits the error.
+/// Measures a run after its move (or from its start, for restart).
+struct AfterMove<'a> {
+    mode: MoveMode,
+    truth: &'a Image,
+    reset: &'a [bool],
+    /// The step whose iterations are measured.
+    measured_step: usize,
+    /// Seconds the move took, counted in the time since the move.
+    move_seconds: f64,
+    moved: Option<MoveReport>,
+    measurements: Vec<Measurement>,
+}
+
+impl AfterMove<'_> {
+    fn measure(&mut self, r: &mut Renderer, seconds: f64, passes: u32) -> ObserverResult {
+        let image = r.resolve()?;
+        let (kept, reset) = relative_rmse_parts(&image, self.truth, self.reset);
+        self.measurements.push(Measurement {
+            mode: self.mode,
+            seconds,
+            rel_rmse: kept.hypot(reset),
+            kept,
+            reset,
+            passes,
+        });
+        Ok(())
+    }
+}
+
+impl Observer for AfterMove<'_> {
+    fn iteration(&mut self, at: &Progress, r: &mut Renderer) -> ObserverResult {
+        if at.step == self.measured_step {
+            self.measure(r, self.move_seconds + at.step_seconds, at.step_iterations)?;
+        }
+        Ok(())
+    }
+
+    fn moved(&mut self, at: &Progress, m: &MoveReport, r: &mut Renderer) -> ObserverResult {
+        self.move_seconds = at.step_seconds;
+        self.moved = Some(m.clone());
+        self.measure(r, at.step_seconds, 0)
+    }
+
+    fn step_done(&mut self, at: &Progress, r: &mut Renderer) -> ObserverResult {
+        // Photons are counted from the move on (the thesis's tables 4.1 and 4.2).
+        if at.step + 1 < self.measured_step {
+            r.counts = PhotonCounts::default();
+        }
+        Ok(())
+    }
+}
+
+/// Runs `mode` after a move: warm-up on frame 0 (not for restart, which starts on frame 1),
+/// the move, then iterations until `settings.seconds`, measuring after each; `reset` (from
+/// [`reset_pixels`]) splits the error.
 pub fn run_mode(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
-    mode: Mode,
+    mode: MoveMode,
     settings: &ErrorSettings,
     truth: &Image,
     reset: &[bool],
-) -> Result<ModeRun, BackendError> {
-    let mut measurements = Vec::new();
-    let mut measure =
-        |render: &mut Progressive, seconds: f64, passes: u32| -> Result<(), BackendError> {
-            let image = render.resolve()?;
-            let (kept, reset) = relative_rmse_parts(&image, truth, reset);
-            measurements.push(Measurement {
-                mode,
-                seconds,
-                rel_rmse: kept.hypot(reset),
-                kept,
-                reset,
-                passes,
-            });
-            Ok(())
-        };
-    let (mut render, moved, mut clock) = if mode == Mode::Restart {
-        let clock = Stopwatch::start();
-        (
-            Progressive::start(
-                backend,
-                scene.at_frame(1),
-                &settings.params,
-                &settings.dynamic,
-            )?,
-            None,
-            clock,
-        )
-    } else {
-        let mut render = Progressive::start(
-            backend,
-            scene.at_frame(0),
-            &settings.params,
-            &settings.dynamic,
-        )?;
-        let warm = Instant::now();
-        while warm.elapsed().as_secs_f64() < settings.warmup_seconds {
-            render.ordinary_pass()?;
-        }
-        render.counts = PhotonCounts::default();
-        let clock = Stopwatch::start();
-        let moved = render.move_to(scene.at_frame(1), mode)?;
-        (render, Some(moved), clock)
+) -> Result<ModeRun, RunError> {
+    let schedule = Schedule::after_move(
+        Budget::seconds(settings.warmup_seconds),
+        mode,
+        Budget::seconds(settings.seconds),
+    );
+    let mut observer = AfterMove {
+        mode,
+        truth,
+        reset,
+        measured_step: schedule.steps.len() - 1,
+        move_seconds: 0.0,
+        moved: None,
+        measurements: Vec::new(),
     };
-    clock.pause();
-    measure(&mut render, clock.seconds(), 0)?;
-    let mut passes = 0;
-    while clock.seconds() < settings.seconds {
-        clock.resume();
-        render.step()?;
-        clock.pause();
-        passes += 1;
-        measure(&mut render, clock.seconds(), passes)?;
+    let outcome = run(
+        backend,
+        scene,
+        &settings.params,
+        &settings.moves,
+        &schedule,
+        &mut observer,
+    )?;
+    if let Some(e) = outcome.error {
+        return Err(e.into());
     }
     Ok(ModeRun {
         mode,
-        moved,
-        counts: render.counts.clone(),
+        moved: observer.moved,
+        counts: outcome.counts,
         r2_initial: settings.params.initial_radius * settings.params.initial_radius,
-        measurements,
+        measurements: observer.measurements,
     })
 }
 
@@ -167,15 +220,15 @@ pub fn perfect_compensation(
     truth: &Image,
     reset: &[bool],
     restart: &ModeRun,
-) -> Result<Vec<(f64, f64)>, BackendError> {
+) -> Result<Vec<(f64, f64)>, RunError> {
     let mut params = settings.params.clone();
     params.seed = params.seed.wrapping_add(1);
-    let mut render = Progressive::start(backend, scene.at_frame(1), &params, &settings.dynamic)?;
-    let warm = Instant::now();
-    while warm.elapsed().as_secs_f64() < settings.warmup_seconds {
-        render.ordinary_pass()?;
+    let schedule = Schedule::frame(1, Budget::seconds(settings.warmup_seconds));
+    let outcome = run(backend, scene, &params, &settings.moves, &schedule, &mut ())?;
+    if let Some(e) = outcome.error {
+        return Err(e.into());
     }
-    let (kept, _) = relative_rmse_parts(&render.resolve()?, truth, reset);
+    let (kept, _) = relative_rmse_parts(&outcome.image, truth, reset);
     Ok(restart
         .measurements
         .iter()
@@ -201,11 +254,11 @@ pub fn csv(runs: &[ModeRun]) -> String {
 
 /// The log-log chart of the runs, with the perfect-compensation curve in grey.
 pub fn chart(scene: &str, runs: &[ModeRun], perfect: &[(f64, f64)]) -> Image {
-    let colour = |m: Mode| match m {
-        Mode::Restart => [0.8, 0.1, 0.1],
-        Mode::Thesis => [0.1, 0.3, 0.9],
-        Mode::Area => [0.1, 0.6, 0.2],
-        Mode::Difference => [0.9, 0.6, 0.0],
+    let colour = |m: MoveMode| match m {
+        MoveMode::Restart => [0.8, 0.1, 0.1],
+        MoveMode::Thesis => [0.1, 0.3, 0.9],
+        MoveMode::Area => [0.1, 0.6, 0.2],
+        MoveMode::Difference => [0.9, 0.6, 0.0],
     };
     let mut series: Vec<Series> = runs
         .iter()
@@ -248,18 +301,26 @@ pub fn tables(runs: &[ModeRun], triangles: usize) -> String {
         "valid photons",
         "time"
     ));
-    for r in runs.iter().filter(|r| r.mode != Mode::Restart) {
+    for r in runs.iter().filter(|r| r.mode != MoveMode::Restart) {
         let c = &r.counts;
-        let positive = c.region.0 + c.ordinary.0;
-        let valid = c.compensation.1 + c.region.1 + c.ordinary.1 + c.testing.1 + c.guided.1;
+        let positive = c.region.emitted + c.ordinary.emitted;
+        let valid = c.compensation.deposited
+            + c.region.deposited
+            + c.ordinary.deposited
+            + c.testing.deposited
+            + c.guided.deposited;
         let t = r.measurements.last().map_or(0.0, |m| m.seconds);
         s.push_str(&format!(
             "{:<8} {:>9} {:>22} {:>22} {:>22} {:>16} {:>7.2}s\n",
             r.mode.name(),
             triangles,
-            format!("{}k({})", c.compensation.0 / 1000, r.r2_initial),
+            format!("{}k({})", c.compensation.emitted / 1000, r.r2_initial),
             format!("{}k({})", positive / 1000, r.r2_initial),
-            format!("{}k({})", (c.guided.0 + c.testing.0) / 1000, r.r2_initial),
+            format!(
+                "{}k({})",
+                (c.guided.emitted + c.testing.emitted) / 1000,
+                r.r2_initial
+            ),
             format!("{}k", valid / 1000),
             t
         ));
@@ -269,14 +330,14 @@ pub fn tables(runs: &[ModeRun], triangles: usize) -> String {
         "{:<8} {:>9} {:>22} {:>16} {:>8}\n",
         "mode", "triangles", "total photons (r2)", "valid photons", "time"
     ));
-    for r in runs.iter().filter(|r| r.mode == Mode::Restart) {
+    for r in runs.iter().filter(|r| r.mode == MoveMode::Restart) {
         let t = r.measurements.last().map_or(0.0, |m| m.seconds);
         s.push_str(&format!(
             "{:<8} {:>9} {:>22} {:>16} {:>7.2}s\n",
             r.mode.name(),
             triangles,
-            format!("{}k({})", r.counts.ordinary.0 / 1000, r.r2_initial),
-            format!("{}k", r.counts.ordinary.1 / 1000),
+            format!("{}k({})", r.counts.ordinary.emitted / 1000, r.r2_initial),
+            format!("{}k", r.counts.ordinary.deposited / 1000),
             t
         ));
     }
@@ -286,13 +347,13 @@ pub fn tables(runs: &[ModeRun], triangles: usize) -> String {
 /// Restart's final error: the level every other curve is timed against.
 pub fn restart_final_error(runs: &[ModeRun]) -> Option<f64> {
     runs.iter()
-        .find(|r| r.mode == Mode::Restart)
+        .find(|r| r.mode == MoveMode::Restart)
         .and_then(|r| r.measurements.last())
         .map(|m| m.rel_rmse)
 }
 
 /// Seconds each mode needs to reach restart's final error (`None` if it never does).
-pub fn time_to_restart_error(runs: &[ModeRun]) -> Vec<(Mode, Option<f64>)> {
+pub fn time_to_restart_error(runs: &[ModeRun]) -> Vec<(MoveMode, Option<f64>)> {
     let Some(target) = restart_final_error(runs) else {
         return Vec::new();
     };

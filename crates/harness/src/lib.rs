@@ -1,17 +1,16 @@
-//! Drives any backend through the passes of ppm-core: the render loop and its report, the diff
-//! harness that compares two backends, the conformance suite, and scene lookup by name or
-//! file. The `ppm` command is built on it.
+//! Drives any backend through the passes of ppm-core: the one driver and its report, the
+//! ground truth and the error reports measured against it, the diff harness that compares two
+//! backends, the conformance suite, the stress family, and scene lookup by name or file. The
+//! `ppm` command is built on it.
 
 pub mod chart;
 pub mod clock;
 pub mod conformance;
 pub mod convergence;
 pub mod diff;
-pub mod diff_command;
-pub mod dynamic;
+pub mod driver;
 pub mod error_report;
 pub mod reference;
-pub mod render;
 pub mod report;
 pub mod stats;
 pub mod stress;

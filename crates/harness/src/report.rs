@@ -2,7 +2,7 @@
 //! did not need and was left out.
 
 use ppm_core::compile::{CompiledScene, SceneFeatures};
-use ppm_core::params::{DirectMode, RenderParams};
+use ppm_core::params::{DirectMode, Estimator, RenderParams};
 use ppm_core::scene::{Scene, degenerate_triangle_count};
 use serde::Serialize;
 
@@ -21,8 +21,10 @@ pub struct PassTimes {
     pub photon: f64,
     /// All gather passes.
     pub gather: f64,
-    /// Resolve.
+    /// Resolves.
     pub resolve: f64,
+    /// Moves (compensation, hit-point update, testing photons), all passes included.
+    pub moves: f64,
     /// Wall clock of the whole render.
     pub total: f64,
 }
@@ -43,7 +45,7 @@ pub struct RayCounts {
 pub struct RenderReport {
     /// Scene name.
     pub scene: String,
-    /// Frame rendered (0 before the move, 1 after).
+    /// Frame the render started in (0 before the scene's moves, 1 after).
     pub frame: u32,
     /// Backend name.
     pub backend: String,
@@ -55,9 +57,9 @@ pub struct RenderReport {
     pub degenerate_triangles: usize,
     /// What the scene contains.
     pub features: SceneFeatures,
-    /// Hit-point slots that found a surface.
+    /// Slots with a visible point after the last eye pass.
     pub hit_points: u64,
-    /// Photon passes run.
+    /// Iterations run (one photon pass each).
     pub passes: u32,
     /// Photons emitted.
     pub photons_emitted: u64,
@@ -82,13 +84,12 @@ impl RenderReport {
     pub fn new(
         backend: &str,
         scene: &Scene,
-        frame: u32,
         params: &RenderParams,
         compiled: &CompiledScene,
     ) -> Self {
         Self {
             scene: scene.name.clone(),
-            frame,
+            frame: 0,
             backend: backend.to_owned(),
             params: params.clone(),
             triangles: compiled.triangles.len(),
@@ -110,17 +111,13 @@ impl RenderReport {
 
 /// The passes and code paths a render skips, each with the reason.
 ///
-/// `single_frame`: the render stays on one frame (`ppm render`), so even a scene that moves
-/// runs no compensation pass.
-pub fn left_out(
-    features: &SceneFeatures,
-    params: &RenderParams,
-    single_frame: bool,
-) -> Vec<String> {
+/// `moving`: the render moves the scene; without moves even a scene that could move runs no
+/// compensation pass.
+pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -> Vec<String> {
     let mut out = Vec::new();
     if !features.moving_objects {
         out.push("compensation, region and guided photon passes: no object moves".to_owned());
-    } else if single_frame {
+    } else if !moving {
         out.push(
             "compensation passes: a single frame is rendered (moves apply between frames)"
                 .to_owned(),
@@ -138,8 +135,8 @@ pub fn left_out(
         }
         DirectMode::Photons => out.push("shadow rays: photons carry direct light".to_owned()),
     }
-    if params.spp == 1 {
-        out.push("pixel jitter: one eye ray through each pixel centre".to_owned());
+    if params.estimator == Estimator::Ppm && params.spp == 1 {
+        out.push("pixel jitter: one eye ray through each pixel centre (ppm)".to_owned());
     }
     out
 }

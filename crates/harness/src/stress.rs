@@ -2,13 +2,14 @@
 //! fields, `tau >= 0`, `0 < r2 <= r2_initial`, `n >= 0`, a finite image, and the case's
 //! closed form where it has one.
 
+use crate::diff::OTHER_SEED_OFFSET;
 use crate::diff::independent::{IndependentReport, TileMeans, compare_at, tile_means};
-use crate::diff_command::OTHER_SEED_OFFSET;
-use crate::dynamic::{DynamicParams, Mode, Progressive};
-use crate::render::{Progress, render};
+use crate::driver::schedule::EachIteration;
+use crate::driver::{Budget, Progress, Renderer, Schedule, run};
 use ppm_core::image::Image;
-use ppm_core::passes::{Backend, BackendError, DynamicBackend};
-use scenes::stress::{Compensating, Expected, MoveStress, StressCase, StressSetup};
+use ppm_core::params::MoveParams;
+use ppm_core::passes::{BackendError, DynamicBackend};
+use scenes::stress::{Expected, MoveStress, StressCase, StressSetup};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -46,55 +47,58 @@ pub struct CaseResult {
     pub seconds: f64,
 }
 
-/// Renders a moving case: frame 0, a compensated move, then as many passes again.
+/// Renders a moving case: frame 0, a compensated move, then as many iterations again.
 fn render_move(
     backend: &mut dyn DynamicBackend,
     setup: &StressSetup,
     m: MoveStress,
-) -> Result<Image, BackendError> {
-    let dynamic = DynamicParams {
+) -> Result<Image, String> {
+    let moves = MoveParams {
         compensation_passes: 2,
         region_photons: m.region_photons,
-        ..DynamicParams::default()
+        ..MoveParams::default()
     };
-    let mut render = Progressive::start(backend, setup.scene.at_frame(0), &setup.params, &dynamic)?;
-    for _ in 0..setup.params.passes {
-        render.ordinary_pass()?;
+    let budget = Budget::iterations(setup.params.passes);
+    let schedule = Schedule::after_move(budget, m.mode, budget);
+    let outcome = run(
+        backend,
+        &setup.scene,
+        &setup.params,
+        &moves,
+        &schedule,
+        &mut (),
+    )
+    .map_err(|e| e.to_string())?;
+    match outcome.error {
+        Some(e) => Err(e.to_string()),
+        None => Ok(outcome.image),
     }
-    let mode = match m.mode {
-        Compensating::Thesis => Mode::Thesis,
-        Compensating::Area => Mode::Area,
-        Compensating::Difference => Mode::Difference,
-    };
-    render.move_to(setup.scene.at_frame(1), mode)?;
-    for _ in 0..setup.params.passes {
-        render.step()?;
-    }
-    render.resolve()
 }
 
-/// Renders a static case, seeding its state after direct light when it has one.
+/// Renders a static case, seeding its state after the first iteration when it has one.
 fn render_still(
-    backend: &mut dyn Backend,
+    backend: &mut dyn DynamicBackend,
     setup: &StressSetup,
 ) -> Result<(Image, Option<BackendError>), String> {
-    let mut seeding_failed = None;
-    let mut observe = |p: Progress, b: &mut dyn Backend| {
-        if let (0, Some(seed)) = (p.pass, setup.seed) {
-            let seeded = b.read_hit_points().and_then(|mut hps| {
-                hps.iter_mut().filter(|h| h.is_valid()).for_each(seed);
-                b.write_hit_points(&hps)
-            });
-            if let Err(e) = seeded {
-                seeding_failed = Some(e.to_string());
-            }
+    let mut seeding = EachIteration(|at: &Progress, r: &mut Renderer| {
+        if let (1, Some(seed)) = (at.iterations, setup.seed) {
+            let b = r.backend();
+            let mut hps = b.read_hit_points()?;
+            hps.iter_mut().filter(|h| h.is_valid()).for_each(seed);
+            b.write_hit_points(&hps)?;
         }
-    };
-    let outcome =
-        render(backend, &setup.scene, 0, &setup.params, &mut observe).map_err(|e| e.to_string())?;
-    if let Some(e) = seeding_failed {
-        return Err(format!("seeding the state failed: {e}"));
-    }
+        Ok(())
+    });
+    let schedule = Schedule::frame(0, Budget::iterations(setup.params.passes));
+    let outcome = run(
+        backend,
+        &setup.scene,
+        &setup.params,
+        &MoveParams::default(),
+        &schedule,
+        &mut seeding,
+    )
+    .map_err(|e| format!("seeding the state failed: {e}"))?;
     Ok((outcome.image, outcome.error))
 }
 
@@ -115,9 +119,7 @@ pub fn run_case(backend: &mut dyn DynamicBackend, case: &StressCase) -> CaseResu
         .validate(case.name)
         .map_err(|e| e.to_string())
         .and_then(|()| match setup.moves {
-            Some(m) => render_move(backend, &setup, m)
-                .map(|image| (image, None))
-                .map_err(|e| e.to_string()),
+            Some(m) => render_move(backend, &setup, m).map(|image| (image, None)),
             None => render_still(backend, &setup),
         });
     let verdict =
@@ -150,7 +152,7 @@ fn check(
         min_r2_ratio: f32::INFINITY,
         ..Worst::default()
     };
-    for (i, hp) in hps.iter().enumerate().filter(|(_, h)| h.is_valid()) {
+    for (i, hp) in hps.iter().enumerate() {
         let fields = hp
             .tau
             .iter()
@@ -225,7 +227,7 @@ fn sample(
     let mut setup = (case.build)();
     setup.params.seed = seed;
     let image = match setup.moves {
-        Some(m) => render_move(backend, &setup, m).map_err(|e| e.to_string())?,
+        Some(m) => render_move(backend, &setup, m)?,
         None => match render_still(backend, &setup)? {
             (_, Some(_)) if setup.expected == Expected::FiniteOrRefused => return Ok(None),
             (_, Some(e)) => return Err(e.to_string()),

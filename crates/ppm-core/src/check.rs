@@ -4,18 +4,23 @@
 use crate::layout::HitPoint;
 use crate::passes::BackendError;
 
-/// The first non-finite field of a valid hit point, as an error; `Ok` when all are finite.
+/// The first non-finite field of a slot, as an error; `Ok` when all are finite. Statistics
+/// are checked in every slot (they outlive the visible point), the visible point only where
+/// there is one.
 pub fn check_hit_points(pass: &'static str, hit_points: &[HitPoint]) -> Result<(), BackendError> {
-    for (index, hp) in hit_points.iter().enumerate().filter(|(_, h)| h.is_valid()) {
-        let fields: [(&'static str, &[f32]); 7] = [
-            ("position", &hp.position),
+    for (index, hp) in hit_points.iter().enumerate() {
+        let visible: [(&'static str, &[f32]); 2] =
+            [("position", &hp.position), ("throughput", &hp.throughput)];
+        let statistics: [(&'static str, &[f32]); 5] = [
             ("direct", &hp.direct),
             ("tau", &hp.tau),
             ("r2", std::slice::from_ref(&hp.r2)),
             ("n", std::slice::from_ref(&hp.n)),
             ("emitted", std::slice::from_ref(&hp.emitted)),
-            ("throughput", &hp.throughput),
         ];
+        let fields = statistics
+            .into_iter()
+            .chain(visible.into_iter().filter(|_| hp.is_valid()));
         for (field, values) in fields {
             if let Some(v) = values.iter().find(|v| !v.is_finite()) {
                 return Err(BackendError::NonFinite {
@@ -52,8 +57,14 @@ mod tests {
         );
         hps[2].flags = 0;
         assert!(
+            check_hit_points("gather", &hps).is_err(),
+            "statistics outlive the visible point and are checked without one"
+        );
+        hps[2].tau[1] = 0.0;
+        hps[2].position[0] = f32::INFINITY;
+        assert!(
             check_hit_points("gather", &hps).is_ok(),
-            "empty slots are not checked"
+            "a slot without a visible point has no position to check"
         );
     }
 }

@@ -19,11 +19,12 @@ pub mod material_kind {
 
 /// Bits of [`HitPoint::flags`].
 pub mod hit_flags {
-    /// The slot holds a hit point; without it the eye path escaped, was absorbed or ran out of depth.
+    /// The slot has a visible point this iteration; without it the eye path escaped, was
+    /// absorbed or ran out of depth (its statistics stay, and so does its share of the pixel).
     pub const VALID: u32 = 1;
     /// The eye ray met the surface on the side its normal points to: emitters emit only there.
     pub const FRONT: u32 = 2;
-    /// The hit point was reset by the last hit-point update (ALGORITHM.md 2.4).
+    /// The slot was reset by the last hit-point update (ALGORITHM.md 2.4).
     pub const UPDATED: u32 = 4;
     /// The index of the object hit sits in the bits from here up (24 bits).
     pub const OBJECT_SHIFT: u32 = 8;
@@ -32,42 +33,55 @@ pub mod hit_flags {
 /// Marks an empty hit-point slot in [`HitPoint::material`].
 pub const NO_MATERIAL: u32 = u32::MAX;
 
-/// One eye-path slot: where an eye path first met a non-specular surface, and its PPM statistics.
+/// One eye sample of one pixel (a slot): this iteration's visible point, and the progressive
+/// statistics the slot keeps across iterations (ALGORITHM.md 1).
 ///
-/// 96 bytes: six 16-byte rows, each a `vec3<f32>` plus one scalar. At 768x768 with one eye sample
-/// per pixel that is 589,824 slots = 56.6 MB, well inside one storage binding (128 MiB baseline
-/// limit). The diffuse albedo is not stored: `material` indexes it, which saves a row per slot.
+/// With `sppm` the visible point (position, normal, material, throughput, the `VALID`/`FRONT`
+/// flags) is traced anew every iteration while the statistics (`r2`, `n`, `tau`, `emitted`,
+/// the direct sum and its iteration count) belong to the slot; with `ppm` the visible point
+/// is traced once per frame. Both fold the eye path's throughput and the BRDF into what they
+/// accumulate, so the pixel is `direct / iterations + tau / (pi r2 emitted)` either way.
+///
+/// 96 bytes: six 16-byte rows, each a `vec3<f32>` plus one scalar. At 768x768 with one eye
+/// sample per pixel that is 589,824 slots = 56.6 MB, well inside one storage binding (128 MiB
+/// baseline limit). The diffuse albedo is not stored (`material` indexes it), nor the
+/// outgoing direction (hit points are Lambertian).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HitPoint {
-    /// World-space position of the hit.
+    /// World-space position of the visible point.
     pub position: [f32; 3],
     /// Pixel index `y * width + x` this slot belongs to.
     pub pixel: u32,
     /// Shading normal, flipped to face the eye ray.
     pub normal: [f32; 3],
-    /// Index into the material buffer, or [`NO_MATERIAL`] for an empty slot.
+    /// Index into the material buffer, or [`NO_MATERIAL`] when the slot has no visible point.
     pub material: u32,
-    /// Unit direction from the hit towards the eye (the outgoing direction).
-    pub wo: [f32; 3],
+    /// Product of specular reflectances along this iteration's eye path.
+    pub throughput: [f32; 3],
     /// Squared gather radius `r2` (ALGORITHM.md 1.4).
     pub r2: f32,
-    /// Product of specular reflectances along the eye path.
-    pub throughput: [f32; 3],
+    /// Accumulated flux `tau` (power times throughput times BRDF), per channel.
+    pub tau: [f32; 3],
     /// Accumulated photon count `n` (fractional: it grows by `alpha * M`).
     pub n: f32,
-    /// Accumulated flux `tau` (power times BRDF), per channel.
-    pub tau: [f32; 3],
-    /// Photons emitted so far for this hit point: the normaliser of ALGORITHM.md 1.5.
-    pub emitted: f32,
-    /// Radiance leaving the hit towards the eye from emission plus explicit direct light.
+    /// Sum over the slot's iterations of the radiance towards the eye from emission seen and
+    /// explicit direct light, times the eye path's throughput.
     pub direct: [f32; 3],
+    /// Photons emitted so far for this slot: the normaliser of ALGORITHM.md 1.5.
+    pub emitted: f32,
+    /// Iterations summed in `direct`.
+    pub iterations: u32,
     /// [`hit_flags`] bits.
     pub flags: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
 }
 
 impl HitPoint {
-    /// An empty slot for `pixel`: no surface, no statistics.
+    /// An empty slot for `pixel`: no visible point, no statistics.
     pub fn empty(pixel: u32) -> Self {
         Self {
             pixel,
@@ -76,9 +90,15 @@ impl HitPoint {
         }
     }
 
-    /// Whether the slot holds a hit point.
+    /// Whether the slot has a visible point this iteration.
     pub fn is_valid(&self) -> bool {
         self.flags & hit_flags::VALID != 0
+    }
+
+    /// Mean direct radiance over the slot's iterations (zero before the first).
+    pub fn direct_mean(&self) -> [f32; 3] {
+        let k = self.iterations.max(1) as f32;
+        self.direct.map(|d| d / k)
     }
 }
 
@@ -200,40 +220,60 @@ pub struct GpuCamera {
     pub _pad1: u32,
 }
 
+/// Bits of [`EyePassParams::flags`].
+pub mod eye_flags {
+    /// Keep each slot's statistics and replace only its visible point (an `sppm` iteration);
+    /// without it every slot starts fresh (`r2 = r2_initial`, everything else zero).
+    pub const KEEP_STATISTICS: u32 = 1;
+    /// Shoot through a random point of the pixel even with one sample per pixel (`sppm`);
+    /// without it one sample per pixel goes through the pixel's centre.
+    pub const JITTER: u32 = 2;
+}
+
 /// Parameters of one eye pass. 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct EyePassParams {
     /// Run seed.
     pub seed: u32,
-    /// Eye samples per pixel; 1 shoots through the pixel centre.
+    /// Eye samples (slots) per pixel.
     pub spp: u32,
     /// Specular bounces after which an eye path is dropped.
     pub max_depth: u32,
-    /// Frame index (keys the random generator so each frame draws fresh numbers).
-    pub frame: u32,
-    /// Initial squared radius given to every new hit point.
+    /// Keys the random generator: the iteration (`sppm`) or the frame (`ppm`).
+    pub iteration: u32,
+    /// Initial squared radius given to every fresh slot.
     pub r2_initial: f32,
     /// Offset along the normal for new ray origins, against self-intersection.
     pub ray_epsilon: f32,
+    /// [`eye_flags`] bits.
+    pub flags: u32,
     /// Padding.
     pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
 }
 
-/// Parameters of the direct-light pass. 16 bytes.
+/// Parameters of the direct-light pass. 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct DirectLightParams {
     /// Run seed.
     pub seed: u32,
-    /// Shadow rays per hit point (0 when photons carry direct light).
+    /// Samples per hit point (0 when photons carry direct light): each a shadow ray and a
+    /// cosine ray.
     pub samples: u32,
-    /// Frame index.
-    pub frame: u32,
+    /// Keys the random generator: the iteration (`sppm`) or the frame (`ppm`).
+    pub iteration: u32,
     /// Offset along the normal for shadow-ray origins.
     pub ray_epsilon: f32,
+    /// 1: add this estimate to each slot's direct sum as one more iteration (`sppm`);
+    /// 0: replace the sum with it (`ppm`, once per frame).
+    pub accumulate: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
 
 /// How the photon pass treats the first surface a photon meets after leaving the light.
@@ -429,7 +469,7 @@ mod tests {
             ("GpuLight", size_of::<GpuLight>(), 64),
             ("GpuCamera", size_of::<GpuCamera>(), 64),
             ("EyePassParams", size_of::<EyePassParams>(), 32),
-            ("DirectLightParams", size_of::<DirectLightParams>(), 16),
+            ("DirectLightParams", size_of::<DirectLightParams>(), 32),
             ("PhotonPassParams", size_of::<PhotonPassParams>(), 32),
             ("GatherParams", size_of::<GatherParams>(), 16),
             ("GridParams", size_of::<GridParams>(), 48),
@@ -441,6 +481,7 @@ mod tests {
         }
         assert_eq!(align_of::<HitPoint>(), 4);
         assert_eq!(std::mem::offset_of!(HitPoint, r2), 44);
-        assert_eq!(std::mem::offset_of!(HitPoint, tau), 64);
+        assert_eq!(std::mem::offset_of!(HitPoint, tau), 48);
+        assert_eq!(std::mem::offset_of!(HitPoint, iterations), 80);
     }
 }

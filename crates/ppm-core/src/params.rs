@@ -1,7 +1,52 @@
 //! Settings of one render, with checks that name the offending option.
 
 use crate::scene::{Scene, SceneError};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+/// Which progressive estimator renders (ALGORITHM.md 1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Estimator {
+    /// Stochastic progressive photon mapping: a fresh jittered eye sample per pixel every
+    /// iteration, statistics and direct light accumulated per slot. Consistent: converges to
+    /// the pixel's true average, edges and direct light included.
+    #[default]
+    Sppm,
+    /// The thesis's progressive photon mapping: hit points traced once per frame, direct
+    /// light drawn once per frame. Converges to the radiance at its fixed sample points.
+    Ppm,
+}
+
+impl Estimator {
+    /// The name on the command line and in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Sppm => "sppm",
+            Estimator::Ppm => "ppm",
+        }
+    }
+
+    /// Shadow-ray samples per hit point by default: one per iteration (`sppm`, where they
+    /// average over iterations), or sixteen once per frame (`ppm`).
+    pub fn default_direct_samples(self) -> u32 {
+        match self {
+            Estimator::Sppm => 1,
+            Estimator::Ppm => 16,
+        }
+    }
+}
+
+impl std::str::FromStr for Estimator {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "sppm" => Ok(Estimator::Sppm),
+            "ppm" => Ok(Estimator::Ppm),
+            _ => Err(format!("unknown estimator '{s}' (estimators: sppm, ppm)")),
+        }
+    }
+}
 
 /// Where direct light comes from (ALGORITHM.md 1.2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -22,7 +67,7 @@ pub struct RenderParams {
     pub height: u32,
     /// Eye samples per pixel.
     pub spp: u32,
-    /// Photon passes (the render may stop earlier on `time_budget`).
+    /// Iterations, each one photon pass (the render may stop earlier on `time_budget`).
     pub passes: u32,
     /// Photons per pass.
     pub photons_per_pass: u32,
@@ -40,8 +85,11 @@ pub struct RenderParams {
     pub max_photon_depth: u32,
     /// Source of direct light.
     pub direct: DirectMode,
-    /// Shadow rays per hit point in explicit mode.
+    /// Shadow-ray samples per hit point in explicit mode: per iteration (`sppm`) or per
+    /// frame (`ppm`).
     pub direct_samples: u32,
+    /// The progressive estimator.
+    pub estimator: Estimator,
 }
 
 impl RenderParams {
@@ -60,7 +108,8 @@ impl RenderParams {
             max_eye_depth: 64,
             max_photon_depth: 64,
             direct: DirectMode::Explicit,
-            direct_samples: 16,
+            direct_samples: scene.render.estimator.default_direct_samples(),
+            estimator: scene.render.estimator,
         }
     }
 
@@ -120,5 +169,89 @@ impl RenderParams {
     /// Number of hit-point slots.
     pub fn slots(&self) -> usize {
         self.width as usize * self.height as usize * self.spp as usize
+    }
+}
+
+/// How a render follows a move (ALGORITHM.md 2, 3 and 3b): one row per mode, for every
+/// command, report and test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MoveMode {
+    /// Start over from scratch on the new pose.
+    Restart,
+    /// The thesis: point light at the lights' centre, raw `M`, unweighted guided photons.
+    Thesis,
+    /// Every light point, `M` in ordinary-photon units, defensively weighted guides.
+    Area,
+    /// Area mode's guides, but the compensation traces ordinary photons in both poses with
+    /// the same random numbers, so every path the move changed is removed and re-added, not
+    /// only those whose first segment crosses the emitting rectangle.
+    Difference,
+}
+
+impl MoveMode {
+    /// Every mode, in report order.
+    pub const ALL: [MoveMode; 4] = [
+        MoveMode::Restart,
+        MoveMode::Thesis,
+        MoveMode::Area,
+        MoveMode::Difference,
+    ];
+
+    /// The mode's name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            MoveMode::Restart => "restart",
+            MoveMode::Thesis => "thesis",
+            MoveMode::Area => "area",
+            MoveMode::Difference => "difference",
+        }
+    }
+}
+
+impl std::str::FromStr for MoveMode {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        MoveMode::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = MoveMode::ALL.iter().map(|m| m.name()).collect();
+                format!("unknown mode '{s}' (modes: {})", names.join(", "))
+            })
+    }
+}
+
+/// Settings of the passes that follow a move.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MoveParams {
+    /// Compensation passes (and as many positive region passes) per move (thesis and area).
+    pub compensation_passes: u32,
+    /// Photons per compensation or region pass (the thesis: 256 x 256).
+    pub region_photons: u32,
+    /// Half-angle of the guided photons' jitter cone, degrees (the thesis: within 10).
+    pub cone_deg: f32,
+    /// Probability of an ordinary direction in the defensive mixture.
+    pub beta: f32,
+    /// Recorded paths kept for guiding (a stride subsample beyond this).
+    pub max_recorded: usize,
+    /// Distance beyond which a hit point counts as moved, relative to the scene's extent.
+    pub update_epsilon: f32,
+    /// Difference passes per move (each one negative and one positive ordinary pass).
+    pub difference_passes: u32,
+}
+
+impl Default for MoveParams {
+    fn default() -> Self {
+        Self {
+            compensation_passes: 4,
+            region_photons: 256 * 256,
+            cone_deg: 10.0,
+            beta: 0.25,
+            max_recorded: 1024,
+            update_epsilon: 1e-4,
+            difference_passes: 8,
+        }
     }
 }

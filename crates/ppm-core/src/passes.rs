@@ -116,15 +116,20 @@ pub trait SceneUpload {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
 }
 
-/// Eye pass (ALGORITHM.md 1.1): fills the hit-point buffer, `width * height * spp` slots.
+/// Eye pass (ALGORITHM.md 1.1): the visible point of every slot, `width * height * spp`.
 pub trait EyePass {
-    /// Traces the eye paths and writes fresh hit points with `r2 = params.r2_initial`.
+    /// Traces one eye path per slot and writes its visible point. Without
+    /// [`crate::layout::eye_flags::KEEP_STATISTICS`] the slots start fresh (`r2 =
+    /// params.r2_initial`, all else zero, the buffer allocated to the camera's size); with it
+    /// they keep their statistics (and the `UPDATED` flag) and only the visible point changes.
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError>;
 }
 
-/// Direct light at every hit point by shadow rays (ALGORITHM.md 1.2).
+/// Direct light at every visible point (ALGORITHM.md 1.2).
 pub trait DirectLight {
-    /// Writes each hit point's `direct` field (emission seen plus reflected direct light).
+    /// Estimates emission seen plus reflected direct light at each visible point, times the
+    /// eye path's throughput (zero for a slot without one), and adds it to the slot's direct
+    /// sum as one more iteration, or replaces the sum with it (`params.accumulate`).
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError>;
 }
 
@@ -134,15 +139,19 @@ pub trait PhotonPass {
     fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError>;
 }
 
-/// Gather pass (ALGORITHM.md 1.4): folds the current photon map into every hit point.
+/// Gather pass (ALGORITHM.md 1.4): folds the current photon map into the slots.
 pub trait GatherPass {
-    /// Updates `n`, `r2`, `tau` and `emitted` of the hit points; fails on a non-finite result.
+    /// Updates `n`, `r2` and `tau` of the slots that gather this pass's kind and have a
+    /// visible point (flux times throughput times BRDF), and adds the pass's photons to
+    /// `emitted` of every slot the kind serves, visible point or not (a slot whose eye path
+    /// escaped this iteration still counts the photons: its estimate averages over
+    /// iterations); fails on a non-finite result.
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError>;
 }
 
-/// Resolve (ALGORITHM.md 1.5): the image from the hit points.
+/// Resolve (ALGORITHM.md 1.5): the image from the slots' statistics.
 pub trait Resolve {
-    /// Averages `throughput * (direct + indirect)` over each pixel's slots.
+    /// Averages `direct / iterations + tau / (pi r2 emitted)` over each pixel's slots.
     fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError>;
 }
 
@@ -181,10 +190,11 @@ pub trait SceneUpdate {
 
 /// Hit-point update after a move (ALGORITHM.md 2.4).
 pub trait HitPointUpdate {
-    /// Re-runs the eye pass on the current geometry; a slot whose surface changed object,
-    /// validity, or moved more than `epsilon` is reset (`n = 0`, `tau = 0`,
-    /// `r2 = r2_initial`, `emitted = 0`) and flagged `UPDATED`; the others keep their
-    /// statistics. Flags of earlier updates are cleared.
+    /// Re-runs the eye pass on the current geometry (with `params` keyed as the last
+    /// iteration's, so each slot traces the same sample); a slot whose visible point changed
+    /// object, validity, or moved more than `epsilon` starts fresh and is flagged `UPDATED`;
+    /// the others keep `n`, `r2`, `tau` and `emitted`. Every slot's direct sum restarts
+    /// (direct light is recomputed for all). Flags of earlier updates are cleared.
     fn update_hit_points(
         &mut self,
         params: &EyePassParams,

@@ -92,6 +92,7 @@ pub fn furnace(albedo: Vec3, le: f32) -> Scene {
             alpha: 0.7,
             photons_per_pass: 50_000,
             passes: 16,
+            ..RenderDefaults::default()
         },
         moves: Vec::new(),
     }

@@ -122,6 +122,7 @@ pub fn wedding_band() -> Result<Scene, SceneError> {
             alpha: 0.7,
             photons_per_pass: 200_000,
             passes: 32,
+            ..RenderDefaults::default()
         },
         moves: vec![Move {
             object: 2,

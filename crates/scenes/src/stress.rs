@@ -5,7 +5,7 @@
 use crate::analytic::{furnace, specular_furnace};
 use glam::Vec3;
 use ppm_core::layout::HitPoint;
-use ppm_core::params::RenderParams;
+use ppm_core::params::{MoveMode, RenderParams};
 use ppm_core::scene::{Material, MaterialKind, Object, Scene, quad_triangles};
 
 /// What a case must produce besides finite, in-range statistics.
@@ -25,24 +25,13 @@ pub enum Expected {
     FiniteOrRefused,
 }
 
-/// How a moving case compensates (the harness's compensating modes).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Compensating {
-    /// Point light at the lights' centre, raw counts, unweighted guides.
-    Thesis,
-    /// Every light point, weighted counts and guides.
-    Area,
-    /// Ordinary photons traced in both poses.
-    Difference,
-}
-
 /// A move to run through compensation photons (ALGORITHM.md 2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MoveStress {
     /// Photons per compensation pass (two passes each way).
     pub region_photons: u32,
     /// The compensating mode.
-    pub mode: Compensating,
+    pub mode: MoveMode,
 }
 
 /// A ready-to-render case.
@@ -75,7 +64,8 @@ fn small(scene: &Scene) -> RenderParams {
     p.height = 16;
     p.passes = 4;
     p.photons_per_pass = 20_000;
-    p.direct_samples = 64;
+    // Per iteration with sppm: 64 over the four iterations.
+    p.direct_samples = 16;
     p
 }
 
@@ -492,7 +482,7 @@ pub const STRESS: &[StressCase] = &[
             move_case(
                 MoveStress {
                     region_photons: 400_000,
-                    mode: Compensating::Area,
+                    mode: MoveMode::Area,
                 },
                 2_000,
             )
@@ -505,7 +495,7 @@ pub const STRESS: &[StressCase] = &[
             move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    mode: Compensating::Thesis,
+                    mode: MoveMode::Thesis,
                 },
                 20_000,
             )
@@ -518,7 +508,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    mode: Compensating::Thesis,
+                    mode: MoveMode::Thesis,
                 },
                 20_000,
             );
@@ -538,7 +528,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    mode: Compensating::Area,
+                    mode: MoveMode::Area,
                 },
                 20_000,
             );
@@ -559,7 +549,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    mode: Compensating::Area,
+                    mode: MoveMode::Area,
                 },
                 20_000,
             );
@@ -578,7 +568,7 @@ pub const STRESS: &[StressCase] = &[
             let mut s = move_case(
                 MoveStress {
                     region_photons: 20_000,
-                    mode: Compensating::Difference,
+                    mode: MoveMode::Difference,
                 },
                 20_000,
             );

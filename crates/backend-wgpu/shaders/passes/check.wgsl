@@ -1,5 +1,5 @@
 // #import layout
-// Finiteness check after every pass that writes hit points: records the lowest slot holding
+// Finiteness check after every pass that writes slots: records the lowest slot holding
 // NaN or infinity, so the host reports it (with ppm_core::check) instead of rendering it.
 
 @group(0) @binding(0) var<storage, read> hit_points: array<HitPoint>;
@@ -12,11 +12,13 @@ fn check_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
         return;
     }
     let hp = hit_points[slot];
-    if (hp.flags & HIT_VALID) == 0u {
-        return;
+    // Statistics outlive the visible point: checked in every slot; the visible point where
+    // there is one.
+    var finite = is_finite_vec3(hp.direct) && is_finite_vec3(hp.tau) && is_finite_f32(hp.r2)
+        && is_finite_f32(hp.n) && is_finite_f32(hp.emitted);
+    if (hp.flags & HIT_VALID) != 0u {
+        finite = finite && is_finite_vec3(hp.position) && is_finite_vec3(hp.throughput);
     }
-    let finite = is_finite_vec3(hp.position) && is_finite_vec3(hp.direct) && is_finite_vec3(hp.tau)
-        && is_finite_vec3(hp.throughput) && is_finite_f32(hp.r2) && is_finite_f32(hp.n) && is_finite_f32(hp.emitted);
     if !finite {
         atomicMin(&counters[COUNTER_FIRST_BAD], slot);
     }

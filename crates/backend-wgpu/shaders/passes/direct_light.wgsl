@@ -58,15 +58,23 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     var hp = hit_points[slot];
-    if (hp.flags & HIT_VALID) == 0u {
-        return;
+    var estimate = vec3<f32>(0.0);
+    if (hp.flags & HIT_VALID) != 0u {
+        let material = materials[hp.material];
+        var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
+        if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && arrayLength(&lights) > 0u {
+            let key = StreamKey(params.seed, PASS_DIRECT_LIGHT, params.iteration, slot);
+            direct += estimate_irradiance(hp, key) * material.albedo * (1.0 / PI);
+            atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
+        }
+        estimate = hp.throughput * direct;
     }
-    let material = materials[hp.material];
-    var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
-    if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && arrayLength(&lights) > 0u {
-        let key = StreamKey(params.seed, PASS_DIRECT_LIGHT, params.frame, slot);
-        direct += estimate_irradiance(hp, key) * material.albedo * (1.0 / PI);
+    if params.accumulate != 0u {
+        hp.direct += estimate;
+        hp.iterations += 1u;
+    } else {
+        hp.direct = estimate;
+        hp.iterations = 1u;
     }
-    hit_points[slot].direct = direct;
-    atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
+    hit_points[slot] = hp;
 }

@@ -1,5 +1,6 @@
 // #import layout rng sampling geometry bvh
-// Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs.
+// Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
+// visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
@@ -11,9 +12,19 @@
 
 const DIM_GLASS: u32 = 2u;
 
-fn empty_hit_point(pixel: u32) -> HitPoint {
+// The slot before this iteration's eye path: fresh, or its statistics without a visible point.
+fn cleared_slot(slot: u32, pixel: u32) -> HitPoint {
     var hp: HitPoint;
-    hp.pixel = pixel;
+    if (params.flags & EYE_KEEP_STATISTICS) != 0u {
+        hp = hit_points[slot];
+        hp.position = vec3<f32>(0.0);
+        hp.normal = vec3<f32>(0.0);
+        hp.throughput = vec3<f32>(0.0);
+        hp.flags &= HIT_UPDATED;
+    } else {
+        hp.pixel = pixel;
+        hp.r2 = params.r2_initial;
+    }
     hp.material = NO_MATERIAL;
     return hp;
 }
@@ -25,9 +36,9 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         return;
     }
     let pixel = slot / params.spp;
-    let key = StreamKey(params.seed, PASS_EYE, params.frame, slot);
+    let key = StreamKey(params.seed, PASS_EYE, params.iteration, slot);
     var jitter = vec2<f32>(0.5);
-    if params.spp != 1u {
+    if params.spp != 1u || (params.flags & EYE_JITTER) != 0u {
         jitter = vec2<f32>(stream_uniform(key, 0u), stream_uniform(key, 1u));
     }
     let px = f32(pixel % camera.width) + jitter.x;
@@ -35,7 +46,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     var dir = camera_ray(camera, px, py);
     var origin = camera.eye;
     var throughput = vec3<f32>(1.0);
-    var out = empty_hit_point(pixel);
+    var out = cleared_slot(slot, pixel);
     var rays = params.max_depth + 1u;
     for (var depth = 0u; depth <= params.max_depth; depth++) {
         let hit = closest_hit(origin, dir, T_MISS);
@@ -52,10 +63,8 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             out.position = position;
             out.normal = facing;
             out.material = tri.material;
-            out.wo = -dir;
-            out.r2 = params.r2_initial;
             out.throughput = throughput;
-            out.flags = HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
+            out.flags |= HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
             rays = depth + 1u;
             break;
         }

@@ -65,11 +65,9 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);
 }
 
-fn gathers(hp: HitPoint, kind: u32) -> bool {
+// Whether a slot belongs to the set the pass kind serves, visible point or not.
+fn serves(hp: HitPoint, kind: u32) -> bool {
     let updated = (hp.flags & HIT_UPDATED) != 0u;
-    if (hp.flags & HIT_VALID) == 0u {
-        return false;
-    }
     switch kind & GATHER_KIND_MASK {
         case GATHER_REGION_NEGATIVE, GATHER_REGION_POSITIVE: {
             return !updated;
@@ -81,6 +79,11 @@ fn gathers(hp: HitPoint, kind: u32) -> bool {
             return true;
         }
     }
+}
+
+// Whether a slot gathers the pass: served, with a visible point.
+fn gathers(hp: HitPoint, kind: u32) -> bool {
+    return (hp.flags & HIT_VALID) != 0u && serves(hp, kind);
 }
 
 fn store(slot: u32, hp_in: HitPoint, s: Statistics, emitted: f32) {
@@ -121,6 +124,9 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     if !gathers(hp, params.kind) {
+        if serves(hp, params.kind) && params.emitted_increment != 0.0 {
+            hit_points[slot].emitted = hp.emitted + params.emitted_increment;
+        }
         return;
     }
     let found = acc.w;
@@ -134,7 +140,7 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         m = weight_sum * scale;
     }
     let brdf = materials[hp.material].albedo * (1.0 / PI);
-    let dtau = acc.xyz * brdf * scale;
+    let dtau = acc.xyz * hp.throughput * brdf * scale;
     if found > 0.0 {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
         atomicAdd(&counters[COUNTER_GATHERED], u32(found));

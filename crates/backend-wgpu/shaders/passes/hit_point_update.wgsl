@@ -1,6 +1,7 @@
 // #import layout
 // Hit-point update (ALGORITHM.md 2.4): the twin of backend-cpu's hit_point_update.rs. The eye
-// pass has written `fresh` for the new pose; slots whose surface changed take it, reset.
+// pass has written `fresh` for the new pose; slots whose visible point changed take it,
+// reset; every slot's direct sum restarts.
 
 struct UpdateParams {
     epsilon: f32,
@@ -32,6 +33,8 @@ fn hit_point_update_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
     }
     if same {
         old.flags &= ~HIT_UPDATED;
+        old.direct = vec3<f32>(0.0);
+        old.iterations = 0u;
         hit_points[slot] = old;
         return;
     }

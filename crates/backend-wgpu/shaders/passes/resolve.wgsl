@@ -14,9 +14,7 @@ fn resolve_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < params.spp; s++) {
         let hp = hit_points[pixel * params.spp + s];
-        if (hp.flags & HIT_VALID) != 0u {
-            sum += hp.throughput * (hp.direct + radiance(hp.tau, hp.r2, hp.emitted));
-        }
+        sum += hp.direct / f32(max(hp.iterations, 1u)) + radiance(hp.tau, hp.r2, hp.emitted);
     }
     let c = sum / f32(params.spp);
     image[3u * pixel] = c.x;

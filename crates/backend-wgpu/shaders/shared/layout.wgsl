@@ -25,14 +25,16 @@ struct HitPoint {
     pixel: u32,
     normal: vec3<f32>,
     material: u32,
-    wo: vec3<f32>,
-    r2: f32,
     throughput: vec3<f32>,
-    n: f32,
+    r2: f32,
     tau: vec3<f32>,
-    emitted: f32,
+    n: f32,
     direct: vec3<f32>,
+    emitted: f32,
+    iterations: u32,
     flags: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 struct Photon {
@@ -89,22 +91,29 @@ struct GpuCamera {
     _pad1: u32,
 }
 
+const EYE_KEEP_STATISTICS: u32 = 1u;
+const EYE_JITTER: u32 = 2u;
+
 struct EyePassParams {
     seed: u32,
     spp: u32,
     max_depth: u32,
-    frame: u32,
+    iteration: u32,
     r2_initial: f32,
     ray_epsilon: f32,
+    flags: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 struct DirectLightParams {
     seed: u32,
     samples: u32,
-    frame: u32,
+    iteration: u32,
     ray_epsilon: f32,
+    accumulate: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct PhotonPassParams {

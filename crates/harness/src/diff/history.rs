@@ -3,11 +3,12 @@
 use super::Recording;
 use ppm_core::params::RenderParams;
 use serde::Serialize;
+use std::fmt::Write as _;
 
 /// One hit point's state after one pass on one backend.
 #[derive(Clone, Debug, Serialize)]
 pub struct HistoryRow {
-    /// Pass (0 = after eye pass and direct light).
+    /// Iteration (from 1).
     pub pass: u32,
     /// Backend.
     pub backend: String,
@@ -25,6 +26,8 @@ pub struct HistoryRow {
     pub r2: f32,
     /// Flux.
     pub flux: [f32; 3],
+    /// Mean direct radiance over the slot's iterations.
+    pub direct: [f32; 3],
 }
 
 /// The history of pixel `(x, y)` on both recordings, interleaved pass by pass.
@@ -42,7 +45,7 @@ pub fn pixel_history(
             for s in 0..params.spp as usize {
                 let hp = &rec.passes[pass][pixel * params.spp as usize + s];
                 rows.push(HistoryRow {
-                    pass: pass as u32,
+                    pass: pass as u32 + 1,
                     backend: rec.backend.clone(),
                     sample: s as u32,
                     valid: hp.is_valid(),
@@ -51,9 +54,46 @@ pub fn pixel_history(
                     n: hp.n,
                     r2: hp.r2,
                     flux: hp.tau,
+                    direct: hp.direct_mean(),
                 });
             }
         }
     }
     rows
+}
+
+/// The pixel-history table.
+pub fn format(rows: &[HistoryRow]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:>4} {:<6} {:>2} {:<34} {:<24} {:>10} {:>11} flux",
+        "pass", "back", "s", "position", "normal", "n", "r2"
+    );
+    for r in rows {
+        let v3 = |v: [f32; 3]| format!("{:.4} {:.4} {:.4}", v[0], v[1], v[2]);
+        if !r.valid {
+            let _ = writeln!(
+                s,
+                "{:>4} {:<6} {:>2} (no hit point)",
+                r.pass, r.backend, r.sample
+            );
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{:>4} {:<6} {:>2} {:<34} {:<24} {:>10.3} {:>11.5e} {:.5e} {:.5e} {:.5e}",
+            r.pass,
+            r.backend,
+            r.sample,
+            v3(r.position),
+            format!("{:.3} {:.3} {:.3}", r.normal[0], r.normal[1], r.normal[2]),
+            r.n,
+            r.r2,
+            r.flux[0],
+            r.flux[1],
+            r.flux[2]
+        );
+    }
+    s
 }

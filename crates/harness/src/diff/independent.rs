@@ -2,7 +2,7 @@
 //! two sets are samples of the same estimator if the backends agree.
 //!
 //! The image is cut into tiles; for each tile and each quantity (mean radiance R, G, B, mean
-//! `r2`, mean `n` over its hit points) Welch's t-test compares the two sets of per-run tile
+//! `r2`, mean `n` and mean direct luminance over its slots) Welch's t-test compares the two sets of per-run tile
 //! means. Holm's step-down correction over all those tests keeps the probability of declaring
 //! agreeing backends different at most `alpha` (the stated false-alarm rate), whatever the
 //! number of tiles. Runs are independent samples, so the test is exact up to the normal
@@ -14,6 +14,7 @@ use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::RenderParams;
 use serde::Serialize;
+use std::fmt::Write as _;
 
 /// Family-wise false-alarm rate of the comparison.
 pub const ALPHA: f64 = 0.01;
@@ -34,8 +35,15 @@ fn tile_t(a: &[f64], b: &[f64]) -> (f64, f64) {
 pub type TileMeans = Vec<[f64; QUANTITIES]>;
 
 /// Quantities tested per tile.
-pub const QUANTITIES: usize = 5;
-const QUANTITY_NAMES: [&str; QUANTITIES] = ["radiance.r", "radiance.g", "radiance.b", "r2", "n"];
+pub const QUANTITIES: usize = 6;
+const QUANTITY_NAMES: [&str; QUANTITIES] = [
+    "radiance.r",
+    "radiance.g",
+    "radiance.b",
+    "r2",
+    "n",
+    "direct",
+];
 
 /// Tiles per image side (fewer for tiny images).
 fn tiles_per_side(pixels: u32) -> u32 {
@@ -47,7 +55,7 @@ pub fn tile_means(image: &Image, hit_points: &[HitPoint], params: &RenderParams)
     let (tx, ty) = (tiles_per_side(params.width), tiles_per_side(params.height));
     let mut sums = vec![[0.0f64; QUANTITIES]; (tx * ty) as usize];
     let mut pixels = vec![0.0f64; sums.len()];
-    let mut valid = vec![0.0f64; sums.len()];
+    let mut slots = vec![0.0f64; sums.len()];
     let tile = |x: u32, y: u32| ((y * ty / params.height) * tx + x * tx / params.width) as usize;
     for y in 0..params.height {
         for x in 0..params.width {
@@ -59,19 +67,20 @@ pub fn tile_means(image: &Image, hit_points: &[HitPoint], params: &RenderParams)
             pixels[t] += 1.0;
         }
     }
-    for hp in hit_points.iter().filter(|h| h.is_valid()) {
+    for hp in hit_points {
         let (x, y) = (hp.pixel % params.width, hp.pixel / params.width);
         let t = tile(x, y);
         sums[t][3] += f64::from(hp.r2);
         sums[t][4] += f64::from(hp.n);
-        valid[t] += 1.0;
+        sums[t][5] += super::luminance(hp.direct_mean());
+        slots[t] += 1.0;
     }
     sums.iter()
         .enumerate()
         .map(|(t, s)| {
             let p = pixels[t].max(1.0);
-            let v = valid[t].max(1.0);
-            [s[0] / p, s[1] / p, s[2] / p, s[3] / v, s[4] / v]
+            let v = slots[t].max(1.0);
+            [s[0] / p, s[1] / p, s[2] / p, s[3] / v, s[4] / v, s[5] / v]
         })
         .collect()
 }
@@ -204,4 +213,40 @@ pub fn heat(reference: &[TileMeans], other: &[TileMeans], params: &RenderParams)
         }
     }
     heat_map(params.width, params.height, &values)
+}
+
+/// The independent-seed table.
+pub fn format(r: &IndependentReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "independent seeds: {} vs {}, {} runs each",
+        r.reference, r.other, r.runs
+    );
+    let _ = writeln!(
+        s,
+        "{} tile tests (Welch t, Holm-corrected), false-alarm rate {}: {} rejected, smallest p {:.3e}",
+        r.tests, r.alpha, r.rejected, r.min_p
+    );
+    let _ = writeln!(
+        s,
+        "{:>5} {:>5} {:<11} {:>13} {:>13} {:>9} {:>10}",
+        "tx", "ty", "quantity", "reference", "other", "t", "p"
+    );
+    for t in &r.worst {
+        let _ = writeln!(
+            s,
+            "{:>5} {:>5} {:<11} {:>13.5e} {:>13.5e} {:>9.3} {:>10.3e}{}",
+            t.tile_x,
+            t.tile_y,
+            t.quantity,
+            t.reference_mean,
+            t.other_mean,
+            t.t,
+            t.p,
+            if t.rejected { "  rejected" } else { "" }
+        );
+    }
+    let _ = writeln!(s, "verdict: {}", if r.agree { "agree" } else { "DISAGREE" });
+    s
 }

@@ -6,50 +6,89 @@ pub mod history;
 pub mod independent;
 pub mod same_seed;
 
-use crate::render::{Progress, render};
+use crate::driver::schedule::EachIteration;
+use crate::driver::{Budget, RunError, Schedule, run};
+use independent::{TileMeans, tile_means};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
-use ppm_core::params::RenderParams;
-use ppm_core::passes::{Backend, BackendError};
+use ppm_core::params::{MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 
-/// A render with the hit-point buffer read back after every pass.
+/// A render with the slot buffer read back after every iteration.
 pub struct Recording {
     /// Backend name.
     pub backend: String,
-    /// `passes[0]` after direct light, `passes[k]` after photon pass k.
+    /// `passes[k]` after iteration `k + 1`.
     pub passes: Vec<Vec<HitPoint>>,
     /// The resolved image.
     pub image: Image,
 }
 
-/// Renders `scene` on `backend`, keeping every pass's hit points (for diagnosis, not speed).
+/// Renders `scene` at `frame` for `params.passes` iterations on `backend`, keeping every
+/// iteration's slots (for diagnosis, not speed).
 pub fn record(
-    backend: &mut dyn Backend,
+    backend: &mut dyn DynamicBackend,
     scene: &Scene,
     frame: u32,
     params: &RenderParams,
-) -> Result<Recording, BackendError> {
+) -> Result<Recording, RunError> {
     let mut passes = Vec::new();
-    let mut failure = None;
-    let outcome = render(
+    let mut observer = EachIteration(|_: &_, r: &mut crate::driver::Renderer| {
+        passes.push(r.backend().read_hit_points()?);
+        Ok(())
+    });
+    let schedule = Schedule::frame(frame, Budget::iterations(params.passes));
+    let outcome = run(
         backend,
         scene,
-        frame,
         params,
-        &mut |_: Progress, b: &mut dyn Backend| match b.read_hit_points() {
-            Ok(hps) => passes.push(hps),
-            Err(e) => failure = failure.take().or(Some(e)),
-        },
+        &MoveParams::default(),
+        &schedule,
+        &mut observer,
     )?;
-    if let Some(e) = failure.or(outcome.error) {
-        return Err(e);
+    if let Some(e) = outcome.error {
+        return Err(e.into());
     }
     Ok(Recording {
         backend: backend.name().to_owned(),
         passes,
         image: outcome.image,
     })
+}
+
+/// Seed offset of the compared backend's runs: far from the reference's, so no run of one
+/// shares a seed with a run of the other.
+pub const OTHER_SEED_OFFSET: u32 = 1000;
+
+/// `runs` renders of frame 0 for `params.passes` iterations with seeds
+/// `params.seed + offset + k`, reduced to tile means.
+pub fn runs_of(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    runs: u32,
+    offset: u32,
+) -> Result<Vec<TileMeans>, RunError> {
+    let mut out = Vec::new();
+    for k in 0..runs {
+        let mut p = params.clone();
+        p.seed = params.seed.wrapping_add(offset + k);
+        let schedule = Schedule::frame(0, Budget::iterations(p.passes));
+        let outcome = run(
+            backend,
+            scene,
+            &p,
+            &MoveParams::default(),
+            &schedule,
+            &mut (),
+        )?;
+        if let Some(e) = outcome.error {
+            return Err(e.into());
+        }
+        out.push(tile_means(&outcome.image, &backend.read_hit_points()?, &p));
+    }
+    Ok(out)
 }
 
 /// Pixel coordinates `(x, y)` of a hit-point slot.

@@ -16,6 +16,7 @@ use ppm_core::layout::HitPoint;
 use ppm_core::metrics::relative_rmse;
 use ppm_core::params::RenderParams;
 use serde::Serialize;
+use std::fmt::Write as _;
 
 /// Relative tolerance of a field.
 pub const RELATIVE_TOLERANCE: f64 = 1e-3;
@@ -27,7 +28,7 @@ pub const IMAGE_TOLERANCE: f64 = 1e-2;
 /// Agreement of one field over all compared slots.
 #[derive(Clone, Debug, Serialize)]
 pub struct FieldAgreement {
-    /// `flux`, `r2`, `n` or `valid`.
+    /// `flux`, `r2`, `n`, `direct`, `iterations` or `valid`.
     pub field: &'static str,
     /// Share of slots within tolerance after the last pass.
     pub share: f64,
@@ -52,14 +53,14 @@ pub struct Divergence {
     pub other: f64,
     /// Relative difference.
     pub relative: f64,
-    /// First pass at which any field left tolerance (0 = eye pass and direct light).
+    /// First iteration (from 1) after which any field left tolerance.
     pub first_pass: u32,
 }
 
-/// How many hit points first diverged at a pass.
+/// How many hit points first diverged at an iteration.
 #[derive(Clone, Debug, Serialize)]
 pub struct PassCount {
-    /// Pass (0 = eye pass and direct light).
+    /// Iteration (from 1).
     pub pass: u32,
     /// Hit points that first diverged there.
     pub hit_points: usize,
@@ -92,27 +93,34 @@ pub struct SameSeedReport {
     pub agree: bool,
 }
 
-/// One slot's comparable fields: flux (three channels), r2, n, valid.
-fn fields(hp: &HitPoint) -> [(&'static str, f64); 6] {
+/// One slot's comparable fields: flux and direct sum (three channels each), r2, n, the
+/// direct sum's iteration count, and whether it has a visible point.
+fn fields(hp: &HitPoint) -> [(&'static str, f64); 10] {
     [
         ("flux", f64::from(hp.tau[0])),
         ("flux", f64::from(hp.tau[1])),
         ("flux", f64::from(hp.tau[2])),
         ("r2", f64::from(hp.r2)),
         ("n", f64::from(hp.n)),
+        ("direct", f64::from(hp.direct[0])),
+        ("direct", f64::from(hp.direct[1])),
+        ("direct", f64::from(hp.direct[2])),
+        ("iterations", f64::from(hp.iterations)),
         ("valid", f64::from(u8::from(hp.is_valid()))),
     ]
 }
 
-const FIELD_NAMES: [&str; 4] = ["flux", "r2", "n", "valid"];
+/// The compared field groups.
+const FIELD_NAMES: [&str; GROUPS] = ["flux", "r2", "n", "direct", "iterations", "valid"];
+const GROUPS: usize = 6;
 
 fn field_slot(name: &str) -> usize {
     FIELD_NAMES.iter().position(|f| *f == name).unwrap_or(0)
 }
 
 /// Per-field absolute floors: a millionth of each field's mean magnitude in the reference.
-fn floors(hps: &[HitPoint]) -> [f64; 4] {
-    let mut sum = [0.0f64; 4];
+fn floors(hps: &[HitPoint]) -> [f64; GROUPS] {
+    let mut sum = [0.0f64; GROUPS];
     for hp in hps {
         for (name, v) in fields(hp) {
             sum[field_slot(name)] += v.abs();
@@ -123,8 +131,12 @@ fn floors(hps: &[HitPoint]) -> [f64; 4] {
 
 /// Per field group of one slot: (largest relative difference, within tolerance, reference
 /// value, other value), the flux group taking its worst channel.
-fn differences(a: &HitPoint, b: &HitPoint, floor: &[f64; 4]) -> [(f64, bool, f64, f64); 4] {
-    let mut out = [(0.0, true, 0.0, 0.0); 4];
+fn differences(
+    a: &HitPoint,
+    b: &HitPoint,
+    floor: &[f64; GROUPS],
+) -> [(f64, bool, f64, f64); GROUPS] {
+    let mut out = [(0.0, true, 0.0, 0.0); GROUPS];
     for ((name, x), (_, y)) in fields(a).into_iter().zip(fields(b)) {
         let k = field_slot(name);
         let scale = x.abs().max(y.abs());
@@ -154,13 +166,13 @@ pub fn compare(
     let (ra, rb) = (&reference.passes[last], &other.passes[last]);
     let floor = floors(ra);
     let slots = ra.len().min(rb.len());
-    let mut within = [0usize; 4];
-    let mut worst_rel = [0.0f64; 4];
+    let mut within = [0usize; GROUPS];
+    let mut worst_rel = [0.0f64; GROUPS];
     let mut all = 0usize;
     let mut worst = Vec::new();
     for i in 0..slots {
         let d = differences(&ra[i], &rb[i], &floor);
-        for k in 0..4 {
+        for k in 0..GROUPS {
             within[k] += usize::from(d[k].1);
             worst_rel[k] = worst_rel[k].max(d[k].0);
         }
@@ -201,7 +213,7 @@ pub fn compare(
     worst.sort_by(|a, b| b.relative.total_cmp(&a.relative).then(a.slot.cmp(&b.slot)));
     worst.truncate(worst_count);
     let share = |n: usize| n as f64 / slots.max(1) as f64;
-    let fields: Vec<FieldAgreement> = (0..4)
+    let fields: Vec<FieldAgreement> = (0..GROUPS)
         .map(|k| FieldAgreement {
             field: FIELD_NAMES[k],
             share: share(within[k]),
@@ -226,14 +238,14 @@ pub fn compare(
     }
 }
 
-/// First pass at which slot `i` left tolerance on any field.
-fn first_divergence(a: &Recording, b: &Recording, i: usize, floor: &[f64; 4]) -> u32 {
+/// First iteration (counted from 1) after which slot `i` left tolerance on any field.
+fn first_divergence(a: &Recording, b: &Recording, i: usize, floor: &[f64; GROUPS]) -> u32 {
     for (pass, (pa, pb)) in a.passes.iter().zip(&b.passes).enumerate() {
         if differences(&pa[i], &pb[i], floor).iter().any(|d| !d.1) {
-            return pass as u32;
+            return pass as u32 + 1;
         }
     }
-    a.passes.len() as u32
+    a.passes.len() as u32 + 1
 }
 
 /// Per-pixel heat map: luminance difference relative to the reference image's mean luminance.
@@ -247,4 +259,64 @@ pub fn heat(reference: &Image, other: &Image) -> Image {
         .map(|(a, b)| (luminance(*a) - luminance(*b)).abs() / mean.max(f64::MIN_POSITIVE))
         .collect();
     heat_map(reference.width, reference.height, &values)
+}
+
+/// The same-seed table.
+pub fn format(r: &SameSeedReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "same seed: {} (reference) vs {}, {} hit-point slots",
+        r.reference, r.other, r.slots
+    );
+    let _ = writeln!(
+        s,
+        "tolerance: relative {:e}; required share per field {:.1}%",
+        r.relative_tolerance,
+        100.0 * r.required_share
+    );
+    let _ = writeln!(
+        s,
+        "{:<8} {:>12} {:>16}",
+        "field", "within tol.", "worst relative"
+    );
+    for f in &r.fields {
+        let _ = writeln!(
+            s,
+            "{:<8} {:>11.4}% {:>16.3e}",
+            f.field,
+            100.0 * f.share,
+            f.worst_relative
+        );
+    }
+    let _ = writeln!(
+        s,
+        "all fields: {:.4}%   image relative RMSE: {:.3e}",
+        100.0 * r.all_fields_share,
+        r.image_relative_rmse
+    );
+    if !r.first_divergence.is_empty() {
+        let passes: Vec<String> = r
+            .first_divergence
+            .iter()
+            .map(|p| format!("pass {}: {}", p.pass, p.hit_points))
+            .collect();
+        let _ = writeln!(s, "first divergence: {}", passes.join(", "));
+    }
+    if !r.worst.is_empty() {
+        let _ = writeln!(
+            s,
+            "{:>6} {:>6} {:<6} {:>14} {:>14} {:>10} {:>6}",
+            "x", "y", "field", "reference", "other", "relative", "from"
+        );
+        for w in &r.worst {
+            let _ = writeln!(
+                s,
+                "{:>6} {:>6} {:<6} {:>14.6e} {:>14.6e} {:>10.3e} {:>6}",
+                w.x, w.y, w.field, w.reference, w.other, w.relative, w.first_pass
+            );
+        }
+    }
+    let _ = writeln!(s, "verdict: {}", if r.agree { "agree" } else { "DISAGREE" });
+    s
 }

@@ -9,6 +9,7 @@ use super::model::{
     Camera, Material, MaterialKind, Move, Object, RenderDefaults, Scene, quad_triangles,
     triangle_area,
 };
+use crate::params::Estimator;
 use glam::{EulerRot, Quat, Vec3};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -51,6 +52,7 @@ struct RenderFile {
     alpha: Option<f32>,
     photons_per_pass: Option<u32>,
     passes: Option<u32>,
+    estimator: Option<Estimator>,
 }
 
 #[derive(Deserialize)]
@@ -273,6 +275,9 @@ impl Converter<'_> {
         }
         if let Some(p) = r.passes {
             d.passes = p;
+        }
+        if let Some(e) = r.estimator {
+            d.estimator = e;
         }
         Ok(d)
     }

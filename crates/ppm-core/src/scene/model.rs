@@ -1,5 +1,6 @@
 //! The scene model: what a scene is, independent of any file format or backend.
 
+use crate::params::Estimator;
 use glam::{Quat, Vec3};
 
 /// A complete scene: camera, materials, named objects, render defaults and the move of frame 1.
@@ -111,8 +112,10 @@ pub struct RenderDefaults {
     pub alpha: f32,
     /// Photons emitted per photon pass.
     pub photons_per_pass: u32,
-    /// Photon passes in a render.
+    /// Iterations (photon passes) in a render.
     pub passes: u32,
+    /// The progressive estimator.
+    pub estimator: Estimator,
 }
 
 impl Default for RenderDefaults {
@@ -122,6 +125,7 @@ impl Default for RenderDefaults {
             alpha: 0.7,
             photons_per_pass: 100_000,
             passes: 16,
+            estimator: Estimator::Sppm,
         }
     }
 }

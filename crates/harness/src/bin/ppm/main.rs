@@ -1,0 +1,82 @@
+//! `ppm`: render the canonical scenes, measure them against the truth, move them, and compare
+//! backends.
+
+mod diff;
+mod moving;
+mod options;
+mod render;
+mod reports;
+mod stress;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "ppm",
+    version,
+    about = "Progressive photon mapping with compensation photons"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene progressively and write EXR, PNG and a JSON report.
+    Render(render::RenderArgs),
+    /// List the built-in scenes.
+    Scenes,
+    /// Render the ground truth with the unbiased reference path tracer (CPU).
+    Reference(render::ReferenceArgs),
+    /// Measure an image against a reference image (EXR files from any renderer).
+    Compare(render::CompareArgs),
+    /// Render one seeded scene on the CPU and wgpu backends and compare them.
+    Diff(diff::DiffArgs),
+    /// Render a scene's move as an animation, carrying the light from frame to frame.
+    Animate(moving::AnimateArgs),
+    /// Measurement reports.
+    #[command(subcommand)]
+    Report(ReportCommand),
+    /// Run the stress family (extreme scales, powers, geometry) and check every invariant.
+    Stress(stress::StressArgs),
+}
+
+#[derive(Subcommand)]
+enum ReportCommand {
+    /// Error against the truth of the new pose over time after a move, per mode.
+    ErrorVsTime(moving::ErrorArgs),
+    /// Error against the truth over time of a render from scratch.
+    Convergence(reports::ConvergenceArgs),
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Scenes => {
+            for s in scenes::BUILTIN {
+                println!("{:<14} {}", s.name, s.description);
+            }
+            Ok(())
+        }
+        Command::Render(args) => render::render(args),
+        Command::Reference(args) => render::reference(args),
+        Command::Compare(args) => render::compare(args),
+        Command::Diff(args) => diff::run(args),
+        Command::Animate(args) => moving::animate(args),
+        Command::Report(ReportCommand::ErrorVsTime(args)) => moving::error_vs_time(args),
+        Command::Report(ReportCommand::Convergence(args)) => reports::convergence(args),
+        Command::Stress(args) => stress::run(args),
+    }
+}

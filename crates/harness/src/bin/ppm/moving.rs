@@ -1,0 +1,229 @@
+//! `ppm animate` and `ppm report error-vs-time`: scenes whose objects move.
+
+use crate::options::{BackendChoice, MoveOptions, RenderOptions, TruthOptions};
+use anyhow::{Context, Result, bail};
+use harness::driver::{
+    Budget, MoveReport, Observer, ObserverResult, Progress, Renderer, Schedule, run,
+};
+use harness::error_report::{self, ErrorSettings};
+use ppm_core::params::{MoveMode, RenderParams};
+use ppm_core::scene::Scene;
+use std::path::PathBuf;
+
+/// Scene, backend and settings of a command on a moving scene.
+#[derive(clap::Args)]
+pub struct MovingArgs {
+    /// Built-in scene name or path to a TOML scene file (its `[[moves]]` define the motion).
+    scene: String,
+    /// Backend.
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: BackendChoice,
+    #[command(flatten)]
+    options: RenderOptions,
+    #[command(flatten)]
+    moves: MoveOptions,
+}
+
+impl MovingArgs {
+    /// The scene (which must move) and its settings, 256x256 unless the options say.
+    fn setup(&self) -> Result<(Scene, RenderParams)> {
+        let scene = harness::load_scene(&self.scene)?;
+        if scene.moves.is_empty() {
+            bail!(
+                "{}: the scene has no [[moves]]: nothing to animate",
+                self.scene
+            );
+        }
+        let params = self.options.params(&scene, Some((256, 256)))?;
+        Ok((scene, params))
+    }
+}
+
+#[derive(clap::Args)]
+pub struct AnimateArgs {
+    #[command(flatten)]
+    common: MovingArgs,
+    /// Steps from frame 0 to frame 1 (the scene's move cut into equal parts).
+    #[arg(long, default_value_t = 8)]
+    steps: u32,
+    /// How each step is followed.
+    #[arg(long, default_value = "area", value_parser = clap::value_parser!(MoveMode))]
+    mode: MoveMode,
+    /// Seconds of iterations per frame.
+    #[arg(long, default_value_t = 2.0)]
+    time_per_frame: f64,
+    /// Output folder: frame-NNN.exr, .png and .json.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Writes each frame when its render step ends, with what its move did.
+struct FrameWriter<'a> {
+    args: &'a AnimateArgs,
+    scene: &'a str,
+    last_move: Option<MoveReport>,
+    frame_start: (u32, f64),
+}
+
+impl Observer for FrameWriter<'_> {
+    fn moved(&mut self, _: &Progress, m: &MoveReport, _: &mut Renderer) -> ObserverResult {
+        self.last_move = Some(m.clone());
+        Ok(())
+    }
+
+    fn step_done(&mut self, at: &Progress, r: &mut Renderer) -> ObserverResult {
+        let frame = at.step / 2;
+        let image = r.resolve()?;
+        let stem = self.args.output.join(format!("frame-{frame:03}"));
+        image.write_exr(&stem.with_extension("exr"))?;
+        image.write_png(&stem.with_extension("png"), 1.0)?;
+        let iterations = at.iterations - self.frame_start.0;
+        let seconds = at.seconds - self.frame_start.1;
+        let report = serde_json::json!({
+            "scene": self.scene, "frame": frame, "steps": self.args.steps,
+            "mode": self.args.mode, "estimator": r.params().estimator, "iterations": iterations,
+            "seconds": seconds, "move": self.last_move.take(), "photons": r.counts,
+            "left_out": r.report().left_out,
+        });
+        std::fs::write(
+            stem.with_extension("json"),
+            serde_json::to_string_pretty(&report)?,
+        )?;
+        println!(
+            "frame {frame}: {iterations} iterations, {seconds:.2}s -> {}",
+            stem.with_extension("exr").display()
+        );
+        self.frame_start = (at.iterations, at.seconds);
+        Ok(())
+    }
+}
+
+pub fn animate(args: AnimateArgs) -> Result<()> {
+    let (scene, params) = args.common.setup()?;
+    if args.steps == 0 {
+        bail!("--steps = 0: must be at least 1");
+    }
+    if !(args.time_per_frame.is_finite() && args.time_per_frame > 0.0) {
+        bail!(
+            "--time-per-frame = {}: must be a positive number of seconds",
+            args.time_per_frame
+        );
+    }
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    let mut backend = args.common.backend.start()?;
+    let schedule = Schedule::animation(args.steps, args.mode, Budget::seconds(args.time_per_frame));
+    let mut writer = FrameWriter {
+        args: &args,
+        scene: &scene.name,
+        last_move: None,
+        frame_start: (0, 0.0),
+    };
+    let outcome = run(
+        backend.as_mut(),
+        &scene,
+        &params,
+        &args.common.moves.params(),
+        &schedule,
+        &mut writer,
+    )?;
+    if let Some(e) = outcome.error {
+        bail!("the animation stopped: {e}");
+    }
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct ErrorArgs {
+    #[command(flatten)]
+    common: MovingArgs,
+    /// Seconds of iterations on frame 0 before the move.
+    #[arg(long, default_value_t = 10.0)]
+    warmup: f64,
+    /// Seconds measured after the move.
+    #[arg(long, default_value_t = 8.0)]
+    seconds: f64,
+    #[command(flatten)]
+    truth: TruthOptions,
+    /// Output folder: error-vs-time.csv, .json and .png.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
+    let (scene, params) = args.common.setup()?;
+    for (name, v) in [("--warmup", args.warmup), ("--seconds", args.seconds)] {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("{name} = {v}: must be a positive number of seconds");
+        }
+    }
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    let settings = ErrorSettings {
+        params,
+        moves: args.common.moves.params(),
+        warmup_seconds: args.warmup,
+        seconds: args.seconds,
+    };
+    let truth = args.truth.truth(&scene, 1, &settings.params)?;
+    let truth = &truth.image;
+    let mut backend = args.common.backend.start()?;
+    eprintln!("finding the pixels the move resets");
+    let reset = error_report::reset_pixels(backend.as_mut(), &scene, &settings)?;
+    let mut runs = Vec::new();
+    for mode in MoveMode::ALL {
+        eprintln!("measuring {}", mode.name());
+        runs.push(error_report::run_mode(
+            backend.as_mut(),
+            &scene,
+            mode,
+            &settings,
+            truth,
+            &reset,
+        )?);
+    }
+    eprintln!("measuring the perfect-compensation bound");
+    let restart = runs
+        .iter()
+        .find(|r| r.mode == MoveMode::Restart)
+        .context("the restart run is missing")?;
+    let perfect = error_report::perfect_compensation(
+        backend.as_mut(),
+        &scene,
+        &settings,
+        truth,
+        &reset,
+        restart,
+    )?;
+    let target = error_report::restart_final_error(&runs);
+    let perfect_time = target.and_then(|t| error_report::time_to_reach(&perfect, t));
+    let out = &args.output;
+    std::fs::write(out.join("error-vs-time.csv"), error_report::csv(&runs))?;
+    let json = serde_json::json!({ "scene": scene.name, "settings": settings, "runs": runs,
+        "reset_pixels": reset.iter().filter(|&&r| r).count(),
+        "perfect_compensation": perfect,
+        "seconds_to_restart_error": error_report::time_to_restart_error(&runs),
+        "perfect_seconds_to_restart_error": perfect_time });
+    std::fs::write(
+        out.join("error-vs-time.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    error_report::chart(&scene.name, &runs, &perfect)
+        .write_png(&out.join("error-vs-time.png"), 1.0)?;
+    print!("{}", error_report::tables(&runs, scene.triangle_count()));
+    let reached = error_report::time_to_restart_error(&runs)
+        .into_iter()
+        .map(|(mode, t)| (mode.name(), t))
+        .chain([("perfect", perfect_time)]);
+    for (name, t) in reached {
+        match t {
+            Some(t) => println!("{name:<10} reaches restart's final error after {t:.2}s"),
+            None => println!(
+                "{name:<10} does not reach restart's final error within {:.1}s",
+                args.seconds
+            ),
+        }
+    }
+    println!("wrote {}", out.display());
+    Ok(())
+}

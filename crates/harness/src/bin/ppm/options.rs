@@ -1,0 +1,222 @@
+//! Options shared by several commands, and the one place they become render settings.
+
+use anyhow::{Context, Result, bail};
+use backend_cpu::CpuBackend;
+use backend_wgpu::WgpuBackend;
+use clap::ValueEnum;
+use harness::reference::Truth;
+use harness::reference::cache::{ReferenceRequest, cached_reference};
+use indicatif::{ProgressBar, ProgressStyle};
+use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
+use ppm_core::scene::Scene;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum BackendChoice {
+    /// rayon on this machine's cores.
+    Cpu,
+    /// WGSL compute shaders on the best wgpu adapter (a GPU, or lavapipe on the CPU).
+    Wgpu,
+}
+
+impl BackendChoice {
+    /// The backend, started.
+    pub fn start(self) -> Result<Box<dyn DynamicBackend + Send>> {
+        Ok(match self {
+            BackendChoice::Cpu => Box::new(CpuBackend::new()),
+            BackendChoice::Wgpu => {
+                let b = WgpuBackend::new().context("the wgpu backend cannot start")?;
+                eprintln!("wgpu adapter: {}", b.adapter_name());
+                Box::new(b)
+            }
+        })
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DirectChoice {
+    /// Shadow rays; photons skip their first surface (the thesis).
+    Explicit,
+    /// Photons carry direct light too (classic PPM).
+    Photons,
+}
+
+/// How a scene is rendered: every option defaults to the scene's setting or the estimator's.
+#[derive(clap::Args)]
+pub struct RenderOptions {
+    /// Progressive estimator: sppm (consistent; the default) or ppm (the thesis's fixed hit
+    /// points). Default: the scene's.
+    #[arg(long, value_parser = clap::value_parser!(Estimator))]
+    pub estimator: Option<Estimator>,
+    /// Image width.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Iterations, one photon pass each (default: the scene's; unbounded when only
+    /// --time-budget is given).
+    #[arg(long)]
+    pub passes: Option<u32>,
+    /// Photons emitted per pass (default: the scene's).
+    #[arg(long)]
+    pub photons_per_pass: Option<u32>,
+    /// Stop iterating after this many seconds of rendering.
+    #[arg(long)]
+    pub time_budget: Option<f64>,
+    /// Seed of the random generator.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Fraction of new photons kept per pass, in (0, 1) (default: the scene's).
+    #[arg(long)]
+    pub alpha: Option<f32>,
+    /// Initial gather radius in scene units, not squared (default: the scene's).
+    #[arg(long)]
+    pub radius: Option<f32>,
+    /// Eye samples (slots) per pixel; with ppm, 1 goes through the pixel centre.
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
+    /// Where direct light comes from.
+    #[arg(long, value_enum, default_value = "explicit")]
+    pub direct: DirectChoice,
+    /// Shadow-ray samples per visible point: per iteration with sppm (default 1), once per
+    /// frame with ppm (default 16).
+    #[arg(long)]
+    pub direct_samples: Option<u32>,
+}
+
+impl RenderOptions {
+    /// The settings for `scene`; `size` is the image size when the options give none
+    /// (otherwise the scene's own).
+    pub fn params(&self, scene: &Scene, size: Option<(u32, u32)>) -> Result<RenderParams> {
+        let mut p = RenderParams::for_scene(scene);
+        let (w, h) = size.unwrap_or((p.width, p.height));
+        p.estimator = self.estimator.unwrap_or(p.estimator);
+        p.width = self.width.unwrap_or(w);
+        p.height = self.height.unwrap_or(h);
+        p.passes = match (self.passes, self.time_budget) {
+            (Some(n), _) => n,
+            (None, Some(_)) => u32::MAX,
+            (None, None) => p.passes,
+        };
+        p.photons_per_pass = self.photons_per_pass.unwrap_or(p.photons_per_pass);
+        p.time_budget = self.time_budget;
+        p.seed = self.seed;
+        p.alpha = self.alpha.unwrap_or(p.alpha);
+        p.initial_radius = self.radius.unwrap_or(p.initial_radius);
+        p.spp = self.spp;
+        p.direct = match self.direct {
+            DirectChoice::Explicit => DirectMode::Explicit,
+            DirectChoice::Photons => DirectMode::Photons,
+        };
+        p.direct_samples = self
+            .direct_samples
+            .unwrap_or(p.estimator.default_direct_samples());
+        p.validate("command line")?;
+        Ok(p)
+    }
+}
+
+/// Settings of the passes that follow a move.
+#[derive(clap::Args)]
+pub struct MoveOptions {
+    /// Compensation passes per move (and as many positive region passes).
+    #[arg(long, default_value_t = 4)]
+    pub compensation_passes: u32,
+    /// Photons per compensation or region pass.
+    #[arg(long, default_value_t = 65_536)]
+    pub region_photons: u32,
+    /// Half-angle of the guided photons' cone, degrees.
+    #[arg(long, default_value_t = 10.0)]
+    pub cone_deg: f32,
+    /// Difference passes per move in difference mode (each a negative and a positive pass
+    /// of the ordinary photon count).
+    #[arg(long, default_value_t = 8)]
+    pub difference_passes: u32,
+}
+
+impl MoveOptions {
+    /// The settings.
+    pub fn params(&self) -> MoveParams {
+        MoveParams {
+            compensation_passes: self.compensation_passes,
+            region_photons: self.region_photons,
+            cone_deg: self.cone_deg,
+            difference_passes: self.difference_passes,
+            ..MoveParams::default()
+        }
+    }
+}
+
+/// Where an error report takes its truth from.
+#[derive(clap::Args)]
+pub struct TruthOptions {
+    /// Reference image to measure against: an EXR from any renderer, of the rendered size
+    /// with R, G and B channels (a NAME.var.exr beside it gives its noise). Default: the
+    /// project's reference path tracer, cached in --cache.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_spp: u32,
+    /// Folder of cached path-traced references (file names are hashes of every setting that
+    /// changes the image).
+    #[arg(long, default_value = "out/cache")]
+    pub cache: PathBuf,
+}
+
+/// Seed of cached references: apart from the renders they judge, which start at seed 0.
+const REFERENCE_SEED: u32 = 0x5eed;
+
+impl TruthOptions {
+    /// The truth of `scene` at `frame` and the size of `params`: `--reference FILE.exr`, or
+    /// the cached path-traced reference.
+    pub fn truth(&self, scene: &Scene, frame: u32, params: &RenderParams) -> Result<Truth> {
+        if let Some(path) = &self.reference {
+            let truth = Truth::from_exr(path, params.width, params.height)
+                .context("--reference: the image cannot serve as the truth")?;
+            eprintln!("reference: {}", truth.source);
+            return Ok(truth);
+        }
+        if self.reference_spp == 0 {
+            bail!("--reference-spp = 0: must be at least 1");
+        }
+        let request = ReferenceRequest {
+            frame,
+            width: params.width,
+            height: params.height,
+            spp: self.reference_spp,
+            seed: REFERENCE_SEED,
+        };
+        let bar = spp_bar(Some(self.reference_spp));
+        let truth = cached_reference(&self.cache, scene, &request, &mut |spp, s| {
+            bar.set_position(u64::from(spp));
+            bar.set_message(format!("{s:.1}s"));
+        })?;
+        bar.finish_and_clear();
+        eprintln!("reference: {}", truth.source);
+        Ok(truth)
+    }
+}
+
+/// A progress bar over reference samples per pixel (a spinner when unbounded).
+pub fn spp_bar(spp: Option<u32>) -> ProgressBar {
+    let bar = match spp {
+        Some(n) => ProgressBar::new(u64::from(n)),
+        None => ProgressBar::new_spinner(),
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} reference spp {pos}/{len} {bar:30} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// Checks `--frame`.
+pub fn check_frame(frame: u32) -> Result<()> {
+    if frame > 1 {
+        bail!("--frame = {frame}: a scene has frames 0 and 1 only");
+    }
+    Ok(())
+}

@@ -1,0 +1,70 @@
+//! `ppm stress`: the stress family on one or both backends.
+
+use crate::options::BackendChoice;
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum StressBackends {
+    /// The CPU backend.
+    Cpu,
+    /// The wgpu backend.
+    Wgpu,
+    /// Both, one after the other.
+    Both,
+}
+
+#[derive(clap::Args)]
+pub struct StressArgs {
+    /// Backends to run.
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: StressBackends,
+    /// Run only this case (see the table for names).
+    #[arg(long)]
+    case: Option<String>,
+    /// JSON report.
+    #[arg(short, long, default_value = "out/stress.json")]
+    output: PathBuf,
+}
+
+pub fn run(args: StressArgs) -> Result<()> {
+    let cases: Vec<&scenes::stress::StressCase> = match &args.case {
+        Some(name) => vec![scenes::stress::stress_case(name).with_context(|| {
+            let names: Vec<&str> = scenes::stress::STRESS.iter().map(|c| c.name).collect();
+            format!("--case {name}: no such case (cases: {})", names.join(", "))
+        })?],
+        None => scenes::stress::STRESS.iter().collect(),
+    };
+    let choices: &[BackendChoice] = match args.backend {
+        StressBackends::Cpu => &[BackendChoice::Cpu],
+        StressBackends::Wgpu => &[BackendChoice::Wgpu],
+        StressBackends::Both => &[BackendChoice::Cpu, BackendChoice::Wgpu],
+    };
+    let mut backends = choices
+        .iter()
+        .map(|c| c.start())
+        .collect::<Result<Vec<_>>>()?;
+    let mut results = Vec::new();
+    for case in cases {
+        for backend in &mut backends {
+            results.push(harness::stress::run_case(backend.as_mut(), case));
+        }
+    }
+    print!("{}", harness::stress::table(&results));
+    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(&args.output, serde_json::to_string_pretty(&results)?)
+        .with_context(|| format!("{}: cannot write", args.output.display()))?;
+    let failed = results.iter().filter(|r| !r.passed).count();
+    if failed > 0 {
+        bail!("{failed} of {} stress runs failed", results.len());
+    }
+    println!(
+        "all {} stress runs passed; wrote {}",
+        results.len(),
+        args.output.display()
+    );
+    Ok(())
+}

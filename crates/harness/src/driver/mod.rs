@@ -1,0 +1,299 @@
+//! The one driver: every command, report, suite and test renders through it.
+//!
+//! [`Renderer`] is the only code that knows how passes follow each other: it turns the render
+//! settings into each pass's parameter struct in one place ([`Renderer::eye_params`] and its
+//! siblings), runs an iteration of either estimator, and moves the scene with any
+//! [`MoveMode`] ([`moves`]). Callers describe *what* to run as a [`Schedule`] (render for a
+//! budget, move, render again, ...) and watch it through an [`Observer`]; [`run`] executes it
+//! ([`schedule`]).
+//!
+//! An iteration of `sppm` traces a fresh jittered eye sample per slot, adds its direct light
+//! to the slot's sum, then traces and gathers one photon pass; `ppm` traces its hit points
+//! and direct light once per pose, and an iteration is a photon pass and its gather.
+
+pub mod moves;
+pub mod schedule;
+
+pub use moves::{MoveReport, PhotonCounts};
+pub use schedule::{
+    Budget, Observer, ObserverResult, Outcome, Progress, RunError, Schedule, Step, run,
+};
+
+use crate::report::{RenderReport, left_out};
+use ppm_core::compile::{CompiledScene, compile_scene};
+use ppm_core::image::Image;
+use ppm_core::layout::{
+    DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
+    PhotonPassParams, RecordedPath, ResolveParams, eye_flags, first_hit, gather_kind,
+};
+use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
+use ppm_core::passes::{BackendError, DynamicBackend, PhotonStats};
+use ppm_core::scene::Scene;
+use std::time::Instant;
+
+/// Offset of secondary ray origins, relative to the scene's extent: ~150 f32 ulps at the
+/// largest coordinate, far below any feature of the canonical scenes.
+pub const RAY_EPSILON_RELATIVE: f32 = 1e-5;
+
+/// A progressive render on one backend, carried across moves.
+pub struct Renderer<'a> {
+    backend: &'a mut dyn DynamicBackend,
+    params: RenderParams,
+    moves: MoveParams,
+    scene: Scene,
+    lights: Vec<GpuLight>,
+    materials: Vec<GpuMaterial>,
+    extent: f32,
+    /// Poses loaded or moved to so far: keys `ppm`'s eye and direct passes.
+    frame: u32,
+    /// `sppm` iterations so far: keys their eye and direct passes.
+    iteration: u32,
+    /// The slots have not been traced since the last load (`sppm` starts them fresh).
+    fresh: bool,
+    photon_pass: u32,
+    region_pass: u32,
+    difference_pass: u32,
+    guided_pass: u32,
+    steps_since_move: u32,
+    guide: Option<(GuidedEmission, Vec<RecordedPath>)>,
+    /// Photons emitted and deposited so far, per kind.
+    pub counts: PhotonCounts,
+    report: RenderReport,
+}
+
+impl<'a> Renderer<'a> {
+    /// Loads `scene` (already posed) on `backend`; `ppm` also traces its hit points and
+    /// direct light here.
+    pub fn start(
+        backend: &'a mut dyn DynamicBackend,
+        scene: Scene,
+        params: &RenderParams,
+        moves: &MoveParams,
+    ) -> Result<Self, BackendError> {
+        let compiled = compile_scene(&scene, params.width, params.height);
+        let mut report = RenderReport::new(backend.name(), &scene, params, &compiled);
+        report.left_out = left_out(&compiled.features, params, false);
+        let mut r = Self {
+            backend,
+            params: params.clone(),
+            moves: moves.clone(),
+            scene: scene.clone(),
+            lights: Vec::new(),
+            materials: Vec::new(),
+            extent: 0.0,
+            frame: 0,
+            iteration: 0,
+            fresh: true,
+            photon_pass: 0,
+            region_pass: 0,
+            difference_pass: 0,
+            guided_pass: 0,
+            steps_since_move: 0,
+            guide: None,
+            counts: PhotonCounts::default(),
+            report,
+        };
+        r.load(scene, &compiled)?;
+        Ok(r)
+    }
+
+    /// Starts over on `scene`: its buffers, fresh slots, and for `ppm` the eye pass and
+    /// direct light.
+    fn load(&mut self, scene: Scene, compiled: &CompiledScene) -> Result<(), BackendError> {
+        let t = Instant::now();
+        self.backend.load_scene(compiled)?;
+        self.report.times.upload += t.elapsed().as_secs_f64();
+        self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
+        self.adopt(scene, compiled);
+        self.guide = None;
+        self.fresh = true;
+        if self.params.estimator == Estimator::Ppm {
+            self.eye_pass(self.frame, false)?;
+            self.direct_light(self.frame, false)?;
+        }
+        Ok(())
+    }
+
+    fn adopt(&mut self, scene: Scene, compiled: &CompiledScene) {
+        self.scene = scene;
+        self.lights = compiled.lights.clone();
+        self.materials = compiled.materials.clone();
+        self.extent = compiled.extent;
+    }
+
+    /// One iteration: for `sppm` an eye pass and direct light, then for both estimators one
+    /// photon pass and its gather (after a move, guided and ordinary passes alternate while
+    /// there are recorded paths).
+    pub fn iteration(&mut self) -> Result<(), BackendError> {
+        if self.params.estimator == Estimator::Sppm {
+            let key = self.iteration;
+            self.eye_pass(key, !self.fresh)?;
+            self.direct_light(key, true)?;
+            self.iteration += 1;
+            self.fresh = false;
+        }
+        let guided_turn = self.steps_since_move.is_multiple_of(2);
+        self.steps_since_move += 1;
+        match &self.guide {
+            Some((guide, paths)) if guided_turn => {
+                let (guide, paths) = (*guide, paths.clone());
+                let n = self.params.photons_per_pass;
+                let params = self.photon_params(self.guided_pass, n, 1.0);
+                let t = Instant::now();
+                let stats = self.backend.guided_photon_pass(&params, &guide, &paths)?;
+                self.count_photons(&stats, t);
+                self.guided_pass += 1;
+                self.counts.guided.add(&stats);
+                self.gather(gather_kind::GUIDED, n as f32, 0.0)?;
+            }
+            _ => self.ordinary_pass()?,
+        }
+        self.report.passes += 1;
+        Ok(())
+    }
+
+    /// One ordinary photon pass, gathered by every slot.
+    fn ordinary_pass(&mut self) -> Result<(), BackendError> {
+        let n = self.params.photons_per_pass;
+        let params = self.photon_params(self.photon_pass, n, 1.0);
+        let t = Instant::now();
+        let stats = self.backend.photon_pass(&params)?;
+        self.count_photons(&stats, t);
+        self.photon_pass += 1;
+        self.counts.ordinary.add(&stats);
+        self.gather(gather_kind::ORDINARY, n as f32, 0.0)
+    }
+
+    /// The image of the current statistics (black before `sppm`'s first iteration, which has
+    /// traced no slot yet).
+    pub fn resolve(&mut self) -> Result<Image, BackendError> {
+        if self.fresh && self.params.estimator == Estimator::Sppm {
+            return Ok(Image::new(self.params.width, self.params.height));
+        }
+        let t = Instant::now();
+        let image = self.backend.resolve(&ResolveParams {
+            width: self.params.width,
+            height: self.params.height,
+            spp: self.params.spp,
+            _pad0: 0,
+        })?;
+        self.report.times.resolve += t.elapsed().as_secs_f64();
+        Ok(image)
+    }
+
+    /// The backend, for read-back between passes.
+    pub fn backend(&mut self) -> &mut dyn DynamicBackend {
+        self.backend
+    }
+
+    /// The render's settings.
+    pub fn params(&self) -> &RenderParams {
+        &self.params
+    }
+
+    /// What ran so far: counters and time per pass kind.
+    pub fn report(&self) -> &RenderReport {
+        &self.report
+    }
+
+    fn ray_epsilon(&self) -> f32 {
+        RAY_EPSILON_RELATIVE * self.extent
+    }
+
+    /// The eye pass keyed by `key`, starting the slots fresh or keeping their statistics.
+    fn eye_params(&self, key: u32, keep: bool) -> EyePassParams {
+        let mut flags = if keep { eye_flags::KEEP_STATISTICS } else { 0 };
+        if self.params.estimator == Estimator::Sppm {
+            flags |= eye_flags::JITTER;
+        }
+        EyePassParams {
+            seed: self.params.seed,
+            spp: self.params.spp,
+            max_depth: self.params.max_eye_depth,
+            iteration: key,
+            r2_initial: self.params.initial_radius * self.params.initial_radius,
+            ray_epsilon: self.ray_epsilon(),
+            flags,
+            _pad0: 0,
+        }
+    }
+
+    fn eye_pass(&mut self, key: u32, keep: bool) -> Result<(), BackendError> {
+        let params = self.eye_params(key, keep);
+        let t = Instant::now();
+        let stats = self.backend.eye_pass(&params)?;
+        self.report.times.eye += t.elapsed().as_secs_f64();
+        self.report.rays.eye += stats.rays;
+        self.report.hit_points = stats.hit_points;
+        Ok(())
+    }
+
+    fn direct_params(&self, key: u32, accumulate: bool) -> DirectLightParams {
+        DirectLightParams {
+            seed: self.params.seed,
+            samples: match self.params.direct {
+                DirectMode::Explicit => self.params.direct_samples,
+                DirectMode::Photons => 0,
+            },
+            iteration: key,
+            ray_epsilon: self.ray_epsilon(),
+            accumulate: u32::from(accumulate),
+            ..Default::default()
+        }
+    }
+
+    fn direct_light(&mut self, key: u32, accumulate: bool) -> Result<(), BackendError> {
+        let params = self.direct_params(key, accumulate);
+        let t = Instant::now();
+        let stats = self.backend.direct_light(&params)?;
+        self.report.times.direct += t.elapsed().as_secs_f64();
+        self.report.rays.shadow += stats.rays;
+        Ok(())
+    }
+
+    fn photon_params(
+        &self,
+        pass_index: u32,
+        photon_count: u32,
+        power_scale: f32,
+    ) -> PhotonPassParams {
+        PhotonPassParams {
+            seed: self.params.seed,
+            pass_index,
+            photon_count,
+            max_depth: self.params.max_photon_depth,
+            first_hit: match self.params.direct {
+                DirectMode::Explicit => first_hit::SKIP,
+                DirectMode::Photons => first_hit::DEPOSIT,
+            },
+            ray_epsilon: self.ray_epsilon(),
+            power_scale,
+            first_path: 0,
+        }
+    }
+
+    fn count_photons(&mut self, stats: &PhotonStats, started: Instant) {
+        self.report.times.photon += started.elapsed().as_secs_f64();
+        self.report.photons_emitted += stats.emitted;
+        self.report.photons_deposited += stats.deposited;
+        self.report.rays.photon += stats.rays;
+    }
+
+    fn gather(
+        &mut self,
+        kind: u32,
+        emitted_increment: f32,
+        region_photons: f32,
+    ) -> Result<(), BackendError> {
+        let t = Instant::now();
+        let stats = self.backend.gather_pass(&GatherParams {
+            alpha: self.params.alpha,
+            emitted_increment,
+            kind,
+            region_photons,
+        })?;
+        self.report.times.gather += t.elapsed().as_secs_f64();
+        self.report.photons_gathered += stats.photons_gathered;
+        Ok(())
+    }
+}

@@ -1,0 +1,301 @@
+//! Moves (ALGORITHM.md 2 and 3): the scene changes pose and the render keeps what the mode
+//! lets it keep.
+//!
+//! Thesis and area modes remove light through the emitting rectangle with negative photons in
+//! pose A and re-add it with positive ones in pose B; difference mode traces ordinary photons
+//! in both poses with the same random numbers, so their deferred sum is exactly the change of
+//! every path (ALGORITHM.md 3, "Convergence", names the gap it closes). After the
+//! compensation, testing photons record the emissions that reach the reset slots, and guided
+//! passes alternate with ordinary ones. Restart starts over on the new pose.
+
+use super::Renderer;
+use glam::Vec3;
+use ppm_core::compile::compile_scene;
+use ppm_core::emission::ordinary_emission;
+use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, gather_kind, region_mode};
+use ppm_core::params::{Estimator, MoveMode};
+use ppm_core::passes::{BackendError, PhotonStats};
+use ppm_core::region::{RegionError, emitting_region};
+use ppm_core::rng::{DIFFERENCE_PASS_BASE, PassKind, StreamKey};
+use ppm_core::scene::Scene;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Photons of one kind: emitted and deposited.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Tally {
+    /// Photons emitted.
+    pub emitted: u64,
+    /// Deposits stored.
+    pub deposited: u64,
+}
+
+impl Tally {
+    /// Adds a pass's counters.
+    pub fn add(&mut self, stats: &PhotonStats) {
+        self.emitted += stats.emitted;
+        self.deposited += stats.deposited;
+    }
+}
+
+/// Photons emitted and deposited, per kind (the thesis's tables 4.1 and 4.2).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PhotonCounts {
+    /// Ordinary photons.
+    pub ordinary: Tally,
+    /// Compensation (negative) photons.
+    pub compensation: Tally,
+    /// Positive region or difference photons.
+    pub region: Tally,
+    /// Testing photons.
+    pub testing: Tally,
+    /// Guided photons.
+    pub guided: Tally,
+}
+
+/// What a move did.
+#[derive(Clone, Debug, Serialize)]
+pub struct MoveReport {
+    /// Mode used.
+    pub mode: MoveMode,
+    /// Area of the emitting rectangle (0 when the mode uses none or restarted).
+    pub region_area: f32,
+    /// Slots reset by the update.
+    pub updated: u64,
+    /// Slots that kept their statistics.
+    pub kept: u64,
+    /// Testing-photon paths recorded for guiding.
+    pub recorded_paths: usize,
+    /// Why the move restarted instead of compensating, if it did.
+    pub restarted: Option<String>,
+    /// Seconds the move took (compensation, update, region and testing passes).
+    pub seconds: f64,
+}
+
+/// What compensates a move: region photons through the emitting rectangle (thesis and area
+/// modes) or difference photons over the whole emission (difference mode).
+enum Compensation {
+    Region {
+        region: EmissionRegion,
+        /// Thesis mode's raw counts applied pass by pass; otherwise weighted and deferred.
+        raw: bool,
+    },
+    Difference,
+}
+
+impl Renderer<'_> {
+    /// Moves to `next` (the same scene in its next pose) the way `mode` says.
+    pub fn move_to(&mut self, next: Scene, mode: MoveMode) -> Result<MoveReport, BackendError> {
+        let start = Instant::now();
+        let mut report = MoveReport {
+            mode,
+            region_area: 0.0,
+            updated: 0,
+            kept: 0,
+            recorded_paths: 0,
+            restarted: None,
+            seconds: 0.0,
+        };
+        let vertices: Vec<Vec3> = self
+            .scene
+            .moving_vertices()
+            .into_iter()
+            .chain(next.moving_vertices())
+            .collect();
+        let plan = if self.fresh && self.params.estimator == Estimator::Sppm {
+            Err("no iteration has run: nothing to keep".to_owned())
+        } else {
+            self.compensation_plan(mode, &vertices)
+        };
+        let plan = match plan {
+            Ok(plan) => plan,
+            Err(why) => {
+                self.frame += 1;
+                let compiled = compile_scene(&next, self.params.width, self.params.height);
+                self.load(next, &compiled)?;
+                report.restarted = Some(why);
+                report.seconds = start.elapsed().as_secs_f64();
+                self.report.times.moves += report.seconds;
+                return Ok(report);
+            }
+        };
+        if let Compensation::Region { region, .. } = &plan {
+            report.region_area = region.area;
+        }
+        // Negative photons in pose A, then (same random numbers) positive ones in pose B:
+        // where nothing changed their paths coincide and the two cancel almost exactly.
+        self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
+        let compiled = compile_scene(&next, self.params.width, self.params.height);
+        self.backend.update_scene(&compiled)?;
+        self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
+        self.adopt(next, &compiled);
+        self.frame += 1;
+        // Each slot traces its last sample again in the new pose: the frame's for `ppm`, the
+        // last iteration's (same jitter) for `sppm`.
+        let key = match self.params.estimator {
+            Estimator::Ppm => self.frame,
+            Estimator::Sppm => self.iteration - 1,
+        };
+        let update = self.backend.update_hit_points(
+            &self.eye_params(key, false),
+            self.moves.update_epsilon * self.extent,
+        )?;
+        self.report.rays.eye += update.rays;
+        report.updated = update.updated;
+        report.kept = update.kept;
+        // Direct light is recomputed for all (ALGORITHM.md 2.4): the update restarted every
+        // direct sum; `ppm` draws the frame's estimate, `sppm` a first sample at the updated
+        // visible points.
+        match self.params.estimator {
+            Estimator::Ppm => self.direct_light(self.frame, false)?,
+            Estimator::Sppm => {
+                self.direct_light(self.iteration, true)?;
+                self.iteration += 1;
+            }
+        }
+        self.compensate(&plan, gather_kind::REGION_POSITIVE)?;
+        // Deferred passes are applied once, as a net change (none when none ran).
+        let (ran, deferred) = match plan {
+            Compensation::Region { raw, .. } => {
+                self.region_pass += self.moves.compensation_passes;
+                (self.moves.compensation_passes, !raw)
+            }
+            Compensation::Difference => {
+                self.difference_pass += self.moves.difference_passes;
+                (self.moves.difference_passes, true)
+            }
+        };
+        if deferred && ran > 0 {
+            self.gather(gather_kind::REGION_APPLY, 0.0, 0.0)?;
+        }
+        // Testing photons: ordinary photons gathered by the updated slots only; the paths
+        // that reached them are rebuilt from their index and guide later passes.
+        let n = self.params.photons_per_pass;
+        let testing_index = self.photon_pass;
+        let params = self.photon_params(testing_index, n, 1.0);
+        let t = Instant::now();
+        let stats = self.backend.photon_pass(&params)?;
+        self.count_photons(&stats, t);
+        self.photon_pass += 1;
+        self.counts.testing.add(&stats);
+        let landed = self.backend.landing_paths()?;
+        self.gather(gather_kind::GUIDED, n as f32, 0.0)?;
+        let paths = self.recorded_paths(testing_index, &landed);
+        report.recorded_paths = paths.len();
+        self.guide = (!paths.is_empty()).then(|| {
+            let guide = GuidedEmission {
+                cos_cone: self.moves.cone_deg.to_radians().cos(),
+                beta: self.moves.beta,
+                paths: paths.len() as u32,
+                weighted: u32::from(mode != MoveMode::Thesis),
+            };
+            (guide, paths)
+        });
+        self.steps_since_move = 0;
+        report.seconds = start.elapsed().as_secs_f64();
+        self.report.times.moves += report.seconds;
+        Ok(report)
+    }
+
+    /// How `mode` compensates a move of `vertices` (both poses), or why it must restart.
+    fn compensation_plan(&self, mode: MoveMode, vertices: &[Vec3]) -> Result<Compensation, String> {
+        let kind = match mode {
+            MoveMode::Restart => return Err("restart mode".to_owned()),
+            MoveMode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
+            MoveMode::Difference => return Ok(Compensation::Difference),
+            MoveMode::Thesis => region_mode::POINT,
+            MoveMode::Area => region_mode::AREA,
+        };
+        match emitting_region(&self.lights, vertices, kind) {
+            Ok(region) => Ok(Compensation::Region {
+                region,
+                raw: mode == MoveMode::Thesis,
+            }),
+            Err(RegionError::Empty) => Err("nothing moves".to_owned()),
+            Err(RegionError::Unbounded) => {
+                Err("the moving object surrounds a light point".to_owned())
+            }
+        }
+    }
+
+    /// All negative (pose A) or all positive (pose B) passes of a move, gathered as `kind`.
+    /// Together the passes of one sign remove (or re-add) their share once: each gathers with
+    /// the photons of all of them as its `N_c`.
+    fn compensate(&mut self, plan: &Compensation, kind: u32) -> Result<(), BackendError> {
+        let sign = if kind == gather_kind::REGION_NEGATIVE {
+            -1.0
+        } else {
+            1.0
+        };
+        match plan {
+            Compensation::Region { region, raw } => {
+                // Thesis: raw counts, each pass applied as it comes (eqs 5-7, then 1-3). Area:
+                // weighted counts, deferred and applied once as a net change.
+                let flag = if *raw {
+                    gather_kind::RAW_COUNT
+                } else {
+                    gather_kind::DEFERRED
+                };
+                let nc = self.moves.region_photons;
+                let total = (nc * self.moves.compensation_passes) as f32;
+                for k in 0..self.moves.compensation_passes {
+                    let params = self.photon_params(self.region_pass + k, nc, sign);
+                    let t = Instant::now();
+                    let stats = self.backend.region_photon_pass(&params, region)?;
+                    self.count_photons(&stats, t);
+                    self.count_compensation(kind, &stats);
+                    self.gather(kind | flag, 0.0, total)?;
+                }
+            }
+            Compensation::Difference => {
+                // Ordinary photons, each standing for `emitted / total` ordinary photons (path
+                // weight 1); deferred, so only the paths the move changed leave a net change.
+                let n = self.params.photons_per_pass;
+                let total = (n * self.moves.difference_passes) as f32;
+                for k in 0..self.moves.difference_passes {
+                    let index = DIFFERENCE_PASS_BASE + self.difference_pass + k;
+                    let params = self.photon_params(index, n, sign);
+                    let t = Instant::now();
+                    let stats = self.backend.photon_pass(&params)?;
+                    self.count_photons(&stats, t);
+                    self.count_compensation(kind, &stats);
+                    self.gather(kind | gather_kind::DEFERRED, 0.0, total)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn count_compensation(&mut self, kind: u32, stats: &PhotonStats) {
+        if kind == gather_kind::REGION_NEGATIVE {
+            self.counts.compensation.add(stats);
+        } else {
+            self.counts.region.add(stats);
+        }
+    }
+
+    /// The emissions of the testing paths `landed`, rebuilt from their random numbers; a
+    /// stride subsample when there are more than `max_recorded`.
+    fn recorded_paths(&self, pass_index: u32, landed: &[u32]) -> Vec<RecordedPath> {
+        let stride = landed.len().div_ceil(self.moves.max_recorded.max(1)).max(1);
+        landed
+            .iter()
+            .step_by(stride)
+            .map(|&path| {
+                let key = StreamKey {
+                    seed: self.params.seed,
+                    kind: PassKind::Photon,
+                    pass_index,
+                    path,
+                };
+                let e = ordinary_emission(&self.lights, &self.materials, &key);
+                RecordedPath {
+                    origin: e.origin.into(),
+                    light: e.light,
+                    direction: e.direction.into(),
+                    _pad0: 0,
+                }
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,321 @@
+//! Schedules: what a render does, as data. A schedule starts from one pose of the scene and
+//! runs steps in order (render for a budget, move to another pose); [`run`] executes it on the
+//! [`Renderer`] and calls an [`Observer`] after each iteration, move and step, with the time
+//! the observer takes not counted as rendering.
+
+use super::{MoveReport, PhotonCounts, Renderer};
+use crate::clock::Stopwatch;
+use crate::report::{RenderReport, left_out};
+use ppm_core::image::Image;
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use ppm_core::passes::{BackendError, DynamicBackend};
+use ppm_core::scene::Scene;
+use std::time::Instant;
+use thiserror::Error;
+
+/// How long a render step runs: until either limit is reached (none: no iteration).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Budget {
+    /// Iterations.
+    pub iterations: Option<u32>,
+    /// Seconds of rendering.
+    pub seconds: Option<f64>,
+}
+
+impl Budget {
+    /// Exactly `n` iterations.
+    pub fn iterations(n: u32) -> Self {
+        Self {
+            iterations: Some(n),
+            seconds: None,
+        }
+    }
+
+    /// Iterations for `s` seconds of rendering.
+    pub fn seconds(s: f64) -> Self {
+        Self {
+            iterations: None,
+            seconds: Some(s),
+        }
+    }
+
+    fn spent(&self, iterations: u32, seconds: f64) -> bool {
+        let by_count = self.iterations.is_some_and(|n| iterations >= n);
+        let by_time = self.seconds.is_some_and(|s| seconds >= s);
+        by_count || by_time || (self.iterations.is_none() && self.seconds.is_none())
+    }
+}
+
+/// One step of a schedule.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub enum Step {
+    /// Iterate until the budget is spent.
+    Render(Budget),
+    /// Move to the pose a fraction `time` of the way through the scene's moves (0 is frame
+    /// 0, 1 is frame 1), the way `mode` says.
+    Move {
+        /// Where the scene's moves stand after this step.
+        time: f32,
+        /// How the render follows.
+        mode: MoveMode,
+    },
+}
+
+/// A render described as data: the starting pose and the steps.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Schedule {
+    /// The pose the render starts in (see [`Step::Move`]).
+    pub start: f32,
+    /// Steps, in order.
+    pub steps: Vec<Step>,
+}
+
+impl Schedule {
+    /// One frame (0 or 1) rendered for `budget`.
+    pub fn frame(frame: u32, budget: Budget) -> Self {
+        Self {
+            start: if frame >= 1 { 1.0 } else { 0.0 },
+            steps: vec![Step::Render(budget)],
+        }
+    }
+
+    /// Frame 0 for `warmup`, the move to frame 1 with `mode`, then `after`. Restart starts
+    /// on frame 1 directly: it keeps nothing from the warm-up.
+    pub fn after_move(warmup: Budget, mode: MoveMode, after: Budget) -> Self {
+        if mode == MoveMode::Restart {
+            return Self::frame(1, after);
+        }
+        Self {
+            start: 0.0,
+            steps: vec![
+                Step::Render(warmup),
+                Step::Move { time: 1.0, mode },
+                Step::Render(after),
+            ],
+        }
+    }
+
+    /// The scene's moves cut into `steps` equal steps, each followed by `per_frame`, after
+    /// frame 0 rendered for `per_frame`.
+    pub fn animation(steps: u32, mode: MoveMode, per_frame: Budget) -> Self {
+        let mut s = vec![Step::Render(per_frame)];
+        for k in 1..=steps {
+            s.push(Step::Move {
+                time: k as f32 / steps as f32,
+                mode,
+            });
+            s.push(Step::Render(per_frame));
+        }
+        Self {
+            start: 0.0,
+            steps: s,
+        }
+    }
+}
+
+/// Where a run stands.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Index of the current step.
+    pub step: usize,
+    /// Iterations in the current step.
+    pub step_iterations: u32,
+    /// Seconds of rendering in the current step.
+    pub step_seconds: f64,
+    /// Iterations since the start.
+    pub iterations: u32,
+    /// Seconds of rendering since the start (observers not counted).
+    pub seconds: f64,
+}
+
+/// What an observer returns: an error stops the run.
+pub type ObserverResult = Result<(), Box<dyn std::error::Error + Send + Sync>>;
+
+/// Watches a run: reads buffers, measures, writes frames. Every method defaults to nothing.
+pub trait Observer {
+    /// After each iteration.
+    fn iteration(&mut self, _at: &Progress, _renderer: &mut Renderer) -> ObserverResult {
+        Ok(())
+    }
+
+    /// After each move.
+    fn moved(
+        &mut self,
+        _at: &Progress,
+        _m: &MoveReport,
+        _renderer: &mut Renderer,
+    ) -> ObserverResult {
+        Ok(())
+    }
+
+    /// After each render step has spent its budget.
+    fn step_done(&mut self, _at: &Progress, _renderer: &mut Renderer) -> ObserverResult {
+        Ok(())
+    }
+}
+
+/// Watches nothing.
+impl Observer for () {}
+
+/// Why a run could not go on.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The scene could not be loaded (before any pass ran).
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+    /// The observer failed.
+    #[error("{0}")]
+    Observer(Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// A finished (or stopped) run.
+pub struct Outcome {
+    /// The image of the last statistics; non-finite pixels, if a pass failed, are zero.
+    pub image: Image,
+    /// What ran, how long it took, and what was left out.
+    pub report: RenderReport,
+    /// Every move, in order.
+    pub moves: Vec<MoveReport>,
+    /// Photons of each kind.
+    pub counts: PhotonCounts,
+    /// The pass error that stopped the run early, if any: the image holds what came before.
+    pub error: Option<BackendError>,
+}
+
+/// Runs `schedule` on `backend`: `scene` posed at its start, `params` and `moves` for every
+/// pass, `observer` told of every iteration, move and finished step.
+pub fn run(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    moves: &MoveParams,
+    schedule: &Schedule,
+    observer: &mut dyn Observer,
+) -> Result<Outcome, RunError> {
+    let total = Instant::now();
+    let mut renderer = Renderer::start(backend, scene.at_time(schedule.start), params, moves)?;
+    let mut clock = Stopwatch::start();
+    let mut at = Progress {
+        step: 0,
+        step_iterations: 0,
+        step_seconds: 0.0,
+        iterations: 0,
+        seconds: 0.0,
+    };
+    let mut move_reports = Vec::new();
+    let mut error = None;
+    'steps: for (index, step) in schedule.steps.iter().enumerate() {
+        at.step = index;
+        at.step_iterations = 0;
+        let step_start = clock.seconds();
+        let observed = match *step {
+            Step::Render(budget) => {
+                while !budget.spent(at.step_iterations, clock.seconds() - step_start) {
+                    if let Err(e) = renderer.iteration() {
+                        error = Some(e);
+                        break 'steps;
+                    }
+                    at.step_iterations += 1;
+                    at.iterations += 1;
+                    at.step_seconds = clock.seconds() - step_start;
+                    at.seconds = clock.seconds();
+                    clock.pause();
+                    let observed = observer.iteration(&at, &mut renderer);
+                    clock.resume();
+                    observed.map_err(RunError::Observer)?;
+                }
+                clock.pause();
+                observer.step_done(&at, &mut renderer)
+            }
+            Step::Move { time, mode } => {
+                let moved = renderer.move_to(scene.at_time(time), mode);
+                at.step_seconds = clock.seconds() - step_start;
+                at.seconds = clock.seconds();
+                clock.pause();
+                match moved {
+                    Ok(m) => {
+                        let observed = observer.moved(&at, &m, &mut renderer);
+                        move_reports.push(m);
+                        observed
+                    }
+                    Err(e) => {
+                        error = Some(e);
+                        break 'steps;
+                    }
+                }
+            }
+        };
+        clock.resume();
+        observed.map_err(RunError::Observer)?;
+    }
+    let mut image = renderer.resolve()?;
+    let mut report = renderer.report().clone();
+    report.frame = u32::from(schedule.start >= 1.0);
+    let moving = schedule
+        .steps
+        .iter()
+        .any(|s| matches!(s, Step::Move { .. }));
+    report.left_out = left_out(&report.features, params, moving);
+    for p in image.pixels.iter_mut().flatten().filter(|v| !v.is_finite()) {
+        *p = 0.0;
+        report.non_finite_pixels_zeroed += 1;
+    }
+    report.times.total = total.elapsed().as_secs_f64();
+    report.error = error.as_ref().map(ToString::to_string);
+    Ok(Outcome {
+        image,
+        report,
+        moves: move_reports,
+        counts: renderer.counts.clone(),
+        error,
+    })
+}
+
+/// An observer made of a closure called after each iteration.
+pub struct EachIteration<F>(pub F);
+
+impl<F> Observer for EachIteration<F>
+where
+    F: FnMut(&Progress, &mut Renderer) -> ObserverResult,
+{
+    fn iteration(&mut self, at: &Progress, renderer: &mut Renderer) -> ObserverResult {
+        (self.0)(at, renderer)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_budget_ends_at_whichever_limit_comes_first() {
+        let both = Budget {
+            iterations: Some(3),
+            seconds: Some(1.0),
+        };
+        assert!(!both.spent(2, 0.5));
+        assert!(both.spent(3, 0.5));
+        assert!(both.spent(1, 1.0));
+        assert!(Budget::default().spent(0, 0.0), "no limit: nothing to run");
+        assert!(Budget::iterations(0).spent(0, 0.0));
+    }
+
+    #[test]
+    fn restart_skips_the_warm_up_and_starts_on_the_new_pose() {
+        let s = Schedule::after_move(
+            Budget::seconds(15.0),
+            MoveMode::Restart,
+            Budget::seconds(8.0),
+        );
+        assert_eq!(s, Schedule::frame(1, Budget::seconds(8.0)));
+        let a = Schedule::animation(2, MoveMode::Area, Budget::iterations(1));
+        assert_eq!(a.steps.len(), 5);
+        assert_eq!(
+            a.steps[3],
+            Step::Move {
+                time: 1.0,
+                mode: MoveMode::Area
+            }
+        );
+    }
+}
