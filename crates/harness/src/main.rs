@@ -10,6 +10,7 @@ use harness::render::{Progress, render};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::params::{DirectMode, RenderParams};
 use ppm_core::passes::{Backend, DynamicBackend};
+use ppm_core::scene::ExportOptions;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -39,6 +40,41 @@ enum Command {
     Report(ReportCommand),
     /// Run the stress family (extreme scales, powers, geometry) and check every invariant.
     Stress(StressArgs),
+    /// Write a scene for Mitsuba 3 or pbrt-v4 (scene file and PLY meshes), to check us
+    /// against another renderer.
+    Export(ExportArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ExportFormat {
+    /// Mitsuba 3 XML.
+    Mitsuba,
+    /// pbrt-v4.
+    Pbrt,
+}
+
+#[derive(clap::Args)]
+struct ExportArgs {
+    /// Built-in scene name or path to a scene file (.toml, .xml, .pbrt).
+    scene: String,
+    /// Frame: 0 before the scene's move, 1 after it.
+    #[arg(long, default_value_t = 0)]
+    frame: u32,
+    /// Scene format to write.
+    #[arg(long, value_enum)]
+    format: ExportFormat,
+    /// Samples per pixel the other renderer takes.
+    #[arg(long, default_value_t = 1024)]
+    spp: u32,
+    /// Image width (default: the scene's).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (default: the scene's).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Folder to write the scene file and its meshes into.
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -269,7 +305,8 @@ enum DirectChoice {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Built-in scene name (see `ppm scenes`) or path to a TOML scene file.
+    /// Built-in scene name (see `ppm scenes`) or path to a scene file: TOML, Mitsuba 3 (.xml)
+    /// or pbrt-v4 (.pbrt).
     scene: String,
     /// Backend that runs the passes.
     #[arg(long, value_enum, default_value = "cpu")]
@@ -344,6 +381,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Animate(args) => run_animate(args),
         Command::Report(ReportCommand::ErrorVsTime(args)) => run_error_report(args),
         Command::Stress(args) => run_stress(args),
+        Command::Export(args) => run_export(args),
     }
 }
 
@@ -623,6 +661,48 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
         }
     }
     println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn run_export(args: ExportArgs) -> Result<()> {
+    if args.frame > 1 {
+        bail!("--frame = {}: a scene has frames 0 and 1 only", args.frame);
+    }
+    if args.spp == 0 {
+        bail!("--spp = 0: must be at least 1");
+    }
+    let mut scene = harness::load_scene(&args.scene)?.at_frame(args.frame);
+    for (option, value, size) in [
+        ("--width", args.width, &mut scene.camera.width),
+        ("--height", args.height, &mut scene.camera.height),
+    ] {
+        match value {
+            Some(0) => bail!("{option} = 0: must be at least 1"),
+            Some(v) => *size = v,
+            None => {}
+        }
+    }
+    let options = ExportOptions {
+        samples_per_pixel: args.spp,
+        frame: args.frame,
+    };
+    let export = match args.format {
+        ExportFormat::Mitsuba => ppm_core::scene::mitsuba::export_mitsuba(&scene, &options),
+        ExportFormat::Pbrt => ppm_core::scene::pbrt::export_pbrt(&scene, &options),
+    };
+    let path = export.write(&args.output)?;
+    println!(
+        "{}: frame {}, {} meshes, {} triangles -> {}",
+        scene.name,
+        args.frame,
+        export.meshes.len(),
+        scene.triangle_count(),
+        path.display()
+    );
+    println!("not expressed exactly (also listed in the file):");
+    for note in &export.notes {
+        println!("- {note}");
+    }
     Ok(())
 }
 
