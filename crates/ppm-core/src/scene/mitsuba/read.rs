@@ -402,7 +402,9 @@ impl<'input> Reader<'_, 'input> {
                             )
                         }
                         n => {
-                            return Err(self.err(op, format!("{n} numbers: a matrix has 16 (or 9)")));
+                            return Err(
+                                self.err(op, format!("{n} numbers: a matrix has 16 (or 9)"))
+                            );
                         }
                     }
                 }

@@ -746,7 +746,12 @@ impl Directive<'_> {
     fn floats(&self, p: &Param) -> Result<Vec<f32>> {
         p.values
             .iter()
-            .map(|t| self.parse_number(p.line, t))
+            .map(|t| {
+                self.parse_number(p.line, t).map_err(|e| match e {
+                    SceneError::At { problem, .. } => self.param_err(p, problem),
+                    other => other,
+                })
+            })
             .collect()
     }
 
