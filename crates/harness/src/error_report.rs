@@ -1,7 +1,7 @@
 //! Error against run time (ALGORITHM.md 6): after a move, how fast each mode approaches a
 //! long from-scratch render of the new pose.
 
-use crate::chart::{Series, loglog_chart};
+use crate::chart::{ChartError, Series, write_loglog_chart};
 use crate::dynamic::{DynamicParams, Mode, MoveReport, PhotonCounts, Progressive};
 use crate::render::render;
 use ppm_core::image::{Image, relative_rmse_parts};
@@ -288,8 +288,14 @@ pub fn csv(runs: &[ModeRun]) -> String {
     s
 }
 
-/// The log-log chart of the runs, with the perfect-compensation curve in grey.
-pub fn chart(scene: &str, runs: &[ModeRun], perfect: &[(f64, f64)]) -> Image {
+/// The log-log chart of the runs, with the perfect-compensation curve dashed in grey, as
+/// `stem.png` and `stem.svg`.
+pub fn chart(
+    stem: &Path,
+    scene: &str,
+    runs: &[ModeRun],
+    perfect: &[(f64, f64)],
+) -> Result<(), ChartError> {
     let colour = |m: Mode| match m {
         Mode::Restart => [0.8, 0.1, 0.1],
         Mode::Thesis => [0.1, 0.3, 0.9],
@@ -306,14 +312,17 @@ pub fn chart(scene: &str, runs: &[ModeRun], perfect: &[(f64, f64)]) -> Image {
                 .iter()
                 .map(|m| (m.seconds, m.rel_rmse))
                 .collect(),
+            dashed: false,
         })
         .collect();
     series.push(Series {
         name: "perfect",
         colour: [0.55; 3],
         points: perfect.to_vec(),
+        dashed: true,
     });
-    loglog_chart(
+    write_loglog_chart(
+        stem,
         &format!("{scene}: error after the move"),
         "seconds since the move",
         "relative rmse",

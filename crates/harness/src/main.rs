@@ -644,8 +644,7 @@ fn run_error_report(args: ErrorArgs) -> Result<()> {
         out.join("error-vs-time.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    error_report::chart(&scene.name, &runs, &perfect)
-        .write_png(&out.join("error-vs-time.png"), 1.0)?;
+    error_report::chart(&out.join("error-vs-time"), &scene.name, &runs, &perfect)?;
     print!("{}", error_report::tables(&runs, triangles));
     let reached = error_report::time_to_restart_error(&runs)
         .into_iter()
