@@ -379,13 +379,15 @@ pub(crate) fn vertical_fov(horizontal_deg: f64, width: u32, height: u32) -> f32 
     (2.0 * ((horizontal_deg.to_radians() * 0.5).tan() / aspect).atan()).to_degrees() as f32
 }
 
-/// The triangles of `mesh` in world space. The winding is reversed where `flip` says so, and
-/// where the mesh has vertex normals, each triangle turns to the side its normals point to
-/// (both renderers orient a face by its shading normals when a mesh has them).
+/// The triangles of `mesh` in world space. Without vertex normals the winding is reversed
+/// where `flip` says so; with them each triangle turns to the side its (transformed) normals
+/// point to, reversed where `flip_normals` says so: both renderers orient a face by its
+/// shading normals when a mesh has them, and their flags act on the normals then.
 pub(crate) fn mesh_triangles(
     mesh: &MeshData,
     to_world: Option<DMat4>,
     flip: bool,
+    flip_normals: bool,
 ) -> Vec<[Vec3; 3]> {
     let point = |p: Vec3| match to_world {
         Some(m) => m.transform_point3(p.as_dvec3()).as_vec3(),
@@ -404,7 +406,7 @@ pub(crate) fn mesh_triangles(
                     None => n,
                 };
                 let face = (v[1] - v[0]).cross(v[2] - v[0]);
-                reverse = (face.dot(n) < 0.0) != flip;
+                reverse = (face.dot(n) < 0.0) != flip_normals;
             }
             if reverse { [v[0], v[2], v[1]] } else { v }
         })

@@ -629,9 +629,9 @@ impl<'input> Reader<'_, 'input> {
         // Mitsuba's rectangle and cube keep their authored normals through a mirroring
         // transform (they are transformed as normals); our winding follows suit.
         let analytic = ty == "rectangle" || ty == "cube";
-        let flip = flip ^ (analytic && swaps_handedness(to_world));
+        let plain_flip = flip ^ (analytic && swaps_handedness(to_world));
         let to_world = to_world.filter(|m| *m != DMat4::IDENTITY);
-        let triangles = mesh_triangles(&mesh, to_world, flip);
+        let triangles = mesh_triangles(&mesh, to_world, plain_flip, flip);
         if triangles.iter().flatten().any(|v| !v.is_finite()) {
             return Err(self.err(node, "a vertex is not finite"));
         }

@@ -460,7 +460,7 @@ impl Reader<'_> {
                     match p.name.as_str() {
                         "eta" if p.ty == "float" => {
                             ior = d.float(p)?;
-                            if !(ior > 0.0) {
+                            if ior <= 0.0 {
                                 return Err(d.param_err(p, "must be a positive number"));
                             }
                         }
@@ -500,7 +500,7 @@ impl Reader<'_> {
                 _ => return Err(d.param_err(&p, "unknown parameter of a diffuse area light, or one outside the subset ppm renders")),
             }
         }
-        if !(scale >= 0.0) {
+        if scale < 0.0 {
             return Err(d.err(format!("scale = {scale}: must not be negative")));
         }
         self.state.emission = Some(if scale == 1.0 {
@@ -573,7 +573,8 @@ impl Reader<'_> {
         };
         let to_world = Some(self.state.ctm).filter(|m| *m != DMat4::IDENTITY);
         let flip = self.state.reverse ^ swaps_handedness(to_world);
-        let triangles = mesh_triangles(&mesh, to_world, flip);
+        // pbrt negates the normals under ReverseOrientation (not for a mirroring transform).
+        let triangles = mesh_triangles(&mesh, to_world, flip, self.state.reverse);
         if triangles.iter().flatten().any(|v| !v.is_finite()) {
             return Err(d.err("a vertex is not finite"));
         }
