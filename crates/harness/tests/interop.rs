@@ -113,3 +113,28 @@ fn pbrt_camera_without_the_flip_is_read_as_pbrt_shows_it() {
         assert!((t[1] - t[0]).cross(t[2] - t[0]).y < 0.0);
     }
 }
+
+/// pbrt's fov spans the shorter image side: a tall image keeps our vertical fov through the
+/// screen window, and a wide one needs none; Mitsuba names the axis.
+#[test]
+fn tall_and_wide_cameras_round_trip_exactly() {
+    for (width, height) in [(48, 64), (64, 48)] {
+        let mut scene = scenes::cornell_box_file().unwrap();
+        (scene.camera.width, scene.camera.height) = (width, height);
+        let options = ExportOptions::default();
+        for export in [
+            mitsuba::export_mitsuba(&scene, &options),
+            pbrt::export_pbrt(&scene, &options),
+        ] {
+            let dir = scratch(&format!("aspect-{width}x{height}"));
+            let back = round_trip(&export, &dir);
+            std::fs::remove_dir_all(&dir).ok();
+            assert_eq!(
+                back.camera, scene.camera,
+                "{width}x{height} {}",
+                export.scene_file
+            );
+            assert_eq!(first_difference(&back, &scene), None);
+        }
+    }
+}
