@@ -1,9 +1,16 @@
-//! A log-log line chart rendered straight to an image, with a built-in 5x7 pixel font, so
-//! reports need no font files or plotting stack.
+//! Log-log line charts drawn with plotters, written as PNG and SVG.
+//!
+//! Text is drawn with a copy of DejaVu Sans kept in `assets/` (plotters' `ab_glyph` font
+//! path), so a machine without system fonts draws the same chart.
 
-use ppm_core::image::Image;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+use thiserror::Error;
 
-/// One curve: name, linear RGB colour, and (x, y) points with x, y > 0.
+/// One curve: name, linear RGB colour, and (x, y) points; points with x or y not positive
+/// cannot sit on log axes and are left out.
 pub struct Series<'a> {
     /// Legend label.
     pub name: &'a str,
@@ -11,208 +18,233 @@ pub struct Series<'a> {
     pub colour: [f32; 3],
     /// Points, in drawing order.
     pub points: Vec<(f64, f64)>,
+    /// Dashed, without point markers: for bounds and floors rather than measurements.
+    pub dashed: bool,
 }
 
-const WIDTH: u32 = 720;
-const HEIGHT: u32 = 480;
-const LEFT: f64 = 80.0;
-const RIGHT: f64 = 20.0;
-const TOP: f64 = 40.0;
-const BOTTOM: f64 = 60.0;
+/// Why a chart could not be written.
+#[derive(Debug, Error)]
+pub enum ChartError {
+    /// plotters could not draw it.
+    #[error("{path}: cannot draw the chart: {reason}")]
+    Draw {
+        /// File being drawn.
+        path: String,
+        /// What plotters said.
+        reason: String,
+    },
+    /// The file could not be written.
+    #[error("{path}: cannot write: {reason}")]
+    Write {
+        /// File.
+        path: String,
+        /// What the encoder or the operating system said.
+        reason: String,
+    },
+}
 
-/// Renders the series on log-log axes with decade ticks, axis labels and a legend.
-pub fn loglog_chart(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Image {
-    let mut img = Image::new(WIDTH, HEIGHT);
-    img.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
-    let all: Vec<(f64, f64)> = series
-        .iter()
-        .flat_map(|s| s.points.iter().copied())
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-        .collect();
-    if all.is_empty() {
-        text(&mut img, LEFT as i32, 20, title, [0.0; 3]);
-        return img;
-    }
-    let range = |f: fn(&(f64, f64)) -> f64| {
-        let lo = all
-            .iter()
-            .map(f)
-            .fold(f64::INFINITY, f64::min)
-            .log10()
-            .floor();
-        let hi = all
-            .iter()
-            .map(f)
-            .fold(f64::NEG_INFINITY, f64::max)
-            .log10()
-            .ceil();
-        (lo, if hi > lo { hi } else { lo + 1.0 })
+/// Chart size in pixels (PNG) and user units (SVG).
+pub const CHART_SIZE: (u32, u32) = (800, 520);
+
+const FONT: &str = "sans-serif";
+static DEJAVU_SANS: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, DEJAVU_SANS)
+            .unwrap_or_else(|_| panic!("the vendored DejaVu Sans is a valid font"));
+    });
+}
+
+/// Draws the series on log-log axes (labelled ticks, a legend in the curves' colours, title
+/// and axis labels) and writes `stem.png` and `stem.svg`.
+pub fn write_loglog_chart(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), ChartError> {
+    register_font();
+    let png = with_extension(stem, "png");
+    let svg = with_extension(stem, "svg");
+    let draw_err = |path: &Path| {
+        let path = path.display().to_string();
+        move |reason: String| ChartError::Draw { path, reason }
     };
-    let (x0, x1) = range(|p| p.0);
-    let (y0, y1) = range(|p| p.1);
-    let (pw, ph) = (
-        f64::from(WIDTH) - LEFT - RIGHT,
-        f64::from(HEIGHT) - TOP - BOTTOM,
-    );
-    let to_px = |x: f64, y: f64| {
-        (
-            LEFT + (x.log10() - x0) / (x1 - x0) * pw,
-            TOP + (1.0 - (y.log10() - y0) / (y1 - y0)) * ph,
-        )
+    let (w, h) = CHART_SIZE;
+    let mut rgb = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        draw(&root, title, x_label, y_label, series).map_err(draw_err(&png))?;
+    }
+    write_png(&png, &rgb, w, h)?;
+    {
+        let root = SVGBackend::new(&svg, (w, h)).into_drawing_area();
+        draw(&root, title, x_label, y_label, series).map_err(draw_err(&svg))?;
+    }
+    Ok(())
+}
+
+fn with_extension(stem: &Path, ext: &str) -> PathBuf {
+    let mut name = stem.as_os_str().to_owned();
+    name.push(".");
+    name.push(ext);
+    PathBuf::from(name)
+}
+
+fn write_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<(), ChartError> {
+    let fail = |e: &dyn std::fmt::Display| ChartError::Write {
+        path: path.display().to_string(),
+        reason: e.to_string(),
     };
-    let grey = [0.8; 3];
-    for d in x0 as i32..=x1 as i32 {
-        let (px, _) = to_px(10f64.powi(d), 10f64.powi(y0 as i32));
-        line(&mut img, (px, TOP), (px, TOP + ph), grey);
-        text(
-            &mut img,
-            px as i32 - 12,
-            (TOP + ph) as i32 + 8,
-            &format!("1e{d}"),
-            [0.0; 3],
-        );
+    let file = std::fs::File::create(path).map_err(|e| fail(&e))?;
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| fail(&e))?;
+    writer.write_image_data(rgb).map_err(|e| fail(&e))?;
+    writer.finish().map_err(|e| fail(&e))
+}
+
+/// The decades `[lo, hi]` (as powers of ten) that hold every value, at least one wide.
+fn decades(values: impl Iterator<Item = f64>) -> (i32, i32) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    if !lo.is_finite() {
+        return (0, 1);
     }
-    for d in y0 as i32..=y1 as i32 {
-        let (_, py) = to_px(10f64.powi(x0 as i32), 10f64.powi(d));
-        line(&mut img, (LEFT, py), (LEFT + pw, py), grey);
-        text(&mut img, 8, py as i32 - 3, &format!("1e{d}"), [0.0; 3]);
+    let lo = lo.log10().floor() as i32;
+    let hi = (hi.log10().ceil() as i32).max(lo + 1);
+    (lo, hi)
+}
+
+/// `m x 10^d` as the nearest `f64` to the decimal, so that labels print as written.
+fn decimal(m: u32, d: i32) -> f64 {
+    format!("{m}e{d}").parse().expect("a decimal literal")
+}
+
+/// Labelled ticks: every decade, and 2 and 5 times each when the axis spans at most three
+/// decades (so a short axis still has several labels); grid lines at 2..9 times each decade.
+fn ticks((lo, hi): (i32, i32)) -> (Vec<f64>, Vec<f64>) {
+    let between: &[u32] = if hi - lo <= 3 { &[1, 2, 5] } else { &[1] };
+    let mut bold = Vec::new();
+    let mut light = Vec::new();
+    for d in lo..=hi {
+        for m in 1..10 {
+            let v = decimal(m, d);
+            if d == hi && m > 1 {
+                break;
+            }
+            if between.contains(&m) {
+                bold.push(v);
+            } else {
+                light.push(v);
+            }
+        }
     }
-    let black = [0.0; 3];
-    line(&mut img, (LEFT, TOP), (LEFT, TOP + ph), black);
-    line(&mut img, (LEFT, TOP + ph), (LEFT + pw, TOP + ph), black);
-    text(&mut img, LEFT as i32, 14, title, black);
-    text(
-        &mut img,
-        (LEFT + pw / 2.0) as i32 - 3 * x_label.len() as i32,
-        HEIGHT as i32 - 22,
-        x_label,
-        black,
-    );
-    text(&mut img, 8, TOP as i32 - 16, y_label, black);
-    for (k, s) in series.iter().enumerate() {
-        let pts: Vec<(f64, f64)> = s
-            .points
+    (bold, light)
+}
+
+/// A tick label: plain decimals from 0.001 to 10,000, else `2e-5`.
+fn tick_label(v: f64) -> String {
+    if (1e-3..=1e4).contains(&v) {
+        format!("{v}")
+    } else {
+        let d = v.log10().floor() as i32;
+        let m = (v / 10f64.powi(d)).round();
+        format!("{m}e{d}")
+    }
+}
+
+fn rgb(c: [f32; 3]) -> RGBColor {
+    let byte = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    RGBColor(byte(c[0]), byte(c[1]), byte(c[2]))
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), String> {
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let positive = |s: &Series| -> Vec<(f64, f64)> {
+        s.points
             .iter()
-            .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-            .map(|&(x, y)| to_px(x, y))
-            .collect();
-        for w in pts.windows(2) {
-            for offset in [0.0, 1.0] {
-                line(
-                    &mut img,
-                    (w[0].0, w[0].1 + offset),
-                    (w[1].0, w[1].1 + offset),
-                    s.colour,
-                );
-            }
-        }
-        for p in &pts {
-            for dy in -2..=2 {
-                for dx in -2..=2 {
-                    put(&mut img, p.0 as i32 + dx, p.1 as i32 + dy, s.colour);
-                }
-            }
-        }
-        let (lx, ly) = (
-            LEFT as i32 + pw as i32 - 140,
-            TOP as i32 + 10 + 14 * k as i32,
-        );
-        line(
-            &mut img,
-            (f64::from(lx), f64::from(ly + 3)),
-            (f64::from(lx + 20), f64::from(ly + 3)),
-            s.colour,
-        );
-        text(&mut img, lx + 26, ly, s.name, black);
-    }
-    img
-}
-
-fn put(img: &mut Image, x: i32, y: i32, c: [f32; 3]) {
-    if x >= 0 && y >= 0 && (x as u32) < img.width && (y as u32) < img.height {
-        img.pixels[(y as u32 * img.width + x as u32) as usize] = c;
-    }
-}
-
-fn line(img: &mut Image, a: (f64, f64), b: (f64, f64), c: [f32; 3]) {
-    let steps = (b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil().max(1.0) as i32;
-    for i in 0..=steps {
-        let t = f64::from(i) / f64::from(steps);
-        put(
-            img,
-            (a.0 + (b.0 - a.0) * t).round() as i32,
-            (a.1 + (b.1 - a.1) * t).round() as i32,
-            c,
-        );
-    }
-}
-
-/// Draws `s` with the 5x7 font (6 pixels per character); unknown characters are blank.
-fn text(img: &mut Image, x: i32, y: i32, s: &str, c: [f32; 3]) {
-    for (i, ch) in s.chars().enumerate() {
-        if let Some(rows) = glyph(ch.to_ascii_lowercase()) {
-            for (r, row) in rows.iter().enumerate() {
-                for col in 0..5 {
-                    if row & (0x10 >> col) != 0 {
-                        put(img, x + 6 * i as i32 + col, y + r as i32, c);
-                    }
-                }
-            }
+            .copied()
+            .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+            .collect()
+    };
+    let all: Vec<(f64, f64)> = series.iter().flat_map(positive).collect();
+    let xd = decades(all.iter().map(|p| p.0));
+    let yd = decades(all.iter().map(|p| p.1));
+    let (x_bold, x_light) = ticks(xd);
+    let (y_bold, y_light) = ticks(yd);
+    let x_range = (decimal(1, xd.0)..decimal(1, xd.1))
+        .log_scale()
+        .with_key_points(x_bold)
+        .with_light_points(x_light);
+    let y_range = (decimal(1, yd.0)..decimal(1, yd.1))
+        .log_scale()
+        .with_key_points(y_bold)
+        .with_light_points(y_light);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, 22))
+        .margin(16)
+        .x_label_area_size(52)
+        .y_label_area_size(72)
+        .build_cartesian_2d(x_range, y_range)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .axis_desc_style((FONT, 16))
+        .label_style((FONT, 14))
+        .x_label_formatter(&|v| tick_label(*v))
+        .y_label_formatter(&|v| tick_label(*v))
+        .bold_line_style(BLACK.mix(0.18))
+        .light_line_style(BLACK.mix(0.06))
+        .draw()
+        .map_err(e)?;
+    for s in series {
+        let colour = rgb(s.colour);
+        let points = positive(s);
+        let line = colour.stroke_width(2);
+        let legend = move |(x, y): (i32, i32)| {
+            PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3))
+        };
+        if s.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(points, 8, 5, line))
+                .map_err(e)?
+                .label(s.name)
+                .legend(legend);
+        } else {
+            chart
+                .draw_series(LineSeries::new(points.clone(), line))
+                .map_err(e)?
+                .label(s.name)
+                .legend(legend);
+            chart
+                .draw_series(points.iter().map(|p| Circle::new(*p, 3, colour.filled())))
+                .map_err(e)?;
         }
     }
-}
-
-/// Rows of a 5x7 glyph, most significant of the five bits leftmost.
-fn glyph(c: char) -> Option<[u8; 7]> {
-    Some(match c {
-        '0' => [14, 17, 19, 21, 25, 17, 14],
-        '1' => [4, 12, 4, 4, 4, 4, 14],
-        '2' => [14, 17, 1, 2, 4, 8, 31],
-        '3' => [31, 2, 4, 2, 1, 17, 14],
-        '4' => [2, 6, 10, 18, 31, 2, 2],
-        '5' => [31, 16, 30, 1, 1, 17, 14],
-        '6' => [6, 8, 16, 30, 17, 17, 14],
-        '7' => [31, 1, 2, 4, 8, 8, 8],
-        '8' => [14, 17, 17, 14, 17, 17, 14],
-        '9' => [14, 17, 17, 15, 1, 2, 12],
-        'a' => [0, 0, 14, 1, 15, 17, 15],
-        'b' => [16, 16, 22, 25, 17, 17, 30],
-        'c' => [0, 0, 14, 16, 16, 17, 14],
-        'd' => [1, 1, 13, 19, 17, 17, 15],
-        'e' => [0, 0, 14, 17, 31, 16, 14],
-        'f' => [6, 9, 8, 28, 8, 8, 8],
-        'g' => [0, 15, 17, 17, 15, 1, 14],
-        'h' => [16, 16, 22, 25, 17, 17, 17],
-        'i' => [4, 0, 12, 4, 4, 4, 14],
-        'j' => [2, 0, 6, 2, 2, 18, 12],
-        'k' => [16, 16, 18, 20, 24, 20, 18],
-        'l' => [12, 4, 4, 4, 4, 4, 14],
-        'm' => [0, 0, 26, 21, 21, 17, 17],
-        'n' => [0, 0, 22, 25, 17, 17, 17],
-        'o' => [0, 0, 14, 17, 17, 17, 14],
-        'p' => [0, 0, 30, 17, 30, 16, 16],
-        'q' => [0, 0, 13, 19, 15, 1, 1],
-        'r' => [0, 0, 22, 25, 16, 16, 16],
-        's' => [0, 0, 14, 16, 14, 1, 30],
-        't' => [8, 8, 28, 8, 8, 9, 6],
-        'u' => [0, 0, 17, 17, 17, 19, 13],
-        'v' => [0, 0, 17, 17, 17, 10, 4],
-        'w' => [0, 0, 17, 17, 21, 21, 10],
-        'x' => [0, 0, 17, 10, 4, 10, 17],
-        'y' => [0, 0, 17, 17, 15, 1, 14],
-        'z' => [0, 0, 31, 2, 4, 8, 31],
-        '.' => [0, 0, 0, 0, 0, 12, 12],
-        ',' => [0, 0, 0, 0, 12, 4, 8],
-        '-' => [0, 0, 0, 31, 0, 0, 0],
-        '+' => [0, 4, 4, 31, 4, 4, 0],
-        '(' => [2, 4, 8, 8, 8, 4, 2],
-        ')' => [8, 4, 2, 2, 2, 4, 8],
-        '/' => [0, 1, 2, 4, 8, 16, 0],
-        ':' => [0, 12, 12, 0, 12, 12, 0],
-        '=' => [0, 0, 31, 0, 31, 0, 0],
-        '*' => [0, 17, 10, 4, 10, 17, 0],
-        _ => return None,
-    })
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK.mix(0.4))
+        .label_font((FONT, 14))
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)
 }
 
 #[cfg(test)]
@@ -220,25 +252,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn curves_are_drawn_in_their_colours_inside_the_axes() {
-        let red = [1.0, 0.0, 0.0];
-        let img = loglog_chart(
-            "error vs time",
-            "seconds",
-            "relative rmse",
-            &[Series {
-                name: "restart",
-                colour: red,
-                points: vec![(0.5, 0.3), (2.0, 0.1), (8.0, 0.04)],
-            }],
-        );
-        let reds = img.pixels.iter().filter(|p| **p == red).count();
-        assert!(reds > 100, "{reds} red pixels");
-        // Nothing is drawn in colour outside the plot rectangle but the legend swatch.
-        let outside = (0..img.height)
-            .flat_map(|y| (0..(LEFT as u32 - 1)).map(move |x| (x, y)))
-            .filter(|&(x, y)| img.at(x, y) == red)
-            .count();
-        assert_eq!(outside, 0);
+    fn short_axes_get_ticks_between_decades_and_long_ones_do_not() {
+        let (bold, _) = ticks((-2, 0));
+        assert_eq!(bold, vec![0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0]);
+        let (bold, light) = ticks((-6, 0));
+        assert_eq!(bold.len(), 7);
+        assert!(light.contains(&2e-3));
+        assert_eq!(tick_label(0.05), "0.05");
+        assert_eq!(tick_label(2e-5), "2e-5");
+    }
+
+    #[test]
+    fn decades_cover_the_data_and_are_never_empty() {
+        assert_eq!(decades([0.3, 0.5].into_iter()), (-1, 0));
+        assert_eq!(decades([1.0].into_iter()), (0, 1));
+        assert_eq!(decades(std::iter::empty()), (0, 1));
+        assert_eq!(decades([0.02, 150.0].into_iter()), (-2, 3));
     }
 }

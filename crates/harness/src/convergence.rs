@@ -3,7 +3,7 @@
 //! noise averaged out (8x8-block relative RMSE: bias, blur and missing light stay), and as
 //! energy (the ratio of the means).
 
-use crate::chart::{Series, loglog_chart};
+use crate::chart::{ChartError, Series, write_loglog_chart};
 use crate::driver::schedule::EachIteration;
 use crate::driver::{Budget, Progress, Renderer, RunError, Schedule, run};
 use crate::reference::Truth;
@@ -14,6 +14,7 @@ use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 use serde::Serialize;
+use std::path::Path;
 
 /// Side of the blocks of the block metric, in pixels.
 pub const BLOCK: u32 = 8;
@@ -136,20 +137,27 @@ pub fn csv(points: &[Point]) -> String {
     s
 }
 
-/// The log-log chart: pixel and block errors against time, and the truth's own noise as a
-/// flat grey floor where it is known.
-pub fn chart(title: &str, points: &[Point], noise: Option<f64>) -> Image {
+/// The log-log chart, `stem.png` and `stem.svg`: pixel and block errors against time, and the
+/// truth's own noise as a dashed grey floor where it is known.
+pub fn chart(
+    stem: &Path,
+    title: &str,
+    points: &[Point],
+    noise: Option<f64>,
+) -> Result<(), ChartError> {
     let curve = |f: fn(&Point) -> f64| points.iter().map(|p| (p.seconds, f(p))).collect();
     let mut series = vec![
         Series {
             name: "pixel relative rmse",
             colour: [0.8, 0.1, 0.1],
             points: curve(|p| p.rel_rmse),
+            dashed: false,
         },
         Series {
             name: "8x8 block relative rmse",
             colour: [0.1, 0.3, 0.9],
             points: curve(|p| p.block_rel_rmse),
+            dashed: false,
         },
     ];
     if let (Some(noise), Some(first), Some(last)) = (noise, points.first(), points.last()) {
@@ -157,9 +165,16 @@ pub fn chart(title: &str, points: &[Point], noise: Option<f64>) -> Image {
             name: "reference noise",
             colour: [0.55; 3],
             points: vec![(first.seconds, noise), (last.seconds, noise)],
+            dashed: true,
         });
     }
-    loglog_chart(title, "seconds of rendering", "relative rmse", &series)
+    write_loglog_chart(
+        stem,
+        title,
+        "seconds of rendering",
+        "relative rmse",
+        &series,
+    )
 }
 
 #[cfg(test)]

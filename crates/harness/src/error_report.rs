@@ -1,7 +1,7 @@
 //! Error against run time after a move (ALGORITHM.md 6): how fast each mode approaches the
 //! truth of the new pose (a path-traced reference, or another renderer's image).
 
-use crate::chart::{Series, loglog_chart};
+use crate::chart::{ChartError, Series, write_loglog_chart};
 use crate::driver::{
     Budget, MoveReport, Observer, ObserverResult, PhotonCounts, Progress, Renderer, RunError,
     Schedule, Step, run,
@@ -13,6 +13,7 @@ use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 use serde::Serialize;
+use std::path::Path;
 
 /// What to measure.
 #[derive(Clone, Debug, Serialize)]
@@ -252,8 +253,14 @@ pub fn csv(runs: &[ModeRun]) -> String {
     s
 }
 
-/// The log-log chart of the runs, with the perfect-compensation curve in grey.
-pub fn chart(scene: &str, runs: &[ModeRun], perfect: &[(f64, f64)]) -> Image {
+/// The log-log chart of the runs, with the perfect-compensation curve dashed in grey, as
+/// `stem.png` and `stem.svg`.
+pub fn chart(
+    stem: &Path,
+    scene: &str,
+    runs: &[ModeRun],
+    perfect: &[(f64, f64)],
+) -> Result<(), ChartError> {
     let colour = |m: MoveMode| match m {
         MoveMode::Restart => [0.8, 0.1, 0.1],
         MoveMode::Thesis => [0.1, 0.3, 0.9],
@@ -270,14 +277,17 @@ pub fn chart(scene: &str, runs: &[ModeRun], perfect: &[(f64, f64)]) -> Image {
                 .iter()
                 .map(|m| (m.seconds, m.rel_rmse))
                 .collect(),
+            dashed: false,
         })
         .collect();
     series.push(Series {
         name: "perfect",
         colour: [0.55; 3],
         points: perfect.to_vec(),
+        dashed: true,
     });
-    loglog_chart(
+    write_loglog_chart(
+        stem,
         &format!("{scene}: error after the move"),
         "seconds since the move",
         "relative rmse",

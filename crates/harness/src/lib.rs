@@ -18,7 +18,8 @@ pub mod stress;
 use ppm_core::scene::{Scene, SceneError, load_scene_file};
 use std::path::Path;
 
-/// A built-in scene by name, or else a scene file by path.
+/// A built-in scene by name, or else a scene file by path: Mitsuba 3 (`.xml`), pbrt-v4
+/// (`.pbrt`), or our TOML format (any other extension).
 pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
     if let Some(builtin) = scenes::builtin(name_or_path) {
         return builtin.load();
@@ -34,5 +35,9 @@ pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
             ),
         });
     }
-    load_scene_file(path)
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("xml") => ppm_core::scene::mitsuba::load_mitsuba_file(path),
+        Some("pbrt") => ppm_core::scene::pbrt::load_pbrt_file(path),
+        _ => load_scene_file(path),
+    }
 }

@@ -176,3 +176,73 @@ fn a_report_refuses_a_reference_of_the_wrong_size() {
     let err = stderr(&out).replace(dir.to_str().unwrap(), "DIR");
     insta::assert_snapshot!(err.trim_end());
 }
+
+/// `ppm export` writes a scene file and its meshes, says what it could not express, and the
+/// file renders back through `ppm render`.
+#[test]
+fn export_writes_scene_and_meshes_that_render_back() {
+    for (format, file) in [("mitsuba", "cornell-box.xml"), ("pbrt", "cornell-box.pbrt")] {
+        let dir = scratch(&format!("export-{format}"));
+        let out = ppm(&[
+            "export",
+            "cornell-box",
+            "--frame",
+            "1",
+            "--format",
+            format,
+            "-o",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains("frame 1, 8 meshes, 32 triangles"),
+            "{stdout}"
+        );
+        assert!(stdout.contains("not expressed exactly"), "{stdout}");
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        assert!(text.contains("frame 1"), "{text}");
+        assert!(
+            text.contains("photon mapping settings have no equivalent"),
+            "{text}"
+        );
+        let meshes = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().path().extension() == Some("ply".as_ref()))
+            .count();
+        assert_eq!(meshes, 8);
+        let render = ppm(&[
+            "render",
+            dir.join(file).to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--passes",
+            "1",
+            "--photons-per-pass",
+            "2000",
+            "-o",
+            dir.join("back.exr").to_str().unwrap(),
+        ]);
+        assert!(render.status.success(), "{}", stderr(&render));
+        assert!(dir.join("back.exr").is_file());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
+
+#[test]
+fn export_refuses_a_third_frame() {
+    let out = ppm(&[
+        "export",
+        "cornell-box",
+        "--frame",
+        "2",
+        "--format",
+        "pbrt",
+        "-o",
+        "unused",
+    ]);
+    assert!(!out.status.success());
+    insta::assert_snapshot!(stderr(&out).trim_end());
+}

@@ -33,6 +33,18 @@ pub enum SceneError {
         /// What is wrong with it.
         problem: String,
     },
+    /// An element of a Mitsuba or pbrt scene file that we cannot read or render.
+    #[error("{file}:{line}: {element}: {problem}")]
+    At {
+        /// Scene file.
+        file: String,
+        /// Line of the element (1-based).
+        line: u32,
+        /// The element or directive as written, e.g. `<bsdf type="plastic">` or `Shape "sphere"`.
+        element: String,
+        /// What is wrong, or what lies outside the subset we render.
+        problem: String,
+    },
 }
 
 impl SceneError {

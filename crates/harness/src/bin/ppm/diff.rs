@@ -13,7 +13,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct DiffArgs {
-    /// Built-in scene name or path to a TOML scene file.
+    /// Built-in scene name or path to a scene file (.toml, .xml, .pbrt).
     scene: String,
     /// Progressive estimator (default: the scene's).
     #[arg(long, value_parser = clap::value_parser!(Estimator))]

@@ -2,6 +2,7 @@
 //! backends.
 
 mod diff;
+mod export;
 mod moving;
 mod options;
 mod render;
@@ -42,6 +43,9 @@ enum Command {
     Report(ReportCommand),
     /// Run the stress family (extreme scales, powers, geometry) and check every invariant.
     Stress(stress::StressArgs),
+    /// Write a scene for Mitsuba 3 or pbrt-v4 (scene file and PLY meshes), to check us
+    /// against another renderer.
+    Export(export::ExportArgs),
 }
 
 #[derive(Subcommand)]
@@ -78,5 +82,6 @@ fn run(cli: Cli) -> Result<()> {
         Command::Report(ReportCommand::ErrorVsTime(args)) => moving::error_vs_time(args),
         Command::Report(ReportCommand::Convergence(args)) => reports::convergence(args),
         Command::Stress(args) => stress::run(args),
+        Command::Export(args) => export::export(args),
     }
 }

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 /// Scene, backend and settings of a command on a moving scene.
 #[derive(clap::Args)]
 pub struct MovingArgs {
-    /// Built-in scene name or path to a TOML scene file (its `[[moves]]` define the motion).
+    /// Built-in scene name or path to a scene file (its `[[moves]]` define the motion).
     scene: String,
     /// Backend.
     #[arg(long, value_enum, default_value = "cpu")]
@@ -208,8 +208,7 @@ pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
         out.join("error-vs-time.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    error_report::chart(&scene.name, &runs, &perfect)
-        .write_png(&out.join("error-vs-time.png"), 1.0)?;
+    error_report::chart(&out.join("error-vs-time"), &scene.name, &runs, &perfect)?;
     print!("{}", error_report::tables(&runs, scene.triangle_count()));
     let reached = error_report::time_to_restart_error(&runs)
         .into_iter()

@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Built-in scene name (see `ppm scenes`) or path to a TOML scene file.
+    /// Built-in scene name (see `ppm scenes`) or path to a scene file: TOML, Mitsuba 3 (.xml)
+    /// or pbrt-v4 (.pbrt).
     scene: String,
     /// Backend that runs the passes.
     #[arg(long, value_enum, default_value = "cpu")]
@@ -138,7 +139,7 @@ fn progress_bar(params: &RenderParams) -> ProgressBar {
 
 #[derive(clap::Args)]
 pub struct ReferenceArgs {
-    /// Built-in scene name or path to a TOML scene file.
+    /// Built-in scene name or path to a scene file (.toml, .xml, .pbrt).
     scene: String,
     /// Frame: 0 before the scene's move, 1 after it.
     #[arg(long, default_value_t = 0)]

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct ConvergenceArgs {
-    /// Built-in scene name or path to a TOML scene file.
+    /// Built-in scene name or path to a scene file (.toml, .xml, .pbrt).
     scene: String,
     /// Backend.
     #[arg(long, value_enum, default_value = "cpu")]
@@ -76,7 +76,7 @@ pub fn convergence(args: ConvergenceArgs) -> Result<()> {
         params.estimator.name(),
         report.backend
     );
-    convergence::chart(&title, &points, noise).write_png(&out.join("convergence.png"), 1.0)?;
+    convergence::chart(&out.join("convergence"), &title, &points, noise)?;
     println!(
         "{:>9} {:>7} {:>10} {:>10} {:>8}",
         "seconds", "iters", "pixel", "8x8", "mean"
