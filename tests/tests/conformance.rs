@@ -88,6 +88,9 @@ impl RandomSource for DropsOneInTen {
     fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
         self.0.random_bits(keys)
     }
+    fn stratified_bits(&mut self, keys: &[[u32; 2]]) -> Result<Vec<[u32; 2]>, BackendError> {
+        self.0.stratified_bits(keys)
+    }
 }
 impl Backend for DropsOneInTen {
     fn name(&self) -> &str {

@@ -10,15 +10,19 @@ use ppm_core::geometry::to_world;
 use ppm_core::layout::NO_MATERIAL;
 use ppm_core::layout::{DirectLightParams, HitPoint, hit_flags};
 use ppm_core::passes::DirectStats;
-use ppm_core::rng::{PassKind, StreamKey};
+use ppm_core::rng::{PassKind, stratified_pair};
 use ppm_core::sampling::{
     cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle,
 };
 use rayon::prelude::*;
 use std::f32::consts::{FRAC_1_PI, PI};
 
-/// Random dimensions per sample: light choice, two for the point on it, two for the cosine ray.
-const DIMS_PER_SAMPLE: u32 = 5;
+/// Stratified pairs of each sample: the point on the light, the cosine direction, and the
+/// light's choice (first number). Sample `s` of iteration `k` is point `k * samples + s` of
+/// the slot's sequences, so a slot's samples over all iterations are stratified together.
+const PAIR_LIGHT_POINT: u32 = 0;
+const PAIR_DIRECTION: u32 = 1;
+const PAIR_LIGHT_CHOICE: u32 = 2;
 
 /// Rays per sample: the shadow ray and the cosine ray.
 pub const RAYS_PER_SAMPLE: u32 = 2;
@@ -71,13 +75,7 @@ fn slot_direct(
     let albedo = Vec3::from(material.albedo);
     let mut rays = 0;
     if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
-        let key = StreamKey {
-            seed: params.seed,
-            kind: PassKind::DirectLight,
-            pass_index: params.iteration,
-            path: slot,
-        };
-        direct += estimate_irradiance(params, scene, hp, &key) * albedo * FRAC_1_PI;
+        direct += estimate_irradiance(params, scene, hp, slot) * albedo * FRAC_1_PI;
         rays = u64::from(params.samples * RAYS_PER_SAMPLE);
     }
     (Vec3::from(hp.throughput) * direct, rays)
@@ -91,17 +89,20 @@ fn estimate_irradiance(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,
-    key: &StreamKey,
+    slot: u32,
 ) -> Vec3 {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
     let origin = x + n * params.ray_epsilon;
     let mut sum = Vec3::ZERO;
     for s in 0..params.samples {
-        let d0 = s * DIMS_PER_SAMPLE;
-        let li = sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), key.uniform(d0));
+        let index = params.iteration * params.samples + s;
+        let pair = |p| stratified_pair(params.seed, PassKind::DirectLight, slot, p, index);
+        let (choice, _) = pair(PAIR_LIGHT_CHOICE);
+        let li = sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice);
         let light = &scene.lights[li];
-        let (b1, b2) = uniform_triangle(key.uniform(d0 + 1), key.uniform(d0 + 2));
+        let (u1, u2) = pair(PAIR_LIGHT_POINT);
+        let (b1, b2) = uniform_triangle(u1, u2);
         let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
         let to_light = y - origin;
         let dist2 = to_light.length_squared();
@@ -119,7 +120,8 @@ fn estimate_irradiance(
                 sum += le * (cos_x / pl * power_heuristic(pl, cos_x * FRAC_1_PI));
             }
         }
-        let local = cosine_hemisphere(key.uniform(d0 + 3), key.uniform(d0 + 4));
+        let (v1, v2) = pair(PAIR_DIRECTION);
+        let local = cosine_hemisphere(v1, v2);
         let w = to_world(local, n);
         if let Some(hit) = scene.closest_hit(origin, w, f32::INFINITY) {
             let tri = &scene.triangles[hit.triangle as usize];

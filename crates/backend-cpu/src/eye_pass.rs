@@ -9,10 +9,11 @@ use ppm_core::layout::{
     EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, eye_flags, hit_flags, material_kind,
 };
 use ppm_core::passes::EyeStats;
-use ppm_core::rng::{PassKind, StreamKey};
+use ppm_core::rng::{PassKind, StreamKey, stratified_pair};
 use rayon::prelude::*;
 
-/// Random dimensions: 0 and 1 jitter the pixel; `2 + depth` picks glass reflection or refraction.
+/// Random dimension `DIM_GLASS + depth` picks glass reflection or refraction; the point in
+/// the pixel is stratified over the pixel's samples (slots times iterations).
 const DIM_GLASS: u32 = 2;
 
 /// Writes the visible point of every slot of `hit_points` (`width * height * spp` slots,
@@ -69,7 +70,8 @@ fn trace_eye_path(
     let (jx, jy) = if params.spp == 1 && params.flags & eye_flags::JITTER == 0 {
         (0.5, 0.5)
     } else {
-        (key.uniform(0), key.uniform(1))
+        let sample = params.iteration * params.spp + slot % params.spp;
+        stratified_pair(params.seed, PassKind::Eye, pixel, 0, sample)
     };
     let px = (pixel % camera.width) as f32 + jx;
     let py = (pixel / camera.width) as f32 + jy;

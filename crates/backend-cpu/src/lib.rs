@@ -316,6 +316,13 @@ impl RandomSource for CpuBackend {
             .map(|k| ppm_core::rng::random_bits(k[0], k[1], k[2], k[3], k[4]))
             .collect())
     }
+
+    fn stratified_bits(&mut self, keys: &[[u32; 2]]) -> Result<Vec<[u32; 2]>, BackendError> {
+        Ok(keys
+            .iter()
+            .map(|k| ppm_core::qmc::sobol_pair_bits(k[0], k[1]))
+            .collect())
+    }
 }
 
 impl Backend for CpuBackend {

@@ -696,15 +696,38 @@ impl ReadBack for WgpuBackend {
 impl RandomSource for WgpuBackend {
     fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
         let words: Vec<u32> = keys.iter().flatten().copied().collect();
-        let key_buffer = buffers::storage_init(&self.ctx, "rng keys", &words);
-        let bits = storage_zeroed(&self.ctx, "rng bits", keys.len() as u64 * 4)?;
+        self.evaluate_keys(&words, keys.len(), 1, false)
+    }
+
+    fn stratified_bits(&mut self, keys: &[[u32; 2]]) -> Result<Vec<[u32; 2]>, BackendError> {
+        let words: Vec<u32> = keys.iter().flatten().copied().collect();
+        let bits = self.evaluate_keys(&words, keys.len(), 2, true)?;
+        Ok(bits.chunks_exact(2).map(|b| [b[0], b[1]]).collect())
+    }
+}
+
+impl WgpuBackend {
+    /// Runs rng_vectors.wgsl on `count` keys packed in `words`, `outputs` words each.
+    fn evaluate_keys(
+        &self,
+        words: &[u32],
+        count: usize,
+        outputs: usize,
+        stratified: bool,
+    ) -> Result<Vec<u32>, BackendError> {
+        let key_buffer = buffers::storage_init(&self.ctx, "rng keys", words);
+        let bits = storage_zeroed(&self.ctx, "rng bits", (count * outputs) as u64 * 4)?;
         self.run("rng vectors", |encoder| {
-            self.kernels
-                .rng
-                .record(&self.ctx, encoder, &key_buffer, &bits, keys.len() as u32);
+            self.kernels.rng.record(
+                &self.ctx,
+                encoder,
+                (&key_buffer, &bits),
+                count as u32,
+                stratified,
+            );
             Ok(())
         })?;
-        read_back(&self.ctx, &bits, keys.len())
+        read_back(&self.ctx, &bits, count * outputs)
     }
 }
 

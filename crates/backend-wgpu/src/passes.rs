@@ -333,33 +333,42 @@ impl CheckKernel {
     }
 }
 
-/// rng_vectors.wgsl.
-pub struct RngVectorsKernel(Kernel);
+/// rng_vectors.wgsl: the counter-based generator and the stratified sequences on given keys.
+pub struct RngVectorsKernel {
+    random: Kernel,
+    stratified: Kernel,
+}
 
 impl RngVectorsKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "rng_vectors", shaders::RNG_VECTORS);
-        Self(Kernel::new(
-            &ctx.device,
-            &module,
-            "rng_vectors_main",
-            &[Read, ReadWrite],
-            WORKGROUP,
-        ))
+        let kernel =
+            |entry| Kernel::new(&ctx.device, &module, entry, &[Read, ReadWrite], WORKGROUP);
+        Self {
+            random: kernel("rng_vectors_main"),
+            stratified: kernel("qmc_vectors_main"),
+        }
     }
 
-    /// Records the evaluation of `count` keys (five words each) into `bits`.
+    /// Records the evaluation of `count` keys into `bits`: five words each giving one word
+    /// of [`ppm_core::rng::random_bits`], or (`stratified`) two words each giving the two
+    /// words of [`ppm_core::qmc::sobol_pair_bits`].
     pub fn record(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        keys: &wgpu::Buffer,
-        bits: &wgpu::Buffer,
+        (keys, bits): (&wgpu::Buffer, &wgpu::Buffer),
         count: u32,
+        stratified: bool,
     ) {
-        let group = self.0.bind(&ctx.device, &[keys, bits]);
-        self.0.dispatch(encoder, &group, count);
+        let kernel = if stratified {
+            &self.stratified
+        } else {
+            &self.random
+        };
+        let group = kernel.bind(&ctx.device, &[keys, bits]);
+        kernel.dispatch(encoder, &group, count);
     }
 }
 

@@ -40,3 +40,30 @@ fn wgsl_generator_matches_the_cpu_on_many_keys() {
         .collect();
     assert_eq!(gpu.random_bits(&keys).unwrap(), cpu);
 }
+
+/// The WGSL stratified sequences reproduce ppm-core's vectors and agree with the CPU on a
+/// thousand keys.
+#[test]
+fn wgsl_stratified_sequences_match_the_cpu() {
+    let Some(mut gpu) = backend_wgpu::backend_or_skip("wgsl_stratified_sequences_match_the_cpu")
+    else {
+        return;
+    };
+    let vectors: Vec<[u32; 2]> = ppm_core::qmc::TEST_VECTORS
+        .iter()
+        .map(|(k, _)| *k)
+        .collect();
+    let expected: Vec<[u32; 2]> = ppm_core::qmc::TEST_VECTORS
+        .iter()
+        .map(|(_, b)| *b)
+        .collect();
+    assert_eq!(gpu.stratified_bits(&vectors).unwrap(), expected);
+    let keys: Vec<[u32; 2]> = (0..1000u32)
+        .map(|i| [i.wrapping_mul(2_654_435_761), i * 37 % 4096])
+        .collect();
+    let cpu: Vec<[u32; 2]> = keys
+        .iter()
+        .map(|k| ppm_core::qmc::sobol_pair_bits(k[0], k[1]))
+        .collect();
+    assert_eq!(gpu.stratified_bits(&keys).unwrap(), cpu);
+}

@@ -14,6 +14,7 @@ use ppm_core::layout::{
 };
 use ppm_core::params::{Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError, DynamicBackend};
+use ppm_core::qmc;
 use ppm_core::rng::TEST_VECTORS;
 use ppm_core::scene::Scene;
 use ppm_core::update::{Statistics, ppm_update};
@@ -173,10 +174,11 @@ fn eye_params(p: &RenderParams, extent: f32) -> EyePassParams {
     }
 }
 
-/// The backend's generator reproduces the fixed vectors bit for bit.
+/// The backend's generator and stratified sequences reproduce the fixed vectors bit for bit.
 fn check_rng_vectors(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    let mut b = make().map_err(err)?;
     let keys: Vec<[u32; 5]> = TEST_VECTORS.iter().map(|(k, _)| *k).collect();
-    let got = make().map_err(err)?.random_bits(&keys).map_err(err)?;
+    let got = b.random_bits(&keys).map_err(err)?;
     for ((key, expected), got) in TEST_VECTORS.iter().zip(&got) {
         if got != expected {
             return Err(format!(
@@ -184,7 +186,20 @@ fn check_rng_vectors(make: BackendFactory, _: &ConformanceOptions) -> Result<Str
             ));
         }
     }
-    Ok(format!("{} vectors reproduced", keys.len()))
+    let pairs: Vec<[u32; 2]> = qmc::TEST_VECTORS.iter().map(|(k, _)| *k).collect();
+    let got = b.stratified_bits(&pairs).map_err(err)?;
+    for ((key, expected), got) in qmc::TEST_VECTORS.iter().zip(&got) {
+        if got != expected {
+            return Err(format!(
+                "stratified key {key:?}: {got:#010x?}, expected {expected:#010x?}"
+            ));
+        }
+    }
+    Ok(format!(
+        "{} generator and {} stratified vectors reproduced",
+        keys.len(),
+        pairs.len()
+    ))
 }
 
 /// Slot `i` belongs to pixel `i / spp`; empty slots say so; fresh slots start with the

@@ -20,6 +20,7 @@ pub mod layout;
 pub mod metrics;
 pub mod params;
 pub mod passes;
+pub mod qmc;
 pub mod region;
 pub mod rng;
 pub mod sampling;

@@ -166,12 +166,15 @@ pub trait ReadBack {
     fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError>;
 }
 
-/// The backend's own twin of [`crate::rng::random_bits`], so a conformance check can pin it
-/// to [`crate::rng::TEST_VECTORS`].
+/// The backend's own twins of [`crate::rng::random_bits`] and [`crate::qmc::sobol_pair_bits`],
+/// so a conformance check can pin them to [`crate::rng::TEST_VECTORS`] and
+/// [`crate::qmc::TEST_VECTORS`].
 pub trait RandomSource {
     /// `random_bits(seed, kind, pass_index, path, dimension)` for each key, computed where the
     /// backend's passes compute it (on the GPU for a GPU backend).
     fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError>;
+    /// `sobol_pair_bits(scramble, index)` for each key, computed where the passes compute it.
+    fn stratified_bits(&mut self, keys: &[[u32; 2]]) -> Result<Vec<[u32; 2]>, BackendError>;
 }
 
 /// A complete backend: every static pass, read-back, and its random generator.

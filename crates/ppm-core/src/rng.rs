@@ -26,6 +26,21 @@ pub enum PassKind {
 /// far above any ordinary pass count, so they share no numbers with ordinary or testing passes.
 pub const DIFFERENCE_PASS_BASE: u32 = 1 << 31;
 
+/// Pass index that keys the scrambles of stratified sequences ([`stratified_pair`]): no
+/// iteration, frame or photon pass reaches it.
+pub const STRATIFIED_PASS: u32 = u32::MAX;
+
+/// Point `index` of the stratified pair sequence `pair` of the stream `(seed, kind, path)`:
+/// each stream and pair has its own Owen-scrambled Sobol sequence ([`crate::qmc`]), so the
+/// samples a path takes over successive iterations cover their square evenly.
+#[inline]
+pub fn stratified_pair(seed: u32, kind: PassKind, path: u32, pair: u32, index: u32) -> (f32, f32) {
+    crate::qmc::sobol_pair(
+        random_bits(seed, kind as u32, STRATIFIED_PASS, path, pair),
+        index,
+    )
+}
+
 /// The key of one random stream: everything but the dimension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StreamKey {

@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bvh lights
+// #import layout rng qmc sampling geometry bvh lights
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
@@ -10,16 +10,21 @@
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
-const DIMS_PER_SAMPLE: u32 = 5u;
+// Stratified pairs of each sample (see backend-cpu's direct_light.rs).
+const PAIR_LIGHT_POINT: u32 = 0u;
+const PAIR_DIRECTION: u32 = 1u;
+const PAIR_LIGHT_CHOICE: u32 = 2u;
 const RAYS_PER_SAMPLE: u32 = 2u;
 
-fn estimate_irradiance(hp: HitPoint, key: StreamKey) -> vec3<f32> {
+fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
     let origin = hp.position + hp.normal * params.ray_epsilon;
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < params.samples; s++) {
-        let d0 = s * DIMS_PER_SAMPLE;
-        let light = lights[sample_light(stream_uniform(key, d0))];
-        let b = uniform_triangle(stream_uniform(key, d0 + 1u), stream_uniform(key, d0 + 2u));
+        let index = params.iteration * params.samples + s;
+        let choice = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_CHOICE, index);
+        let light = lights[sample_light(choice.x)];
+        let u = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_POINT, index);
+        let b = uniform_triangle(u.x, u.y);
         let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
         let to_light = y - origin;
         let dist2 = dot(to_light, to_light);
@@ -34,7 +39,8 @@ fn estimate_irradiance(hp: HitPoint, key: StreamKey) -> vec3<f32> {
                 sum += le * (cos_x / pl * power_heuristic(pl, cos_x * (1.0 / PI)));
             }
         }
-        let local = cosine_hemisphere(stream_uniform(key, d0 + 3u), stream_uniform(key, d0 + 4u));
+        let v = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_DIRECTION, index);
+        let local = cosine_hemisphere(v.x, v.y);
         let w = to_world(local, hp.normal);
         let hit = closest_hit(origin, w, T_MISS);
         if hit.triangle != 0xffffffffu {
@@ -63,8 +69,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         let material = materials[hp.material];
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
         if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && arrayLength(&lights) > 0u {
-            let key = StreamKey(params.seed, PASS_DIRECT_LIGHT, params.iteration, slot);
-            direct += estimate_irradiance(hp, key) * material.albedo * (1.0 / PI);
+            direct += estimate_irradiance(hp, slot) * material.albedo * (1.0 / PI);
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }
         estimate = hp.throughput * direct;

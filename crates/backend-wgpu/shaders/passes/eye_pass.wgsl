@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bvh
+// #import layout rng qmc sampling geometry bvh
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -39,7 +39,8 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     let key = StreamKey(params.seed, PASS_EYE, params.iteration, slot);
     var jitter = vec2<f32>(0.5);
     if params.spp != 1u || (params.flags & EYE_JITTER) != 0u {
-        jitter = vec2<f32>(stream_uniform(key, 0u), stream_uniform(key, 1u));
+        let sample = params.iteration * params.spp + slot % params.spp;
+        jitter = stratified_pair(params.seed, PASS_EYE, pixel, 0u, sample);
     }
     let px = f32(pixel % camera.width) + jitter.x;
     let py = f32(pixel / camera.width) + jitter.y;
