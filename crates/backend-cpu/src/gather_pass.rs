@@ -4,19 +4,17 @@
 
 use crate::photon_grid::PhotonGrid;
 use glam::Vec3;
-use ppm_core::geometry::oct_decode;
-use ppm_core::grid::buckets_around;
-use ppm_core::layout::{GatherParams, GpuMaterial, HitPoint, Photon, gather_kind, hit_flags};
+use ppm_core::geometry::oct_faces;
+use ppm_core::grid::{cell_key, cell_range, scan_instead};
+use ppm_core::layout::{GatherParams, GpuMaterial, GridPhoton, HitPoint, gather_kind, hit_flags};
 use ppm_core::passes::GatherStats;
 use ppm_core::update::{Statistics, compensation_update, ppm_update};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 
-/// The current photon map: deposits, their grid, and (region passes) each deposit's weight.
+/// The current photon map: its grid, and (region passes) each deposit's weight.
 pub struct PhotonMap<'a> {
-    /// Deposits.
-    pub photons: &'a [Photon],
-    /// Their grid.
+    /// The deposits in bucket order.
     pub grid: &'a PhotonGrid,
     /// Path weights per deposit, when the pass kept them.
     pub weights: Option<&'a [f32]>,
@@ -130,7 +128,7 @@ pub fn gather_pass_main(
 }
 
 /// Count, summed path weight and summed power of the photons within `sqrt(r2)` of the hit
-/// point whose surface faces the same way; summed in bucket order, then ascending index.
+/// point whose surface faces the same way; summed in the grid's fixed order.
 #[inline]
 fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> (u32, f32, Vec3) {
     let mut found = 0u32;
@@ -144,18 +142,42 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> (u32, f32, Vec3) {
     (found, weight, flux)
 }
 
-/// Calls `visit(index, photon)` for each photon within the hit point's disc.
+/// Calls `visit(index in the pass, photon)` for each photon within the hit point's disc, cell
+/// by cell in z, y, x order (or over all photons, when the disc spans more cells than there
+/// are photons), in bucket order within a cell.
 #[inline]
-pub fn for_photons_in_disc(hp: &HitPoint, map: &PhotonMap, mut visit: impl FnMut(usize, &Photon)) {
+pub fn for_photons_in_disc(
+    hp: &HitPoint,
+    map: &PhotonMap,
+    mut visit: impl FnMut(usize, &GridPhoton),
+) {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
-    let (buckets, count) = buckets_around(x, hp.r2.sqrt(), &map.grid.params);
-    for &b in &buckets[..count] {
-        for &i in map.grid.bucket(b) {
-            let p = &map.photons[i as usize];
-            let d = Vec3::from(p.position) - x;
-            if d.length_squared() < hp.r2 && oct_decode(p.normal_oct).dot(n) > 0.0 {
-                visit(i as usize, p);
+    let grid = map.grid;
+    let mut test = |k: usize, p: &GridPhoton| {
+        let d = Vec3::from(p.position) - x;
+        if d.length_squared() < hp.r2 && oct_faces(p.normal_oct, n) {
+            visit(grid.order[k] as usize, p);
+        }
+    };
+    let range = cell_range(x, hp.r2.sqrt(), grid.params.cell_size);
+    if scan_instead(range, grid.params.photon_count) {
+        grid.sorted.iter().enumerate().for_each(|(k, p)| test(k, p));
+        return;
+    }
+    let (lo, hi) = range;
+    let mask = grid.params.bucket_count - 1;
+    for cz in lo[2]..=hi[2] {
+        for cy in lo[1]..=hi[1] {
+            for cx in lo[0]..=hi[0] {
+                let key = cell_key([cx, cy, cz]);
+                let b = (key & mask) as usize;
+                let (start, end) = (grid.bucket_start[b] as usize, grid.bucket_start[b + 1] as usize);
+                for (k, p) in grid.sorted[start..end].iter().enumerate() {
+                    if p.cell == key {
+                        test(start + k, p);
+                    }
+                }
             }
         }
     }

@@ -66,6 +66,34 @@ impl CpuBackend {
     }
 }
 
+/// [`check_hit_points`] over the slots in parallel chunks: the first failing chunk, by slot
+/// order, is reported, so the error is the same whatever the threads.
+fn check_slots(pass: &'static str, hit_points: &[HitPoint]) -> Result<(), BackendError> {
+    const CHUNK: usize = 4096;
+    let bad = hit_points
+        .par_chunks(CHUNK)
+        .position_first(|chunk| check_hit_points(pass, chunk).is_err());
+    match bad {
+        None => Ok(()),
+        Some(c) => match check_hit_points(pass, &hit_points[c * CHUNK..]) {
+            Err(BackendError::NonFinite {
+                field,
+                index,
+                pixel,
+                value,
+                ..
+            }) => Err(BackendError::NonFinite {
+                pass,
+                field,
+                index: c * CHUNK + index,
+                pixel,
+                value,
+            }),
+            other => other,
+        },
+    }
+}
+
 /// The loaded scene, or the error for a pass called before `load_scene`.
 fn loaded<'a>(
     scene: &'a Option<(SceneData, GpuCamera)>,
@@ -114,13 +142,7 @@ impl CpuBackend {
                 value: format!("power {:?} at {:?}", p.power, p.position),
             });
         }
-        let max_r2 = self
-            .hit_points
-            .iter()
-            .filter(|h| h.is_valid())
-            .map(|h| h.r2)
-            .fold(0.0f32, f32::max);
-        self.grid = Some(build_photon_grid(&deposits.photons, max_r2));
+        self.grid = Some(build_photon_grid(&deposits.photons, &self.hit_points));
         self.photons = deposits.photons;
         self.weights = deposits.weights;
         Ok(deposits.stats)
@@ -146,7 +168,7 @@ impl EyePass for CpuBackend {
             self.pending = vec![[0.0; 4]; slots];
             self.r2_initial = params.r2_initial;
         }
-        check_hit_points("eye", &self.hit_points)?;
+        check_slots("eye", &self.hit_points)?;
         Ok(stats)
     }
 }
@@ -155,7 +177,7 @@ impl DirectLight for CpuBackend {
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "direct light")?;
         let stats = direct_light::direct_light_main(params, scene, &mut self.hit_points);
-        check_hit_points("direct light", &self.hit_points)?;
+        check_slots("direct light", &self.hit_points)?;
         Ok(stats)
     }
 }
@@ -224,7 +246,7 @@ impl HitPointUpdate for CpuBackend {
             &mut self.pending,
         );
         self.r2_initial = params.r2_initial;
-        check_hit_points("hit-point update", &self.hit_points)?;
+        check_slots("hit-point update", &self.hit_points)?;
         Ok(stats)
     }
 }
@@ -236,7 +258,6 @@ impl LandingPaths for CpuBackend {
             needs: "a photon pass",
         })?;
         let map = PhotonMap {
-            photons: &self.photons,
             grid,
             weights: None,
         };
@@ -246,7 +267,7 @@ impl LandingPaths for CpuBackend {
             .filter(|h| h.is_valid() && h.flags & hit_flags::UPDATED != 0)
             .flat_map_iter(|hp| {
                 let mut found = Vec::new();
-                for_photons_in_disc(hp, &map, |_, p| found.push(p.path));
+                for_photons_in_disc(hp, &map, |i, _| found.push(self.photons[i].path));
                 found
             })
             .collect();
@@ -264,7 +285,6 @@ impl GatherPass for CpuBackend {
             needs: "a photon pass",
         })?;
         let map = PhotonMap {
-            photons: &self.photons,
             grid,
             weights: self.weights.as_deref(),
         };
@@ -277,7 +297,7 @@ impl GatherPass for CpuBackend {
             &mut self.hit_points,
             &mut self.pending,
         );
-        check_hit_points("gather", &self.hit_points)?;
+        check_slots("gather", &self.hit_points)?;
         Ok(stats)
     }
 }

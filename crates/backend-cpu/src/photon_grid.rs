@@ -1,67 +1,84 @@
-//! The per-pass photon map: a uniform hash grid built by a stable counting sort, so that every
-//! bucket lists its photons in ascending index and gathers sum them in a fixed order.
+//! The per-pass photon map (ppm_core::grid): cells sized to the radii in use, photons copied
+//! into bucket order by a stable counting sort, so a gather reads them contiguously and sums
+//! them in a fixed order.
 
 use glam::Vec3;
-use ppm_core::grid::{bucket_of, cell_of, grid_params};
-use ppm_core::layout::{GridParams, Photon};
+use ppm_core::grid::{RADIUS_BINS, bucket_count, cell_key, cell_of, cell_size, radius_bin};
+use ppm_core::layout::{GridParams, GridPhoton, HitPoint, Photon};
 use rayon::prelude::*;
 
 /// Photons filed by bucket.
 #[derive(Clone, Debug, Default)]
 pub struct PhotonGrid {
-    /// Cell and bucket mapping.
+    /// Cell size and bucket count.
     pub params: GridParams,
-    /// `bucket_start[b] .. bucket_start[b + 1]` is bucket `b`'s range in `order`.
+    /// `bucket_start[b] .. bucket_start[b + 1]` is bucket `b`'s range in `sorted`.
     pub bucket_start: Vec<u32>,
-    /// Photon indices grouped by bucket, ascending within each.
+    /// The photons in bucket order, ascending index within each bucket.
+    pub sorted: Vec<GridPhoton>,
+    /// Index in the pass's deposits of each photon of `sorted`.
     pub order: Vec<u32>,
 }
 
-/// Builds the grid over `photons` for gather radii up to `sqrt(max_r2)`.
-pub fn build_photon_grid(photons: &[Photon], max_r2: f32) -> PhotonGrid {
-    let (lo, hi) = photons
+/// Builds the grid over `photons` for the gather radii of `hit_points`' visible points.
+pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint]) -> PhotonGrid {
+    let histogram = hit_points
         .par_iter()
-        .map(|p| (Vec3::from(p.position), Vec3::from(p.position)))
+        .filter(|h| h.is_valid())
+        .fold(
+            || vec![0u32; RADIUS_BINS as usize],
+            |mut h, hp| {
+                h[radius_bin(hp.r2) as usize] += 1;
+                h
+            },
+        )
         .reduce(
-            || (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            || vec![0u32; RADIUS_BINS as usize],
+            |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect(),
         );
-    let (lo, hi) = if photons.is_empty() {
-        (Vec3::ZERO, Vec3::ZERO)
-    } else {
-        (lo, hi)
+    let params = GridParams {
+        cell_size: cell_size(&histogram),
+        bucket_count: bucket_count(photons.len() as u32),
+        photon_count: photons.len() as u32,
+        _pad0: 0,
     };
-    let params = grid_params(lo, hi, max_r2, photons.len() as u32);
-    let buckets: Vec<u32> = photons
+    let keys: Vec<u32> = photons
         .par_iter()
         .with_min_len(4096)
-        .map(|p| bucket_of(cell_of(Vec3::from(p.position), &params), &params))
+        .map(|p| cell_key(cell_of(Vec3::from(p.position), params.cell_size)))
         .collect();
+    let mask = params.bucket_count - 1;
     let mut bucket_start = vec![0u32; params.bucket_count as usize + 1];
-    for &b in &buckets {
-        bucket_start[b as usize + 1] += 1;
+    for &k in &keys {
+        bucket_start[(k & mask) as usize + 1] += 1;
     }
     for i in 1..bucket_start.len() {
         bucket_start[i] += bucket_start[i - 1];
     }
     let mut next = bucket_start.clone();
     let mut order = vec![0u32; photons.len()];
-    for (i, &b) in buckets.iter().enumerate() {
-        order[next[b as usize] as usize] = i as u32;
-        next[b as usize] += 1;
+    for (i, &k) in keys.iter().enumerate() {
+        let slot = &mut next[(k & mask) as usize];
+        order[*slot as usize] = i as u32;
+        *slot += 1;
     }
+    let sorted = order
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&i| {
+            let p = &photons[i as usize];
+            GridPhoton {
+                position: p.position,
+                cell: keys[i as usize],
+                power: p.power,
+                normal_oct: p.normal_oct,
+            }
+        })
+        .collect();
     PhotonGrid {
         params,
         bucket_start,
+        sorted,
         order,
-    }
-}
-
-impl PhotonGrid {
-    /// Photon indices in bucket `b`.
-    #[inline]
-    pub fn bucket(&self, b: u32) -> &[u32] {
-        &self.order
-            [self.bucket_start[b as usize] as usize..self.bucket_start[b as usize + 1] as usize]
     }
 }

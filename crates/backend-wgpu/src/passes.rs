@@ -258,7 +258,7 @@ impl GatherKernel {
             &[
                 &params,
                 inputs.materials,
-                &map.photons,
+                &map.sorted,
                 &map.grid,
                 &map.bucket_start,
                 &map.order,
@@ -415,7 +415,7 @@ impl LandingPathsKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "landing_paths", shaders::LANDING_PATHS);
-        let slots = [Read, Read, Read, Read, Read, ReadWrite];
+        let slots = [Read, Read, Read, Read, Read, ReadWrite, Read];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -443,6 +443,7 @@ impl LandingPathsKernel {
                 &map.order,
                 slots.hit_points,
                 landed,
+                &map.sorted,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);

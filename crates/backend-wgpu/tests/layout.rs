@@ -152,14 +152,16 @@ fn pass_parameters_match_their_wgsl_twins() {
         region_photons
     });
     same_layout!(GridParams {
-        origin,
         cell_size,
-        dims,
         bucket_count,
         photon_count,
-        _pad0,
-        _pad1,
-        _pad2
+        _pad0
+    });
+    same_layout!(GridPhoton {
+        position,
+        cell,
+        power,
+        normal_oct
     });
     same_layout!(ResolveParams {
         width,

@@ -1,10 +1,15 @@
-//! Throughput of each backend on `cornell-box`: photons and rays per second (photons/s and
-//! photon rays/s over the photon pass's time), and time per photon and gather pass.
+//! Throughput of each backend on `cornell-box`, whole iterations: eye pass, direct light, photon
+//! pass and gather, at 256x256 and 768x768, side by side in one run.
 //!
-//! `cargo bench -p harness --bench throughput` prints one row per backend and resolution,
-//! measured side by side in one run. Figures only: no threshold is asserted, since shared
-//! machines are noisy; compare rows of one run. The wgpu rows use whatever adapter wgpu finds
-//! (lavapipe on a machine without a GPU) and are left out, with a note, when there is none.
+//! `cargo bench -p harness --bench throughput` prints one row per backend and resolution: the
+//! headline is photons per second over the whole iteration (so eye, direct light and gather
+//! count against it), then milliseconds per iteration and per pass kind, and rays per second
+//! of each kind. Figures only: no threshold is asserted, since shared machines are noisy;
+//! compare rows of one run. The wgpu rows use whatever adapter wgpu finds (lavapipe on a
+//! machine without a GPU) and are left out, with a note, when there is none. Set
+//! `PPM_BENCH_ITERATIONS` and `PPM_BENCH_PHOTONS` to change the workload (default 16 x
+//! 200,000), `PPM_BENCH_SIZES` (default `256,768`), and `PPM_BENCH_BACKENDS` (default
+//! `cpu,wgpu`).
 
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
@@ -12,53 +17,70 @@ use harness::driver::{Budget, Schedule, run};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 
+fn setting<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
 fn main() {
     let scene = scenes::builtin("cornell-box")
         .and_then(|s| s.load().ok())
         .expect("cornell-box loads");
+    let iterations: u32 = setting("PPM_BENCH_ITERATIONS", 16);
+    let photons: u32 = setting("PPM_BENCH_PHOTONS", 200_000);
+    let sizes: Vec<u32> = std::env::var("PPM_BENCH_SIZES")
+        .unwrap_or_else(|_| "256,768".into())
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    let backends = std::env::var("PPM_BENCH_BACKENDS").unwrap_or_else(|_| "cpu,wgpu".into());
     let threads = rayon::current_num_threads();
     let mut gpu = match WgpuBackend::new() {
+        _ if !backends.contains("wgpu") => None,
         Ok(b) => Some(b),
         Err(e) => {
             println!("no wgpu rows: {e}");
             None
         }
     };
-    println!("cornell-box, 8 passes x 200,000 photons; cpu on {threads} threads");
+    println!(
+        "cornell-box, sppm, {iterations} iterations x {photons} photons from scratch; cpu on {threads} threads"
+    );
     if let Some(g) = &gpu {
         println!("wgpu adapter: {}", g.adapter_name());
     }
     println!(
-        "(wgpu accumulates each photon batch into the hit points inside its photon pass, so its"
-    );
-    println!(
-        " gather column is only the update: compare the photon+gather column across backends)"
-    );
-    println!(
-        "{:<5} {:>9} {:>12} {:>14} {:>12} {:>14} {:>10} {:>10} {:>15}",
+        "{:<5} {:>9} {:>12} {:>8} {:>7} {:>7} {:>7} {:>7} {:>12} {:>12} {:>12}",
         "back",
         "size",
         "photons/s",
-        "photon rays/s",
+        "iter ms",
+        "eye",
+        "direct",
+        "photon",
+        "gather",
         "eye rays/s",
-        "shadow rays/s",
-        "photon ms",
-        "gather ms",
-        "photon+gather ms"
+        "shadow/s",
+        "photon/s"
     );
-    for size in [256, 768] {
+    for size in sizes {
         let mut params = RenderParams::for_scene(&scene);
         params.width = size;
         params.height = size;
-        params.passes = 8;
-        params.photons_per_pass = 200_000;
+        params.passes = iterations;
+        params.photons_per_pass = photons;
         let mut cpu = CpuBackend::new();
-        let mut backends: Vec<&mut dyn DynamicBackend> = vec![&mut cpu];
-        if let Some(g) = gpu.as_mut() {
-            backends.push(g);
+        let mut rows: Vec<&mut dyn DynamicBackend> = Vec::new();
+        if backends.contains("cpu") {
+            rows.push(&mut cpu);
         }
-        for backend in backends {
-            let schedule = Schedule::frame(0, Budget::iterations(params.passes));
+        if let Some(g) = gpu.as_mut() {
+            rows.push(g);
+        }
+        for backend in rows {
+            let schedule = Schedule::frame(0, Budget::iterations(iterations));
             let outcome = run(
                 backend,
                 &scene,
@@ -70,18 +92,22 @@ fn main() {
             .expect("render");
             let r = &outcome.report;
             let t = &r.times;
-            let passes = f64::from(r.passes);
+            let n = f64::from(r.passes);
+            let iteration = t.eye + t.direct + t.photon + t.gather;
+            let ms = |s: f64| 1e3 * s / n;
             println!(
-                "{:<5} {:>9} {:>12.0} {:>14.0} {:>12.0} {:>14.0} {:>10.1} {:>10.1} {:>15.1}",
+                "{:<5} {:>9} {:>12.0} {:>8.1} {:>7.1} {:>7.1} {:>7.1} {:>7.1} {:>12.3e} {:>12.3e} {:>12.3e}",
                 r.backend,
                 format!("{size}x{size}"),
-                r.photons_emitted as f64 / t.photon,
-                r.rays.photon as f64 / t.photon,
+                r.photons_emitted as f64 / iteration,
+                ms(iteration),
+                ms(t.eye),
+                ms(t.direct),
+                ms(t.photon),
+                ms(t.gather),
                 r.rays.eye as f64 / t.eye,
                 r.rays.shadow as f64 / t.direct,
-                1e3 * t.photon / passes,
-                1e3 * t.gather / passes,
-                1e3 * (t.photon + t.gather) / passes,
+                r.rays.photon as f64 / t.photon,
             );
         }
     }

@@ -8,7 +8,7 @@ use crate::driver::{Budget, Schedule, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
 use ppm_core::compile::compile_scene;
-use ppm_core::geometry::oct_decode;
+use ppm_core::geometry::oct_faces;
 use ppm_core::layout::{
     EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
 };
@@ -361,7 +361,7 @@ fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result
         let (mut m, mut flux) = (0u32, Vec3::ZERO);
         for ph in &photons {
             if (Vec3::from(ph.position) - x).length_squared() < hp.r2
-                && oct_decode(ph.normal_oct).dot(n) > 0.0
+                && oct_faces(ph.normal_oct, n)
             {
                 m += 1;
                 flux += Vec3::from(ph.power);

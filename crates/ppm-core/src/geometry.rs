@@ -144,6 +144,20 @@ pub fn oct_encode(n: Vec3) -> u32 {
 /// Unpacks [`oct_encode`]; the result is unit length up to rounding.
 #[inline]
 pub fn oct_decode(bits: u32) -> Vec3 {
+    oct_unfold(bits).normalize()
+}
+
+/// Whether the packed normal `bits` points into the hemisphere of `n`: the test a gather makes
+/// for every photon in its disc, on the unnormalised decoding (a positive scale keeps the
+/// sign of the dot product, so the square root and division are skipped).
+#[inline]
+pub fn oct_faces(bits: u32, n: Vec3) -> bool {
+    oct_unfold(bits).dot(n) > 0.0
+}
+
+/// The octahedral map unfolded back to a direction of L1 length 1 (not yet unit length).
+#[inline]
+fn oct_unfold(bits: u32) -> Vec3 {
     let d = |v: u32| (v as f32 / 65535.0) * 2.0 - 1.0;
     let (x, y) = (d(bits & 0xffff), d(bits >> 16));
     let z = 1.0 - x.abs() - y.abs();
@@ -155,7 +169,7 @@ pub fn oct_decode(bits: u32) -> Vec3 {
     } else {
         (x, y)
     };
-    Vec3::new(x, y, z).normalize()
+    Vec3::new(x, y, z)
 }
 
 #[inline]

@@ -407,31 +407,37 @@ pub struct GuidedEmission {
     pub weighted: u32,
 }
 
-/// The uniform hash grid that indexes one pass's photons. 48 bytes.
+/// The hash grid that indexes one pass's photons ([`crate::grid`]). 16 bytes.
 ///
-/// A photon lies in cell `floor((p - origin) / cell_size)`; cell `c` hashes to bucket
-/// [`crate::grid::bucket_of`]`(c) & (bucket_count - 1)`. Buckets hold photon indices in ascending
-/// order, so every backend visits photons in the same order and sums them the same way.
+/// A photon lies in cell [`crate::grid::cell_of`]`(p, cell_size)`, whose key
+/// ([`crate::grid::cell_key`]) masked to `bucket_count - 1` is its bucket.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GridParams {
-    /// Minimum corner of the photons' bounding box.
-    pub origin: [f32; 3],
-    /// Edge length of a cell: at least twice the largest gather radius, so a gather disc
-    /// touches at most 2x2x2 cells.
+    /// Edge of a cell, from the gather radii in use.
     pub cell_size: f32,
-    /// Number of cells along each axis (cell coordinates are clamped into it).
-    pub dims: [u32; 3],
     /// Number of hash buckets, a power of two.
     pub bucket_count: u32,
     /// Photons in the map.
     pub photon_count: u32,
     /// Padding.
     pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
-    /// Padding.
-    pub _pad2: u32,
+}
+
+/// A photon as the gather reads it: stored in bucket order, with its cell's key so that a
+/// gather skips the photons of another cell sharing the bucket. 32 bytes, like [`Photon`],
+/// whose path index it trades for the key (the grid keeps each one's index in the pass).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridPhoton {
+    /// Where the photon landed.
+    pub position: [f32; 3],
+    /// Key of its cell.
+    pub cell: u32,
+    /// Power carried.
+    pub power: [f32; 3],
+    /// Octahedral encoding of the surface normal on the side the photon arrived from.
+    pub normal_oct: u32,
 }
 
 /// Parameters of the resolve pass. 16 bytes.
@@ -472,7 +478,8 @@ mod tests {
             ("DirectLightParams", size_of::<DirectLightParams>(), 32),
             ("PhotonPassParams", size_of::<PhotonPassParams>(), 32),
             ("GatherParams", size_of::<GatherParams>(), 16),
-            ("GridParams", size_of::<GridParams>(), 48),
+            ("GridParams", size_of::<GridParams>(), 16),
+            ("GridPhoton", size_of::<GridPhoton>(), 32),
             ("ResolveParams", size_of::<ResolveParams>(), 16),
         ];
         for (name, size, expected) in sizes {

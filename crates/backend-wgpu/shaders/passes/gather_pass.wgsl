@@ -1,4 +1,4 @@
-// #import layout geometry sampling update grid
+// #import layout rng qmc geometry sampling update grid
 // Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
@@ -9,7 +9,7 @@
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> materials: array<GpuMaterial>;
-@group(0) @binding(2) var<storage, read> photons: array<Photon>;
+@group(0) @binding(2) var<storage, read> sorted: array<GridPhoton>;
 @group(0) @binding(3) var<storage, read> grid: GridParams;
 @group(0) @binding(4) var<storage, read> bucket_start: array<u32>;
 @group(0) @binding(5) var<storage, read> order: array<u32>;
@@ -26,6 +26,25 @@
 // other passes skip the extra reads.
 override WEIGHTED: bool = false;
 
+// Running sums of the photons a slot found: count, path weight, power.
+struct Found {
+    m: u32,
+    weight: f32,
+    flux: vec3<f32>,
+}
+
+fn visit(found: ptr<function, Found>, hp: HitPoint, k: u32) {
+    let p = sorted[k];
+    let d = p.position - hp.position;
+    if dot(d, d) < hp.r2 && oct_faces(p.normal_oct, hp.normal) {
+        (*found).m++;
+        if WEIGHTED {
+            (*found).weight += weights[order[k]];
+        }
+        (*found).flux += p.power;
+    }
+}
+
 @compute @workgroup_size(64)
 fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let slot = item_index(gid, groups);
@@ -39,29 +58,34 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         return;
     }
     let g = grid;
-    let buckets = buckets_around(hp.position, sqrt(hp.r2), g);
-    var m = 0u;
-    var weight = 0.0;
-    var flux = vec3<f32>(0.0);
-    for (var k = 0u; k < buckets.count; k++) {
-        let b = buckets.ids[k];
-        for (var i = bucket_start[b]; i < bucket_start[b + 1u]; i++) {
-            let index = order[i];
-            let p = photons[index];
-            let d = p.position - hp.position;
-            if dot(d, d) < hp.r2 && dot(oct_decode(p.normal_oct), hp.normal) > 0.0 {
-                m++;
-                if WEIGHTED {
-                    weight += weights[index];
+    let r = sqrt(hp.r2);
+    let lo = cell_of(hp.position - vec3<f32>(r), g.cell_size);
+    let hi = cell_of(hp.position + vec3<f32>(r), g.cell_size);
+    var found = Found(0u, 0.0, vec3<f32>(0.0));
+    if scan_instead(lo, hi, g.photon_count) {
+        for (var k = 0u; k < g.photon_count; k++) {
+            visit(&found, hp, k);
+        }
+    } else {
+        for (var z = lo.z; z <= hi.z; z++) {
+            for (var y = lo.y; y <= hi.y; y++) {
+                for (var x = lo.x; x <= hi.x; x++) {
+                    let key = cell_key(vec3<i32>(x, y, z));
+                    let b = key & (g.bucket_count - 1u);
+                    for (var k = bucket_start[b]; k < bucket_start[b + 1u]; k++) {
+                        if sorted[k].cell == key {
+                            visit(&found, hp, k);
+                        }
+                    }
                 }
-                flux += p.power;
             }
         }
     }
+    var weight = found.weight;
     if !WEIGHTED {
-        weight = f32(m);
+        weight = f32(found.m);
     }
-    accumulated[2u * slot] += vec4<f32>(flux, f32(m));
+    accumulated[2u * slot] += vec4<f32>(found.flux, f32(found.m));
     accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);
 }
 

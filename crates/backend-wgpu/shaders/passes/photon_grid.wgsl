@@ -1,7 +1,8 @@
-// #import layout grid
-// The per-pass photon map: the twin of backend-cpu's photon_grid.rs. Same cells, same
-// buckets, and within each bucket photon indices in ascending order, so gathers sum in the
-// CPU's order. Steps, one dispatch each: bounds, params, count, (scan), scatter, sort.
+// #import layout rng qmc grid
+// The per-pass photon map: the twin of backend-cpu's photon_grid.rs. Same cells (sized from a
+// histogram of the visible points' squared radii), same buckets, and the photons copied into
+// bucket order with ascending index within each bucket, so gathers sum in the CPU's order.
+// Steps, one dispatch each: histogram, params, count, (scan), scatter, sort, copy.
 
 struct GridBuildParams {
     photon_count: u32,
@@ -13,58 +14,49 @@ struct GridBuildParams {
 @group(0) @binding(0) var<uniform> params: GridBuildParams;
 @group(0) @binding(1) var<storage, read> photons: array<Photon>;
 @group(0) @binding(2) var<storage, read> hit_points: array<HitPoint>;
-// Order-preserving integer keys of: min x, y, z; max x, y, z; largest r2.
-@group(0) @binding(3) var<storage, read_write> bounds: array<atomic<u32>, 7>;
+@group(0) @binding(3) var<storage, read_write> histogram: array<atomic<u32>, 1024>;
 @group(0) @binding(4) var<storage, read_write> grid: GridParams;
 @group(0) @binding(5) var<storage, read_write> bucket_counts: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> bucket_cursor: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> order: array<u32>;
-
-// Maps a float to a u32 whose unsigned order is the float order.
-fn order_key(x: f32) -> u32 {
-    let b = bitcast<u32>(x);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
-}
-
-fn from_order_key(k: u32) -> f32 {
-    return bitcast<f32>(select(~k, k & 0x7fffffffu, (k & 0x80000000u) != 0u));
-}
+@group(0) @binding(8) var<storage, read_write> keys: array<u32>;
+@group(0) @binding(9) var<storage, read_write> sorted: array<GridPhoton>;
 
 @compute @workgroup_size(64)
-fn grid_bounds_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn grid_histogram_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = item_index(gid, groups);
-    if i < params.photon_count {
-        let p = photons[i].position;
-        atomicMin(&bounds[0], order_key(p.x));
-        atomicMin(&bounds[1], order_key(p.y));
-        atomicMin(&bounds[2], order_key(p.z));
-        atomicMax(&bounds[3], order_key(p.x));
-        atomicMax(&bounds[4], order_key(p.y));
-        atomicMax(&bounds[5], order_key(p.z));
-    }
     if i < params.hit_point_count && (hit_points[i].flags & HIT_VALID) != 0u {
-        atomicMax(&bounds[6], order_key(hit_points[i].r2));
+        atomicAdd(&histogram[radius_bin(hit_points[i].r2)], 1u);
     }
 }
 
-const MAX_CELLS_PER_AXIS: f32 = 1048576.0;
-
+// ppm_core::grid::cell_size: the radius at the top of the quantile's bin.
 @compute @workgroup_size(1)
 fn grid_params_main() {
-    var lo = vec3<f32>(0.0);
-    var hi = vec3<f32>(0.0);
-    if params.photon_count > 0u {
-        lo = vec3<f32>(from_order_key(atomicLoad(&bounds[0])), from_order_key(atomicLoad(&bounds[1])), from_order_key(atomicLoad(&bounds[2])));
-        hi = vec3<f32>(from_order_key(atomicLoad(&bounds[3])), from_order_key(atomicLoad(&bounds[4])), from_order_key(atomicLoad(&bounds[5])));
+    var total = 0u;
+    for (var b = 0u; b < RADIUS_BINS; b++) {
+        total += atomicLoad(&histogram[b]);
     }
-    let max_r2 = max(from_order_key(atomicLoad(&bounds[6])), 0.0);
-    let extent = max(hi - lo, vec3<f32>(0.0));
-    var cell = max(2.0 * sqrt(max_r2), max(extent.x, max(extent.y, extent.z)) / MAX_CELLS_PER_AXIS);
-    if !(cell > 0.0 && is_finite_f32(cell)) {
-        cell = 1.0;
+    var cell = 1.0;
+    if total > 0u {
+        let wanted = max((total * CELL_QUANTILE_NUM + CELL_QUANTILE_DEN - 1u) / CELL_QUANTILE_DEN, 1u);
+        var cumulative = 0u;
+        var bin = RADIUS_BINS - 1u;
+        for (var b = 0u; b < RADIUS_BINS; b++) {
+            cumulative += atomicLoad(&histogram[b]);
+            if cumulative >= wanted {
+                bin = b;
+                break;
+            }
+        }
+        let r2 = min(bitcast<f32>((bin + 1u) << RADIUS_BIN_SHIFT), 3.4028235e38);
+        cell = sqrt(r2);
+        if !(cell > 0.0 && is_finite_f32(cell)) {
+            cell = 1.0;
+        }
+        cell = max(cell, 1.1754944e-38);
     }
-    let dims = floor(extent / cell) + vec3<f32>(1.0);
-    grid = GridParams(lo, cell, vec3<u32>(dims), params.bucket_count, params.photon_count, 0u, 0u, 0u);
+    grid = GridParams(cell, params.bucket_count, params.photon_count, 0u);
 }
 
 @compute @workgroup_size(64)
@@ -73,8 +65,9 @@ fn grid_count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     if i >= params.photon_count {
         return;
     }
-    let g = grid;
-    atomicAdd(&bucket_counts[bucket_of(cell_of(photons[i].position, g), g)], 1u);
+    let key = cell_key(cell_of(photons[i].position, grid.cell_size));
+    keys[i] = key;
+    atomicAdd(&bucket_counts[key & (params.bucket_count - 1u)], 1u);
 }
 
 @compute @workgroup_size(64)
@@ -83,9 +76,7 @@ fn grid_scatter_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if i >= params.photon_count {
         return;
     }
-    let g = grid;
-    let b = bucket_of(cell_of(photons[i].position, g), g);
-    order[atomicAdd(&bucket_cursor[b], 1u)] = i;
+    order[atomicAdd(&bucket_cursor[keys[i] & (params.bucket_count - 1u)], 1u)] = i;
 }
 
 // Scattering by atomics leaves each bucket in arbitrary order: sort it by photon index.
@@ -107,4 +98,15 @@ fn grid_sort_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
         }
         order[j] = v;
     }
+}
+
+@compute @workgroup_size(64)
+fn grid_copy_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = item_index(gid, groups);
+    if k >= params.photon_count {
+        return;
+    }
+    let i = order[k];
+    let p = photons[i];
+    sorted[k] = GridPhoton(p.position, keys[i], p.power, p.normal_oct);
 }

@@ -108,7 +108,7 @@ fn oct_encode(n: vec3<f32>) -> u32 {
     return oct_quantise(x) | (oct_quantise(y) << 16u);
 }
 
-fn oct_decode(bits: u32) -> vec3<f32> {
+fn oct_unfold(bits: u32) -> vec3<f32> {
     var x = f32(bits & 0xffffu) / 65535.0 * 2.0 - 1.0;
     var y = f32(bits >> 16u) / 65535.0 * 2.0 - 1.0;
     let z = 1.0 - abs(x) - abs(y);
@@ -118,7 +118,16 @@ fn oct_decode(bits: u32) -> vec3<f32> {
         x = (1.0 - abs(oy)) * sign_nonzero(ox);
         y = (1.0 - abs(ox)) * sign_nonzero(oy);
     }
-    return normalize(vec3<f32>(x, y, z));
+    return vec3<f32>(x, y, z);
+}
+
+fn oct_decode(bits: u32) -> vec3<f32> {
+    return normalize(oct_unfold(bits));
+}
+
+// Whether the packed normal points into n's hemisphere: the sign needs no normalising.
+fn oct_faces(bits: u32, n: vec3<f32>) -> bool {
+    return dot(oct_unfold(bits), n) > 0.0;
 }
 
 fn camera_ray(camera: GpuCamera, px: f32, py: f32) -> vec3<f32> {

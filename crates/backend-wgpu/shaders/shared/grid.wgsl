@@ -1,42 +1,25 @@
-// Photon hash-grid mapping: the twin of ppm_core::grid.
+// Photon hash grid: the twin of ppm_core::grid. Needs qmc.wgsl (qmc_hash) imported before it.
 
-fn cell_axis(v: f32, dim: u32) -> u32 {
-    return min(u32(max(floor(v), 0.0)), dim - 1u);
+const RADIUS_BINS: u32 = 1024u;
+const RADIUS_BIN_SHIFT: u32 = 21u;
+const CELL_QUANTILE_NUM: u32 = 3u;
+const CELL_QUANTILE_DEN: u32 = 4u;
+const I32_MAX_F32: f32 = 2147483520.0;
+
+fn radius_bin(r2: f32) -> u32 {
+    return min(bitcast<u32>(max(r2, 0.0)) >> RADIUS_BIN_SHIFT, RADIUS_BINS - 1u);
 }
 
-fn cell_of(p: vec3<f32>, g: GridParams) -> vec3<u32> {
-    let rel = (p - g.origin) / g.cell_size;
-    return vec3<u32>(cell_axis(rel.x, g.dims.x), cell_axis(rel.y, g.dims.y), cell_axis(rel.z, g.dims.z));
+fn cell_of(p: vec3<f32>, cell: f32) -> vec3<i32> {
+    return vec3<i32>(clamp(floor(p / cell), vec3<f32>(-2147483648.0), vec3<f32>(I32_MAX_F32)));
 }
 
-fn bucket_of(cell: vec3<u32>, g: GridParams) -> u32 {
-    return ((cell.x * 73856093u) ^ (cell.y * 19349663u) ^ (cell.z * 83492791u)) & (g.bucket_count - 1u);
+fn cell_key(c: vec3<i32>) -> u32 {
+    let u = bitcast<vec3<u32>>(c);
+    return qmc_hash((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u));
 }
 
-struct Buckets {
-    ids: array<u32, 8>,
-    count: u32,
-}
-
-fn buckets_around(p: vec3<f32>, r: f32, g: GridParams) -> Buckets {
-    let lo = cell_of(p - vec3<f32>(r), g);
-    let hi = min(cell_of(p + vec3<f32>(r), g), lo + vec3<u32>(1u));
-    var out: Buckets;
-    out.count = 0u;
-    for (var z = lo.z; z <= hi.z; z++) {
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
-                let b = bucket_of(vec3<u32>(x, y, z), g);
-                var seen = false;
-                for (var i = 0u; i < out.count; i++) {
-                    seen = seen || out.ids[i] == b;
-                }
-                if !seen {
-                    out.ids[out.count] = b;
-                    out.count++;
-                }
-            }
-        }
-    }
-    return out;
+fn scan_instead(lo: vec3<i32>, hi: vec3<i32>, photon_count: u32) -> bool {
+    let e = vec3<f32>(hi) - vec3<f32>(lo) + vec3<f32>(1.0);
+    return e.x * e.y * e.z > f32(photon_count);
 }

@@ -135,14 +135,17 @@ struct GatherParams {
 }
 
 struct GridParams {
-    origin: vec3<f32>,
     cell_size: f32,
-    dims: vec3<u32>,
     bucket_count: u32,
     photon_count: u32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+}
+
+struct GridPhoton {
+    position: vec3<f32>,
+    cell: u32,
+    power: vec3<f32>,
+    normal_oct: u32,
 }
 
 struct EmissionRegion {
