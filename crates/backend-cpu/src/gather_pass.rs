@@ -172,7 +172,10 @@ pub fn for_photons_in_disc(
             for cx in lo[0]..=hi[0] {
                 let key = cell_key([cx, cy, cz]);
                 let b = (key & mask) as usize;
-                let (start, end) = (grid.bucket_start[b] as usize, grid.bucket_start[b + 1] as usize);
+                let (start, end) = (
+                    grid.bucket_start[b] as usize,
+                    grid.bucket_start[b + 1] as usize,
+                );
                 for (k, p) in grid.sorted[start..end].iter().enumerate() {
                     if p.cell == key {
                         test(start + k, p);
@@ -220,4 +223,89 @@ fn apply_pending(
             hp.r2 = s.r2;
             hp.tau = s.tau;
         });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photon_grid::build_photon_grid;
+    use ppm_core::geometry::oct_encode;
+    use ppm_core::layout::{Photon, hit_flags};
+    use ppm_core::rng::{PassKind, StreamKey};
+
+    /// Photons on a plane and a perpendicular wall at `scale`, a few far away; visible points
+    /// with radii spread over two orders of magnitude.
+    fn case(scale: f32, far: f32) -> (Vec<Photon>, Vec<HitPoint>) {
+        let u = |path: u32, d: u32| {
+            StreamKey {
+                seed: 9,
+                kind: PassKind::Photon,
+                pass_index: 0,
+                path,
+            }
+            .uniform(d)
+        };
+        let mut photons: Vec<Photon> = (0..4000)
+            .map(|i| {
+                let (a, b) = (u(i, 0) * scale, u(i, 1) * scale);
+                let (position, normal) = if i % 3 == 0 {
+                    ([a, b, 0.0], Vec3::Z)
+                } else {
+                    ([a, 0.0, b], Vec3::Y)
+                };
+                Photon {
+                    position,
+                    path: i,
+                    power: [1.0; 3],
+                    normal_oct: oct_encode(normal),
+                }
+            })
+            .collect();
+        photons.push(Photon {
+            position: [far, -far, far],
+            normal_oct: oct_encode(Vec3::Y),
+            ..Photon::default()
+        });
+        let hit_points = (0..300)
+            .map(|i| {
+                let r = scale * 0.002 * 100f32.powf(u(10_000 + i, 2));
+                HitPoint {
+                    position: [u(10_000 + i, 0) * scale, 0.0, u(10_000 + i, 1) * scale],
+                    normal: [0.0, 1.0, 0.0],
+                    r2: r * r,
+                    flags: hit_flags::VALID,
+                    ..HitPoint::default()
+                }
+            })
+            .collect();
+        (photons, hit_points)
+    }
+
+    /// The grid finds exactly the photons a scan of all of them finds, at any scale and with a
+    /// deposit far from the rest (which must not starve the others' buckets).
+    #[test]
+    fn the_grid_finds_what_a_brute_force_scan_finds() {
+        for (scale, far) in [(1.0, 10.0), (1e-4, 1e-3), (1e4, 1e37), (1.0, 1e8)] {
+            let (photons, hit_points) = case(scale, far);
+            let grid = build_photon_grid(&photons, &hit_points);
+            let map = PhotonMap {
+                grid: &grid,
+                weights: None,
+            };
+            for hp in &hit_points {
+                let mut found = Vec::new();
+                for_photons_in_disc(hp, &map, |i, _| found.push(i));
+                found.sort_unstable();
+                let n = Vec3::from(hp.normal);
+                let expected: Vec<usize> = (0..photons.len())
+                    .filter(|&i| {
+                        let p = &photons[i];
+                        (Vec3::from(p.position) - Vec3::from(hp.position)).length_squared() < hp.r2
+                            && oct_faces(p.normal_oct, n)
+                    })
+                    .collect();
+                assert_eq!(found, expected, "scale {scale}, far {far}, {hp:?}");
+            }
+        }
+    }
 }

@@ -50,7 +50,21 @@ pub struct CpuBackend {
     weights: Option<Vec<f32>>,
     /// Deferred region photons per hit point (area mode).
     pending: Vec<gather_pass::Pending>,
-    grid: Option<PhotonGrid>,
+    /// The photon map's grid: `Indexed` once built from the last pass's deposits (at the first
+    /// gather after it, so a perturbation through [`CpuBackend::photons_mut`] reaches it).
+    grid: PhotonIndex,
+}
+
+/// Whether the current photons are indexed yet.
+#[derive(Default)]
+enum PhotonIndex {
+    /// No photon pass since the scene was loaded or updated.
+    #[default]
+    NoPass,
+    /// A photon pass ran; its deposits are not filed yet.
+    Pending,
+    /// Its deposits, filed.
+    Indexed(PhotonGrid),
 }
 
 impl CpuBackend {
@@ -111,7 +125,7 @@ impl SceneUpload for CpuBackend {
         self.hit_points.clear();
         self.photons.clear();
         self.weights = None;
-        self.grid = None;
+        self.grid = PhotonIndex::NoPass;
         Ok(())
     }
 }
@@ -121,7 +135,7 @@ impl SceneUpdate for CpuBackend {
         self.scene = Some((SceneData::new(scene), scene.camera));
         self.photons.clear();
         self.weights = None;
-        self.grid = None;
+        self.grid = PhotonIndex::NoPass;
         Ok(())
     }
 }
@@ -142,7 +156,7 @@ impl CpuBackend {
                 value: format!("power {:?} at {:?}", p.power, p.position),
             });
         }
-        self.grid = Some(build_photon_grid(&deposits.photons, &self.hit_points));
+        self.grid = PhotonIndex::Pending;
         self.photons = deposits.photons;
         self.weights = deposits.weights;
         Ok(deposits.stats)
@@ -251,12 +265,33 @@ impl HitPointUpdate for CpuBackend {
     }
 }
 
+/// The last photon pass's grid, built now if it is not yet.
+fn indexed<'a>(
+    index: &'a mut PhotonIndex,
+    photons: &[Photon],
+    hit_points: &[HitPoint],
+    pass: &'static str,
+) -> Result<&'a PhotonGrid, BackendError> {
+    if let PhotonIndex::Pending = index {
+        *index = PhotonIndex::Indexed(build_photon_grid(photons, hit_points));
+    }
+    match index {
+        PhotonIndex::Indexed(grid) => Ok(grid),
+        _ => Err(BackendError::OutOfOrder {
+            pass,
+            needs: "a photon pass",
+        }),
+    }
+}
+
 impl LandingPaths for CpuBackend {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
-        let grid = self.grid.as_ref().ok_or(BackendError::OutOfOrder {
-            pass: "landing paths",
-            needs: "a photon pass",
-        })?;
+        let grid = indexed(
+            &mut self.grid,
+            &self.photons,
+            &self.hit_points,
+            "landing paths",
+        )?;
         let map = PhotonMap {
             grid,
             weights: None,
@@ -280,10 +315,7 @@ impl LandingPaths for CpuBackend {
 impl GatherPass for CpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "gather")?;
-        let grid = self.grid.as_ref().ok_or(BackendError::OutOfOrder {
-            pass: "gather",
-            needs: "a photon pass",
-        })?;
+        let grid = indexed(&mut self.grid, &self.photons, &self.hit_points, "gather")?;
         let map = PhotonMap {
             grid,
             weights: self.weights.as_deref(),

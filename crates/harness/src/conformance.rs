@@ -360,8 +360,7 @@ fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result
         let n = Vec3::from(hp.normal);
         let (mut m, mut flux) = (0u32, Vec3::ZERO);
         for ph in &photons {
-            if (Vec3::from(ph.position) - x).length_squared() < hp.r2
-                && oct_faces(ph.normal_oct, n)
+            if (Vec3::from(ph.position) - x).length_squared() < hp.r2 && oct_faces(ph.normal_oct, n)
             {
                 m += 1;
                 flux += Vec3::from(ph.power);

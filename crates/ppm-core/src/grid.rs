@@ -86,14 +86,17 @@ fn clamp_i32(v: f32) -> i32 {
     v.clamp(-2_147_483_648.0, I32_MAX_F32) as i32
 }
 
-/// The 32-bit key of a cell: the spatial hash of Teschner et al. (2003), mixed so that its
-/// low bits (the bucket) depend on every coordinate bit.
+/// The 32-bit key of a cell: a sum of its coordinates times large odd constants (two cells
+/// share it only if their differences weigh to a multiple of 2^32, which no neighbours do),
+/// mixed so that its low bits (the bucket) depend on every coordinate bit. (Teschner et al.'s
+/// xor of the products does collide between neighbours.)
 #[inline]
 pub fn cell_key(c: [i32; 3]) -> u32 {
     crate::qmc::hash(
-        (c[0] as u32).wrapping_mul(73_856_093)
-            ^ (c[1] as u32).wrapping_mul(19_349_663)
-            ^ (c[2] as u32).wrapping_mul(83_492_791),
+        (c[0] as u32)
+            .wrapping_mul(73_856_093)
+            .wrapping_add((c[1] as u32).wrapping_mul(19_349_663))
+            .wrapping_add((c[2] as u32).wrapping_mul(83_492_791)),
     )
 }
 
@@ -101,7 +104,10 @@ pub fn cell_key(c: [i32; 3]) -> u32 {
 /// axis, inclusive.
 #[inline]
 pub fn cell_range(p: Vec3, r: f32, cell: f32) -> ([i32; 3], [i32; 3]) {
-    (cell_of(p - Vec3::splat(r), cell), cell_of(p + Vec3::splat(r), cell))
+    (
+        cell_of(p - Vec3::splat(r), cell),
+        cell_of(p + Vec3::splat(r), cell),
+    )
 }
 
 /// Whether visiting the cells of `range` costs more than scanning all `photon_count`
@@ -162,9 +168,9 @@ mod tests {
     #[test]
     fn neighbouring_cells_have_distinct_keys() {
         let mut keys = std::collections::HashSet::new();
-        for x in -4..4 {
-            for y in -4..4 {
-                for z in -4..4 {
+        for x in -16..16 {
+            for y in -16..16 {
+                for z in -16..16 {
                     assert!(keys.insert(cell_key([x, y, z])), "{x} {y} {z}");
                 }
             }

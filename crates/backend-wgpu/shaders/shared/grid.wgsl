@@ -16,7 +16,7 @@ fn cell_of(p: vec3<f32>, cell: f32) -> vec3<i32> {
 
 fn cell_key(c: vec3<i32>) -> u32 {
     let u = bitcast<vec3<u32>>(c);
-    return qmc_hash((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u));
+    return qmc_hash(u.x * 73856093u + u.y * 19349663u + u.z * 83492791u);
 }
 
 fn scan_instead(lo: vec3<i32>, hi: vec3<i32>, photon_count: u32) -> bool {
