@@ -29,7 +29,7 @@ use passes::{
     HitPointUpdateKernel, LandingPathsKernel, PhotonPassKernel, PhotonTargets, ResolveKernel,
     RngVectorsKernel, Slots,
 };
-use photon_grid::{PhotonGridKernels, PhotonMap, photon_bytes};
+use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
@@ -43,6 +43,15 @@ use ppm_core::passes::{
     ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats,
 };
 use scan::Scan;
+
+/// The buffers a photon pass appends its deposits to: records, their ranks in path order,
+/// and (region passes) their paths' weights.
+struct DepositBuffers {
+    photons: wgpu::Buffer,
+    ranks: wgpu::Buffer,
+    weights: wgpu::Buffer,
+    capacity: u32,
+}
 
 /// Counter slots (`COUNTER_*` in layout.wgsl).
 const COUNTER_RAYS: usize = 0;
@@ -79,7 +88,12 @@ pub struct WgpuBackend {
     pending: Option<wgpu::Buffer>,
     /// Uniform vec4 whose x is the initial squared radius of the last eye pass.
     r2_initial: Option<wgpu::Buffer>,
-    path_offsets: Option<wgpu::Buffer>,
+    /// Where photon passes append their deposits, kept from pass to pass.
+    deposits: Option<DepositBuffers>,
+    /// Deposits per path of the last photon pass: sizes the next pass's buffers.
+    deposits_per_path: f64,
+    /// The photon grid's working buffers, kept from pass to pass.
+    grid_buffers: Option<GridBuffers>,
     map: Option<PhotonMap>,
     /// Batches the last photon pass took.
     batches: u32,
@@ -116,7 +130,9 @@ impl WgpuBackend {
             accumulated: None,
             pending: None,
             r2_initial: None,
-            path_offsets: None,
+            deposits: None,
+            deposits_per_path: 1.5,
+            grid_buffers: None,
             map: None,
             batches: 0,
             last_pass_paths: 0,
@@ -324,10 +340,23 @@ impl DirectLight for WgpuBackend {
 }
 
 impl WgpuBackend {
+    /// Deposit buffers holding at least `capacity` records (reused when large enough).
+    fn deposit_buffers(&mut self, capacity: u32) -> Result<&DepositBuffers, BackendError> {
+        if self.deposits.as_ref().is_none_or(|d| d.capacity < capacity) {
+            self.deposits = Some(DepositBuffers {
+                photons: storage_zeroed(&self.ctx, "photons", photon_bytes(capacity))?,
+                ranks: storage_zeroed(&self.ctx, "ranks", u64::from(capacity.max(1)) * 4)?,
+                weights: storage_zeroed(&self.ctx, "weights", u64::from(capacity.max(1)) * 4)?,
+                capacity,
+            });
+        }
+        Ok(self.deposits.as_ref().expect("allocated above"))
+    }
+
     /// Traces a pass whose photons start as `emitter` says, in as few batches as the device's
     /// binding limit allows (one, unless the deposits would not fit one buffer), and
     /// accumulates each batch into the hit points' accumulators, so the gather that follows
-    /// makes one update from the whole pass.
+    /// makes one update for the whole pass.
     fn trace_pass(
         &mut self,
         params: &PhotonPassParams,
@@ -335,32 +364,12 @@ impl WgpuBackend {
         paths: &[RecordedPath],
     ) -> Result<PhotonStats, BackendError> {
         let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
-        let max_deposits = (limit / size_of::<Photon>() as u64).max(1);
-        // Start from a little under one deposit per path (the common case); a batch that
-        // deposits more is counted again, smaller.
-        let mut batch = params
-            .photon_count
-            .min((self.ctx.binding_limit() / 4).min(u64::from(u32::MAX)) as u32)
-            .min((max_deposits * 9 / 10).clamp(1, u64::from(u32::MAX)) as u32);
-        let path_bytes = u64::from(batch) * 4;
-        let offsets = match self.path_offsets.take() {
-            Some(b) if b.size() >= path_bytes => b,
-            _ => storage_zeroed(&self.ctx, "path_offsets", path_bytes)?,
-        };
-        let scene = self.scene("photon")?;
+        let max_deposits = (limit / size_of::<Photon>() as u64).clamp(1, u64::from(u32::MAX));
+        // A deposit's rank, (path - first_path) * max_depth + bounce, must fit 32 bits.
+        let rank_paths = u32::MAX / params.max_depth.max(1);
+        let mut batch = params.photon_count.clamp(1, rank_paths);
         // No light, no photon: the pass emits its count and its map stays empty.
-        let lit = scene.light_count > 0;
-        let (hit_points, slots) = self.hit_points("photon")?;
-        let (accumulated, pending, r2_initial) = self.gather_state("photon")?;
-        let slots = Slots {
-            hit_points,
-            counters: &self.counters,
-            count: *slots,
-        };
-        // The accumulation needs to know whether deposits carry path weights (region photons)
-        // and who gathers: every hit point, the kept ones (region) or the updated ones (guided).
-        // Ordinary emission also serves testing and difference passes, so it accumulates
-        // everywhere and the gather pass filters.
+        let lit = self.scene("photon")?.light_count > 0;
         let accumulate = GatherParams {
             kind: match emitter.kind {
                 emission_kind::REGION => ppm_core::layout::gather_kind::REGION_POSITIVE,
@@ -368,13 +377,6 @@ impl WgpuBackend {
                 _ => ppm_core::layout::gather_kind::ORDINARY,
             },
             ..GatherParams::default()
-        };
-        let gather = GatherInputs {
-            params: &accumulate,
-            materials: &scene.materials,
-            accumulated,
-            pending,
-            r2_initial,
         };
         let emission = emitter.kind;
         let emitter = buffers::uniform(&self.ctx, "emitter", emitter);
@@ -386,6 +388,7 @@ impl WgpuBackend {
         let mut map = None;
         let mut batches = 0;
         let mut start = 0;
+        let (accumulated, _, _) = self.gather_state("photon")?;
         self.run("photon accumulator reset", |encoder| {
             encoder.clear_buffer(accumulated, 0, None);
             Ok(())
@@ -396,55 +399,79 @@ impl WgpuBackend {
                 first_path: params.first_path + start,
                 ..*params
             };
-            let no_photons = storage_zeroed(&self.ctx, "photons", photon_bytes(0))?;
-            let no_weights = storage_zeroed(&self.ctx, "weights", 4)?;
+            let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
+            let capacity = expected.min(max_deposits as f64) as u32;
+            self.deposit_buffers(capacity)?;
+            self.grid_buffers = Some(GridBuffers::fit(
+                &self.ctx,
+                self.grid_buffers.take(),
+                capacity,
+            )?);
+            let grid_buffers = self.grid_buffers.as_ref().expect("fitted above");
+            let scene = self.scene("photon")?;
+            let deposits = self.deposits.as_ref().expect("allocated above");
             let targets = PhotonTargets {
-                path_offsets: &offsets,
-                photons: &no_photons,
+                ranks: &deposits.ranks,
+                photons: &deposits.photons,
                 counters: &self.counters,
                 emitter: &emitter,
                 recorded: &recorded,
-                weights: &no_weights,
+                weights: &deposits.weights,
             };
-            let counted = if lit {
-                self.run("photon count", |encoder| {
-                    self.kernels.photon.record(
-                        &self.ctx, encoder, &launch, scene, &targets, emission, false,
-                    );
+            let traced = if lit {
+                self.run("photon trace", |encoder| {
                     self.kernels
-                        .scan
-                        .record(&self.ctx, encoder, &offsets, launch.photon_count)
+                        .photon
+                        .record(&self.ctx, encoder, &launch, scene, &targets, emission);
+                    Ok(())
                 })?
             } else {
                 [0; 4]
             };
-            let deposited = counted[COUNTER_ITEMS];
-            if u64::from(deposited) > max_deposits {
-                // Shrink the batch to fit, with a tenth to spare; this count is discarded.
-                batch = ((u64::from(launch.photon_count) * max_deposits / u64::from(deposited)) * 9
-                    / 10)
-                    .max(1) as u32;
+            let deposited = traced[COUNTER_ITEMS];
+            if deposited > deposits.capacity {
+                // The buffers were too small: grow them, or split the pass if even the
+                // binding limit cannot hold the batch; this trace is discarded.
+                self.deposits_per_path = f64::from(deposited) / f64::from(launch.photon_count);
+                if u64::from(deposited) > max_deposits && launch.photon_count == 1 {
+                    return Err(BackendError::Limit(format!(
+                        "one photon path deposits {deposited} photons; the photon buffer holds {max_deposits}"
+                    )));
+                }
+                if u64::from(deposited) > max_deposits {
+                    batch = ((u64::from(launch.photon_count) * max_deposits / u64::from(deposited))
+                        * 9
+                        / 10)
+                        .max(1) as u32;
+                }
                 continue;
             }
-            let photons = storage_zeroed(&self.ctx, "photons", photon_bytes(deposited))?;
-            let weights = storage_zeroed(&self.ctx, "weights", u64::from(deposited.max(1)) * 4)?;
-            let targets = PhotonTargets {
-                path_offsets: &offsets,
-                photons: &photons,
+            let (hit_points, slots) = self.hit_points("photon")?;
+            let (accumulated, pending, r2_initial) = self.gather_state("photon")?;
+            let slots = Slots {
+                hit_points,
                 counters: &self.counters,
-                emitter: &emitter,
-                recorded: &recorded,
-                weights: &weights,
+                count: *slots,
+            };
+            let gather = GatherInputs {
+                params: &accumulate,
+                materials: &scene.materials,
+                accumulated,
+                pending,
+                r2_initial,
             };
             self.run("photon map", |encoder| {
-                self.kernels
-                    .photon
-                    .record(&self.ctx, encoder, &launch, scene, &targets, emission, true);
                 let built = self.kernels.grid.record(
                     &self.ctx,
                     encoder,
                     &self.kernels.scan,
-                    (photons.clone(), weights.clone(), deposited),
+                    grid_buffers,
+                    (
+                        deposits.photons.clone(),
+                        deposits.weights.clone(),
+                        &deposits.ranks,
+                        deposited,
+                    ),
                     (hit_points, slots.count),
                 )?;
                 self.kernels
@@ -454,14 +481,17 @@ impl WgpuBackend {
                 Ok(())
             })?;
             stats.deposited += u64::from(deposited);
-            stats.rays += u64::from(counted[COUNTER_RAYS]);
+            stats.rays += u64::from(traced[COUNTER_RAYS]);
             start += launch.photon_count;
             batches += 1;
+        }
+        if params.photon_count > 0 {
+            self.deposits_per_path =
+                (stats.deposited as f64 / f64::from(params.photon_count)).max(0.1);
         }
         self.map = map;
         self.batches = batches;
         self.last_pass_paths = params.first_path + params.photon_count;
-        self.path_offsets = Some(offsets);
         Ok(stats)
     }
 }
@@ -686,10 +716,16 @@ impl ReadBack for WgpuBackend {
                 self.batches
             )));
         }
-        match &self.map {
-            Some(map) => read_back(&self.ctx, &map.photons, map.count as usize),
-            None => Ok(Vec::new()),
-        }
+        let Some(map) = &self.map else {
+            return Ok(Vec::new());
+        };
+        // Deposits were appended in whatever order the invocations ran: put them back in
+        // path order by their ranks.
+        let photons: Vec<Photon> = read_back(&self.ctx, &map.photons, map.count as usize)?;
+        let ranks: Vec<u32> = read_back(&self.ctx, &map.ranks, map.count as usize)?;
+        let mut ranked: Vec<(u32, Photon)> = ranks.into_iter().zip(photons).collect();
+        ranked.sort_unstable_by_key(|(rank, _)| *rank);
+        Ok(ranked.into_iter().map(|(_, p)| p).collect())
     }
 }
 

@@ -107,17 +107,16 @@ impl DirectLightKernel {
     }
 }
 
-/// photon_pass.wgsl: a counting trace, then (after the scan) a writing trace, each
-/// specialised per emission kind (ordinary, region, guided).
+/// photon_pass.wgsl: one trace appending its deposits, specialised per emission kind
+/// (ordinary, region, guided).
 pub struct PhotonPassKernel {
-    count: [Kernel; 3],
-    write: [Kernel; 3],
+    trace: [Kernel; 3],
 }
 
 /// The buffers a photon pass binds besides the scene.
 pub struct PhotonTargets<'a> {
-    /// Deposits per path, then (scanned) each path's first deposit.
-    pub path_offsets: &'a wgpu::Buffer,
+    /// Each deposit's rank in path order.
+    pub ranks: &'a wgpu::Buffer,
     /// The deposits.
     pub photons: &'a wgpu::Buffer,
     /// Pass counters.
@@ -149,14 +148,11 @@ impl PhotonPassKernel {
             )
         };
         Self {
-            count: [0, 1, 2].map(|k| kernel("photon_count_main", k)),
-            write: [0, 1, 2].map(|k| kernel("photon_write_main", k)),
+            trace: [0, 1, 2].map(|k| kernel("photon_trace_main", k)),
         }
     }
 
-    /// Records the counting trace (`write == false`) or the writing trace of photons emitted
-    /// as `emission` says (`layout::emission_kind`).
-    #[allow(clippy::too_many_arguments)]
+    /// Records the trace of photons emitted as `emission` says (`layout::emission_kind`).
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -165,10 +161,8 @@ impl PhotonPassKernel {
         scene: &SceneBuffers,
         targets: &PhotonTargets,
         emission: u32,
-        write: bool,
     ) {
-        let kernels = if write { &self.write } else { &self.count };
-        let kernel = &kernels[emission as usize];
+        let kernel = &self.trace[emission as usize];
         let uniform_params = uniform(ctx, "photon params", params);
         let group = kernel.bind(
             &ctx.device,
@@ -178,7 +172,7 @@ impl PhotonPassKernel {
                 &scene.nodes,
                 &scene.materials,
                 &scene.lights,
-                targets.path_offsets,
+                targets.ranks,
                 targets.photons,
                 targets.counters,
                 targets.emitter,

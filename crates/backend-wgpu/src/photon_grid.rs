@@ -23,11 +23,16 @@ pub struct PhotonMap {
     pub bucket_start: wgpu::Buffer,
     /// Index in `photons` of each photon of `sorted`.
     pub order: wgpu::Buffer,
-    /// The photons in bucket order (ascending index within a bucket), with their cell keys.
+    /// The photons in bucket order (ascending rank within a bucket), with their cell keys.
     pub sorted: wgpu::Buffer,
+    /// Each deposit's rank in path order.
+    pub ranks: wgpu::Buffer,
     /// Path weight of each deposit.
     pub weights: wgpu::Buffer,
 }
+
+/// Workgroups of the radius histogram (`HISTOGRAM_GROUPS` in photon_grid.wgsl).
+const HISTOGRAM_GROUPS: u32 = 64;
 
 /// The grid kernels.
 pub struct PhotonGridKernels {
@@ -46,7 +51,7 @@ impl PhotonGridKernels {
         let module = shader_module(&ctx.device, "photon_grid", shaders::PHOTON_GRID);
         let slots = [
             Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
-            ReadWrite,
+            ReadWrite, Read,
         ];
         let kernel = |entry, workgroup| Kernel::new(&ctx.device, &module, entry, &slots, workgroup);
         Self {
@@ -59,30 +64,23 @@ impl PhotonGridKernels {
         }
     }
 
-    /// Records the grid build over `photons` (`count` deposits), its cells sized to the
-    /// radii of the hit points' visible points; returns the map whose buffers the commands
-    /// fill.
+    /// Records the grid build over `photons` (`count` deposits, ranked in path order by
+    /// `ranks`) into `buffers`, its cells sized to the radii of the hit points' visible
+    /// points; returns the map whose buffers the commands fill.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         scan: &Scan,
-        (photons, weights, count): (wgpu::Buffer, wgpu::Buffer, u32),
+        buffers: &GridBuffers,
+        (photons, weights, ranks, count): (wgpu::Buffer, wgpu::Buffer, &wgpu::Buffer, u32),
         (hit_points, slots): (&wgpu::Buffer, u32),
     ) -> Result<PhotonMap, BackendError> {
         let bucket_count = bucket_count(count);
-        let histogram = storage_zeroed(ctx, "radius histogram", u64::from(RADIUS_BINS) * 4)?;
-        let grid = storage_zeroed(ctx, "grid", size_of::<GridParams>() as u64)?;
         let bucket_bytes = (u64::from(bucket_count) + 1) * 4;
-        let bucket_start = storage_zeroed(ctx, "bucket_start", bucket_bytes)?;
-        let bucket_cursor = storage_zeroed(ctx, "bucket_cursor", bucket_bytes)?;
-        let order = storage_zeroed(ctx, "order", u64::from(count) * 4)?;
-        let keys = storage_zeroed(ctx, "cell keys", u64::from(count) * 4)?;
-        let sorted = storage_zeroed(
-            ctx,
-            "sorted photons",
-            u64::from(count.max(1)) * size_of::<GridPhoton>() as u64,
-        )?;
+        encoder.clear_buffer(&buffers.histogram, 0, None);
+        encoder.clear_buffer(&buffers.bucket_start, 0, Some(bucket_bytes));
         let params = uniform(
             ctx,
             "grid params",
@@ -93,35 +91,88 @@ impl PhotonGridKernels {
                 _pad0: 0,
             },
         );
-        let buffers = [
+        let bindings = [
             &params,
             &photons,
             hit_points,
-            &histogram,
-            &grid,
-            &bucket_start,
-            &bucket_cursor,
-            &order,
-            &keys,
-            &sorted,
+            &buffers.histogram,
+            &buffers.grid,
+            &buffers.bucket_start,
+            &buffers.bucket_cursor,
+            &buffers.order,
+            &buffers.keys,
+            &buffers.sorted,
+            ranks,
         ];
-        let group = self.histogram.bind(&ctx.device, &buffers);
-        self.histogram.dispatch(encoder, &group, slots);
+        let group = self.histogram.bind(&ctx.device, &bindings);
+        // A fixed number of workgroups, each striding over the hit points (HISTOGRAM_GROUPS).
+        self.histogram
+            .dispatch(encoder, &group, HISTOGRAM_GROUPS * WORKGROUP);
         self.params.dispatch(encoder, &group, 1);
         self.count.dispatch(encoder, &group, count);
-        scan.record(ctx, encoder, &bucket_start, bucket_count + 1)?;
-        encoder.copy_buffer_to_buffer(&bucket_start, 0, &bucket_cursor, 0, bucket_bytes);
+        scan.record(ctx, encoder, &buffers.bucket_start, bucket_count + 1)?;
+        encoder.copy_buffer_to_buffer(
+            &buffers.bucket_start,
+            0,
+            &buffers.bucket_cursor,
+            0,
+            bucket_bytes,
+        );
         self.scatter.dispatch(encoder, &group, count);
-        self.sort.dispatch(encoder, &group, bucket_count);
+        self.sort.dispatch(encoder, &group, count);
         self.copy.dispatch(encoder, &group, count);
         Ok(PhotonMap {
             photons,
             weights,
             count,
-            grid,
-            bucket_start,
-            order,
-            sorted,
+            grid: buffers.grid.clone(),
+            bucket_start: buffers.bucket_start.clone(),
+            order: buffers.order.clone(),
+            sorted: buffers.sorted.clone(),
+            ranks: ranks.clone(),
+        })
+    }
+}
+
+/// The grid's working buffers, kept from pass to pass and grown when a pass needs more, so a
+/// pass allocates and zeroes nothing it did not need.
+pub struct GridBuffers {
+    histogram: wgpu::Buffer,
+    grid: wgpu::Buffer,
+    bucket_start: wgpu::Buffer,
+    bucket_cursor: wgpu::Buffer,
+    order: wgpu::Buffer,
+    keys: wgpu::Buffer,
+    sorted: wgpu::Buffer,
+    /// Photons they hold at most.
+    capacity: u32,
+}
+
+impl GridBuffers {
+    /// Buffers for `count` photons: `kept` if it holds enough, else new ones.
+    pub fn fit(
+        ctx: &GpuContext,
+        kept: Option<GridBuffers>,
+        count: u32,
+    ) -> Result<GridBuffers, BackendError> {
+        if let Some(b) = kept.filter(|b| b.capacity >= count) {
+            return Ok(b);
+        }
+        let bucket_bytes = (u64::from(bucket_count(count)) + 1) * 4;
+        let per_photon = u64::from(count.max(1));
+        Ok(GridBuffers {
+            histogram: storage_zeroed(ctx, "radius histogram", u64::from(RADIUS_BINS) * 4)?,
+            grid: storage_zeroed(ctx, "grid", size_of::<GridParams>() as u64)?,
+            bucket_start: storage_zeroed(ctx, "bucket_start", bucket_bytes)?,
+            bucket_cursor: storage_zeroed(ctx, "bucket_cursor", bucket_bytes)?,
+            order: storage_zeroed(ctx, "order", per_photon * 4)?,
+            keys: storage_zeroed(ctx, "cell keys", per_photon * 4)?,
+            sorted: storage_zeroed(
+                ctx,
+                "sorted photons",
+                per_photon * size_of::<GridPhoton>() as u64,
+            )?,
+            capacity: count.max(1),
         })
     }
 }

@@ -7,7 +7,10 @@ use crate::layout::ScanParams;
 use ppm_core::passes::BackendError;
 
 /// Elements one workgroup scans (`BLOCK` in scan.wgsl).
-const BLOCK: u32 = 256;
+const BLOCK: u32 = 2048;
+
+/// Invocations of a scan workgroup.
+const WORKGROUP: u32 = 256;
 
 /// The two scan kernels.
 pub struct Scan {
@@ -21,8 +24,8 @@ impl Scan {
         let module = shader_module(&ctx.device, "scan", crate::shaders::SCAN);
         let slots = [Slot::Uniform, Slot::ReadWrite, Slot::ReadWrite];
         Self {
-            blocks: Kernel::new(&ctx.device, &module, "scan_blocks_main", &slots, BLOCK),
-            add: Kernel::new(&ctx.device, &module, "scan_add_main", &slots, BLOCK),
+            blocks: Kernel::new(&ctx.device, &module, "scan_blocks_main", &slots, WORKGROUP),
+            add: Kernel::new(&ctx.device, &module, "scan_add_main", &slots, WORKGROUP),
         }
     }
 
@@ -50,7 +53,7 @@ impl Scan {
             },
         );
         let group = self.blocks.bind(&ctx.device, &[&params, data, &sums]);
-        self.blocks.dispatch(encoder, &group, count);
+        self.blocks.dispatch(encoder, &group, blocks * WORKGROUP);
         if blocks > 1 {
             self.record(ctx, encoder, &sums, blocks)?;
             let group = self.add.bind(&ctx.device, &[&params, data, &sums]);

@@ -65,10 +65,15 @@ pub fn cell_size(histogram: &[u32]) -> f32 {
     }
 }
 
-/// Hash buckets for `photon_count` photons: two per photon, a power of two, so cells rarely
-/// share a bucket.
+/// Hash buckets for `photon_count` photons: one per four photons (at least 1024), a power of
+/// two. Photons crowd onto surfaces, a few dozen to an occupied cell, so this still leaves
+/// most buckets to one cell, and building the grid (counting, scanning and sorting every
+/// bucket) costs a quarter of one bucket per photon: 120 against 70 ms a pass on lavapipe.
 pub fn bucket_count(photon_count: u32) -> u32 {
-    (photon_count.max(1) * 2).next_power_of_two().min(1 << 26)
+    (photon_count / 4)
+        .max(1024)
+        .next_power_of_two()
+        .min(1 << 26)
 }
 
 /// Integer cell coordinates of a point: `floor(p / cell)`, clamped into i32.

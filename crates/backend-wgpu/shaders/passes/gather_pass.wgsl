@@ -33,8 +33,7 @@ struct Found {
     flux: vec3<f32>,
 }
 
-fn visit(found: ptr<function, Found>, hp: HitPoint, k: u32) {
-    let p = sorted[k];
+fn visit(found: ptr<function, Found>, hp: HitPoint, p: GridPhoton, k: u32) {
     let d = p.position - hp.position;
     if dot(d, d) < hp.r2 && oct_faces(p.normal_oct, hp.normal) {
         (*found).m++;
@@ -64,19 +63,40 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     var found = Found(0u, 0.0, vec3<f32>(0.0));
     if scan_instead(lo, hi, g.photon_count) {
         for (var k = 0u; k < g.photon_count; k++) {
-            visit(&found, hp, k);
+            visit(&found, hp, sorted[k], k);
         }
     } else {
-        for (var z = lo.z; z <= hi.z; z++) {
-            for (var y = lo.y; y <= hi.y; y++) {
-                for (var x = lo.x; x <= hi.x; x++) {
-                    let key = cell_key(vec3<i32>(x, y, z));
-                    let b = key & (g.bucket_count - 1u);
-                    for (var k = bucket_start[b]; k < bucket_start[b + 1u]; k++) {
-                        if sorted[k].cell == key {
-                            visit(&found, hp, k);
-                        }
-                    }
+        // One flat loop, one photon or one cell a step (z, y, x order, as the CPU's nested
+        // loops): neighbouring invocations stay in step whatever their cells hold.
+        var cell = lo;
+        var key = 0u;
+        var k = 0u;
+        var end = 0u;
+        var cells_done = false;
+        loop {
+            if k < end {
+                let p = sorted[k];
+                if p.cell == key {
+                    visit(&found, hp, p, k);
+                }
+                k++;
+                continue;
+            }
+            if cells_done {
+                break;
+            }
+            key = cell_key(cell);
+            let b = key & (g.bucket_count - 1u);
+            k = bucket_start[b];
+            end = bucket_start[b + 1u];
+            cell.x++;
+            if cell.x > hi.x {
+                cell.x = lo.x;
+                cell.y++;
+                if cell.y > hi.y {
+                    cell.y = lo.y;
+                    cell.z++;
+                    cells_done = cell.z > hi.z;
                 }
             }
         }

@@ -1,8 +1,9 @@
 // #import layout rng qmc grid
 // The per-pass photon map: the twin of backend-cpu's photon_grid.rs. Same cells (sized from a
 // histogram of the visible points' squared radii), same buckets, and the photons copied into
-// bucket order with ascending index within each bucket, so gathers sum in the CPU's order.
-// Steps, one dispatch each: histogram, params, count, (scan), scatter, sort, copy.
+// bucket order with ascending rank (the CPU's path order) within each bucket, so gathers sum
+// in the CPU's order. Steps, one dispatch each: histogram, params, count, (scan), scatter,
+// sort, copy.
 
 struct GridBuildParams {
     photon_count: u32,
@@ -21,12 +22,32 @@ struct GridBuildParams {
 @group(0) @binding(7) var<storage, read_write> order: array<u32>;
 @group(0) @binding(8) var<storage, read_write> keys: array<u32>;
 @group(0) @binding(9) var<storage, read_write> sorted: array<GridPhoton>;
+// Each deposit's rank in path order (photon_pass.wgsl).
+@group(0) @binding(10) var<storage, read> ranks: array<u32>;
+
+// Radii cluster in a few bins: each workgroup counts a strided share of the hit points in
+// workgroup memory, then adds its non-zero bins to the global histogram, so few atomics
+// contend for one address.
+const HISTOGRAM_GROUPS: u32 = 64u;
+var<workgroup> local_histogram: array<atomic<u32>, 1024>;
 
 @compute @workgroup_size(64)
-fn grid_histogram_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = item_index(gid, groups);
-    if i < params.hit_point_count && (hit_points[i].flags & HIT_VALID) != 0u {
-        atomicAdd(&histogram[radius_bin(hit_points[i].r2)], 1u);
+fn grid_histogram_main(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid: vec3<u32>) {
+    for (var b = lid.x; b < RADIUS_BINS; b += 64u) {
+        atomicStore(&local_histogram[b], 0u);
+    }
+    workgroupBarrier();
+    for (var i = wid.x * 64u + lid.x; i < params.hit_point_count; i += HISTOGRAM_GROUPS * 64u) {
+        if (hit_points[i].flags & HIT_VALID) != 0u {
+            atomicAdd(&local_histogram[radius_bin(hit_points[i].r2)], 1u);
+        }
+    }
+    workgroupBarrier();
+    for (var b = lid.x; b < RADIUS_BINS; b += 64u) {
+        let count = atomicLoad(&local_histogram[b]);
+        if count > 0u {
+            atomicAdd(&histogram[b], count);
+        }
     }
 }
 
@@ -79,20 +100,28 @@ fn grid_scatter_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     order[atomicAdd(&bucket_cursor[keys[i] & (params.bucket_count - 1u)], 1u)] = i;
 }
 
-// Scattering by atomics leaves each bucket in arbitrary order: sort it by photon index.
-// `bucket_counts` holds the bucket starts by now (scanned in place).
+// Appending and scattering by atomics leave each bucket in arbitrary order: sort it by rank.
+// `bucket_counts` holds the bucket starts by now (scanned in place). One invocation per
+// photon; the one at its bucket's start sorts the bucket, so empty buckets cost nothing.
+// (The others read an entry the sort may be moving: any entry of the segment names the same
+// bucket, so they see the same start and leave.)
 @compute @workgroup_size(64)
 fn grid_sort_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let b = item_index(gid, groups);
-    if b >= params.bucket_count {
+    let k = item_index(gid, groups);
+    if k >= params.photon_count {
         return;
     }
+    let b = keys[order[k]] & (params.bucket_count - 1u);
     let start = atomicLoad(&bucket_counts[b]);
+    if start != k {
+        return;
+    }
     let end = atomicLoad(&bucket_counts[b + 1u]);
     for (var i = start + 1u; i < end; i++) {
         let v = order[i];
+        let rank = ranks[v];
         var j = i;
-        while j > start && order[j - 1u] > v {
+        while j > start && ranks[order[j - 1u]] > rank {
             order[j] = order[j - 1u];
             j--;
         }

@@ -1,13 +1,13 @@
 // #import layout rng sampling geometry bvh lights emission
 // Photon pass (ALGORITHM.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
-// Deposits land in path order, as on the CPU, without float atomics or an unordered append:
-// `photon_count_main` traces every path and stores its deposit count, an exclusive scan turns
-// the counts into offsets, and `photon_write_main` traces the same paths again (the generator
-// is counter-based, so they are identical) and writes each deposit at its path's offset.
-// A launch traces paths `first_path + i` for `i < photon_count`: the host splits a pass whose
-// deposits would not fit one binding into such batches. The `EMISSION` override picks where
-// photons start: ordinary, through the emitting region, or guided around recorded paths.
+// Each path is traced once and appends its deposits where an atomic counter says, with the
+// deposit's rank `(path - first_path) * max_depth + bounce` beside it: the append order
+// varies from run to run, but the grid sorts each bucket by rank, which is the CPU's path
+// order, so every sum is made in the same order. A deposit past the buffer's end is counted
+// and not written: the host sees the count, grows the buffer (or splits the pass into batches
+// of paths `first_path + i`, i < photon_count) and traces again. The `EMISSION` override picks
+// where photons start: ordinary, through the emitting region, or guided around recorded paths.
 
 struct Emitter {
     kind: u32,
@@ -23,7 +23,7 @@ struct Emitter {
 @group(0) @binding(2) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(3) var<storage, read> materials: array<GpuMaterial>;
 @group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
-@group(0) @binding(5) var<storage, read_write> path_offsets: array<u32>;
+@group(0) @binding(5) var<storage, read_write> ranks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> photons: array<Photon>;
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(8) var<uniform> emitter: Emitter;
@@ -66,19 +66,18 @@ fn pass_kind() -> u32 {
     }
 }
 
-// Traces path `path`; writes its deposits from `photons[base]` on when `write` is set.
-// Returns (deposits, rays).
-fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
+// Traces path `path`, appending its deposits. Returns the rays traced.
+fn trace_photon(path: u32) -> u32 {
     let key = StreamKey(params.seed, pass_kind(), params.pass_index, path);
     let emission = emit(key);
     if emission.weight <= 0.0 {
-        return vec2<u32>(0u, 0u);
+        return 0u;
     }
     var dir = emission.direction;
     var origin = emission.origin + emission.normal * params.ray_epsilon;
     var power = emission.power * params.power_scale;
-    var deposits = 0u;
     var rays = 0u;
+    let rank_base = (path - params.first_path) * params.max_depth;
     for (var bounce = 0u; bounce < params.max_depth; bounce++) {
         rays++;
         let hit = closest_hit(origin, dir, T_MISS);
@@ -93,13 +92,14 @@ fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         if material.kind == MATERIAL_DIFFUSE {
             if bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT {
-                if write {
-                    photons[base + deposits] = Photon(position, path, power, oct_encode(facing));
+                let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
+                if slot < arrayLength(&photons) {
+                    photons[slot] = Photon(position, path, power, oct_encode(facing));
+                    ranks[slot] = rank_base + bounce;
                     if EMISSION == EMISSION_REGION {
-                        weights[base + deposits] = emission.weight;
+                        weights[slot] = emission.weight;
                     }
                 }
-                deposits++;
             }
             let survive = max(material.albedo.x, max(material.albedo.y, material.albedo.z));
             if stream_uniform(key, d) >= survive {
@@ -116,26 +116,14 @@ fn trace_photon(path: u32, write: bool, base: u32) -> vec2<u32> {
             origin = position + side * params.ray_epsilon;
         }
     }
-    return vec2<u32>(deposits, rays);
+    return rays;
 }
 
 @compute @workgroup_size(64)
-fn photon_count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn photon_trace_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let local = item_index(gid, groups);
     if local >= params.photon_count {
         return;
     }
-    let traced = trace_photon(params.first_path + local, false, 0u);
-    path_offsets[local] = traced.x;
-    atomicAdd(&counters[COUNTER_ITEMS], traced.x);
-    atomicAdd(&counters[COUNTER_RAYS], traced.y);
-}
-
-@compute @workgroup_size(64)
-fn photon_write_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let local = item_index(gid, groups);
-    if local >= params.photon_count {
-        return;
-    }
-    trace_photon(params.first_path + local, true, path_offsets[local]);
+    atomicAdd(&counters[COUNTER_RAYS], trace_photon(params.first_path + local));
 }
