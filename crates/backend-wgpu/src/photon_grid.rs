@@ -1,5 +1,5 @@
-//! The per-pass photon map on the GPU (photon_grid.wgsl): bounds, grid parameters, bucket
-//! counts, scan, scatter, and the per-bucket sort that makes the order deterministic.
+//! The per-pass photon map on the GPU (photon_grid.wgsl): radius histogram, grid parameters,
+//! bucket counts, scan, scatter, and the per-bucket sort that makes the order deterministic.
 
 use crate::buffers::{storage_zeroed, uniform};
 use crate::context::GpuContext;

@@ -8,8 +8,8 @@
 //! compare rows of one run. The wgpu rows use whatever adapter wgpu finds (lavapipe on a
 //! machine without a GPU) and are left out, with a note, when there is none. Set
 //! `PPM_BENCH_ITERATIONS` and `PPM_BENCH_PHOTONS` to change the workload (default 16 x
-//! 200,000), `PPM_BENCH_SIZES` (default `256,768`), and `PPM_BENCH_BACKENDS` (default
-//! `cpu,wgpu`).
+//! 200,000), `PPM_BENCH_RADIUS` (default: the scene's), `PPM_BENCH_SIZES` (default
+//! `256,768`), and `PPM_BENCH_BACKENDS` (default `cpu,wgpu`).
 
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
@@ -45,8 +45,9 @@ fn main() {
             None
         }
     };
+    let radius: f32 = setting("PPM_BENCH_RADIUS", scene.render.initial_radius);
     println!(
-        "cornell-box, sppm, {iterations} iterations x {photons} photons from scratch; cpu on {threads} threads"
+        "cornell-box, sppm, {iterations} iterations x {photons} photons from scratch, initial radius {radius}; cpu on {threads} threads"
     );
     if let Some(g) = &gpu {
         println!("wgpu adapter: {}", g.adapter_name());
@@ -71,6 +72,7 @@ fn main() {
         params.height = size;
         params.passes = iterations;
         params.photons_per_pass = photons;
+        params.initial_radius = radius;
         let mut cpu = CpuBackend::new();
         let mut rows: Vec<&mut dyn DynamicBackend> = Vec::new();
         if backends.contains("cpu") {
