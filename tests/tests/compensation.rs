@@ -6,9 +6,11 @@
 use backend_cpu::CpuBackend;
 use harness::driver::Renderer;
 use harness::reference::{ReferenceBudget, render_reference};
-use ppm_core::compile::compile_scene;
+use ppm_core::compile::{camera_ray, compile_scene};
 use ppm_core::image::Image;
-use ppm_core::layout::{GatherParams, PhotonPassParams, first_hit, gather_kind, region_mode};
+use ppm_core::layout::{
+    GatherParams, PhotonPassParams, first_hit, gather_kind, hit_flags, region_mode,
+};
 use ppm_core::metrics::relative_rmse;
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::region::emitting_region;
@@ -111,28 +113,38 @@ fn a_negative_then_positive_region_pass_in_an_unchanged_scene_leaves_the_image()
     assert!(change < 1e-2, "change {change}");
 }
 
-/// A "move" to the same pose in difference mode: every path is traced alike in both poses, so
-/// the negative and positive passes cancel photon by photon and no kept statistic moves.
+/// A "move" to the same pose in difference and local modes: every path is traced alike in
+/// both poses, so the negative and positive passes cancel photon by photon and no kept
+/// statistic moves; local mode keeps every direct sum too.
 #[test]
-fn difference_passes_in_an_unchanged_scene_leave_the_statistics() {
-    let (scene, p) = cornell(64, 40_000);
-    let mut backend = CpuBackend::new();
-    let mut render = warmed(&mut backend, scene.clone(), &p, 8);
-    let before = render.backend().read_hit_points().unwrap();
-    let moved = render.move_to(scene, MoveMode::Difference).unwrap();
-    assert_eq!((moved.updated, &moved.restarted), (0, &None), "{moved:?}");
-    assert_eq!(render.counts.compensation.emitted, 8 * 40_000);
-    assert!(render.counts.compensation.deposited > 0 && render.counts.region.deposited > 0);
-    let after = render.backend().read_hit_points().unwrap();
-    let mut worst = 0.0f32;
-    for (b, a) in before.iter().zip(&after) {
-        assert_eq!((b.n, b.r2, b.emitted), (a.n, a.r2, a.emitted));
-        for c in 0..3 {
-            worst = worst.max((a.tau[c] - b.tau[c]).abs() / b.tau[c].max(1e-30));
+fn a_move_to_the_same_pose_leaves_the_statistics() {
+    for mode in [MoveMode::Difference, MoveMode::Local] {
+        let (scene, p) = cornell(64, 40_000);
+        let mut backend = CpuBackend::new();
+        let mut render = warmed(&mut backend, scene.clone(), &p, 8);
+        let before = render.backend().read_hit_points().unwrap();
+        let moved = render.move_to(scene, mode).unwrap();
+        assert_eq!(
+            (moved.updated, moved.direct_restarted, &moved.restarted),
+            (0, 0, &None),
+            "{moved:?}"
+        );
+        assert_eq!(render.counts.compensation.emitted, 8 * 40_000);
+        assert!(render.counts.compensation.deposited > 0 && render.counts.region.deposited > 0);
+        let after = render.backend().read_hit_points().unwrap();
+        let mut worst = 0.0f32;
+        for (b, a) in before.iter().zip(&after) {
+            assert_eq!((b.n, b.r2, b.emitted), (a.n, a.r2, a.emitted));
+            if mode == MoveMode::Local {
+                assert_eq!((b.direct, b.iterations), (a.direct, a.iterations));
+            }
+            for c in 0..3 {
+                worst = worst.max((a.tau[c] - b.tau[c]).abs() / b.tau[c].max(1e-30));
+            }
         }
+        println!("{mode:?}: largest relative change of tau: {worst:.2e}");
+        assert!(worst < 1e-5, "{mode:?}: tau moved by {worst}");
     }
-    println!("largest relative change of tau: {worst:.2e}");
-    assert!(worst < 1e-5, "tau moved by {worst}");
 }
 
 /// More negative photons than a hit point holds: every hit point stays finite, no flux
@@ -191,8 +203,8 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
     assert!(render.resolve().unwrap().is_finite());
 }
 
-/// After the tall block moves, area and difference modes' frames approach the truth of the
-/// new pose as iterations continue, with either estimator: `sppm` against the path-traced
+/// After the tall block moves, area, difference and (with `sppm`) local modes' frames approach
+/// the truth of the new pose as iterations continue, with either estimator: `sppm` against the path-traced
 /// reference, `ppm` against a long `ppm` render of the new pose (it converges to the
 /// radiance at its pixel centres, not to the pixel averages of the path tracer).
 #[test]
@@ -217,13 +229,19 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
                 tests::render_cpu(&scene, 1, &reference, 2).0.image
             }
         };
-        for mode in [MoveMode::Area, MoveMode::Difference] {
+        let local = (estimator == Estimator::Sppm).then_some(MoveMode::Local);
+        for mode in [MoveMode::Area, MoveMode::Difference]
+            .into_iter()
+            .chain(local)
+        {
             let mut backend = CpuBackend::new();
             let mut render = warmed(&mut backend, scene.at_frame(0), &p, 8);
             let stale = relative_rmse(&render.resolve().unwrap(), &truth);
             let moved = render.move_to(scene.at_frame(1), mode).unwrap();
+            // Local mode records no guiding paths: its reset slots simply iterate on.
+            let guided = mode == MoveMode::Local || moved.recorded_paths > 0;
             assert!(
-                moved.updated > 0 && moved.recorded_paths > 0 && moved.restarted.is_none(),
+                moved.updated > 0 && guided && moved.restarted.is_none(),
                 "{moved:?}"
             );
             let mut errors = vec![relative_rmse(&render.resolve().unwrap(), &truth)];
@@ -245,8 +263,8 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
 }
 
 /// The harness's same-seed comparison passes on a compensated frame: both backends run the
-/// same move (area, thesis and difference modes: compensation, testing and guided photons)
-/// and agree.
+/// same move (area, thesis and difference modes: compensation, testing and guided photons;
+/// local mode: its resets) and agree.
 #[test]
 fn both_backends_agree_on_a_compensated_frame() {
     let Some(mut gpu) = backend_wgpu::backend_or_skip("both_backends_agree_on_a_compensated_frame")
@@ -281,12 +299,18 @@ fn both_backends_agree_on_a_compensated_frame() {
             moved,
         )
     };
-    for mode in [MoveMode::Area, MoveMode::Thesis, MoveMode::Difference] {
+    for mode in [
+        MoveMode::Area,
+        MoveMode::Thesis,
+        MoveMode::Difference,
+        MoveMode::Local,
+    ] {
         let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
         let (wgpu, wgpu_move) = run(&mut gpu, mode);
         assert_eq!(
-            cpu_move.updated, wgpu_move.updated,
-            "{mode:?}: different hit points updated"
+            (cpu_move.updated, cpu_move.direct_restarted),
+            (wgpu_move.updated, wgpu_move.direct_restarted),
+            "{mode:?}: different hit points reset"
         );
         let report = harness::diff::same_seed::compare(&cpu, &wgpu, &p, 5);
         println!(
@@ -297,4 +321,55 @@ fn both_backends_agree_on_a_compensated_frame() {
         );
         assert!(report.agree, "{mode:?}");
     }
+}
+
+/// The object an eye ray through the centre of pixel (x, y) meets first in `scene`.
+fn object_seen(scene: &Scene, size: u32, x: u32, y: u32) -> Option<u32> {
+    let compiled = compile_scene(scene, size, size);
+    let data = backend_cpu::trace::SceneData::new(&compiled);
+    let dir = camera_ray(&compiled.camera, x as f32 + 0.5, y as f32 + 0.5);
+    data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
+        .map(|h| data.triangles[h.triangle as usize].object)
+}
+
+/// Local mode resets every pixel the tall block newly covers (no eye path met the block there
+/// before the move: the box that holds it in every pose finds them), keeps most others, and
+/// keeps the direct light of some of those.
+#[test]
+fn a_local_move_resets_the_pixels_the_object_newly_covers() {
+    const SIZE: u32 = 64;
+    let (scene, p) = cornell(SIZE, 20_000);
+    let block = scene.object_index("tall-block").unwrap() as u32;
+    let (a, b) = (scene.at_frame(0), scene.at_frame(1));
+    let newly: Vec<u32> = (0..SIZE * SIZE)
+        .filter(|&i| {
+            let (x, y) = (i % SIZE, i / SIZE);
+            object_seen(&a, SIZE, x, y) != Some(block) && object_seen(&b, SIZE, x, y) == Some(block)
+        })
+        .collect();
+    assert!(
+        newly.len() > 20,
+        "the move must uncover a test: {}",
+        newly.len()
+    );
+    let mut backend = CpuBackend::new();
+    let mut render = warmed(&mut backend, a, &p, 8);
+    let moved = render.move_to(b, MoveMode::Local).unwrap();
+    println!("{moved:?}; {} pixels newly covered", newly.len());
+    let slots = render.backend().read_hit_points().unwrap();
+    for &i in &newly {
+        let hp = &slots[i as usize];
+        assert!(
+            hp.flags & hit_flags::UPDATED != 0 && hp.iterations == 0 && hp.n == 0.0,
+            "pixel {i} is newly covered but was kept: {hp:?}"
+        );
+    }
+    let kept_direct = slots
+        .iter()
+        .filter(|h| h.flags & hit_flags::UPDATED == 0 && h.iterations == 8)
+        .count();
+    assert!(
+        moved.kept > moved.updated && kept_direct > 0,
+        "{moved:?}, {kept_direct} slots kept their direct light"
+    );
 }

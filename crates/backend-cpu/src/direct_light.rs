@@ -40,11 +40,14 @@ pub fn direct_light_main(
         .enumerate()
         .with_min_len(256)
         .map(|(slot, hp)| {
-            let (estimate, rays) = if hp.is_valid() {
+            let (estimate, rays, near) = if hp.is_valid() {
                 slot_direct(params, scene, hp, slot as u32)
             } else {
-                (Vec3::ZERO, 0)
+                (Vec3::ZERO, 0, false)
             };
+            if near {
+                hp.flags |= hit_flags::SHADOW_NEAR_MOVER;
+            }
             if params.accumulate != 0 {
                 hp.direct = (Vec3::from(hp.direct) + estimate).into();
                 hp.iterations += 1;
@@ -58,14 +61,14 @@ pub fn direct_light_main(
     DirectStats { rays }
 }
 
-/// One visible point's direct radiance towards the eye, throughput included, and the rays
-/// traced for it.
+/// One visible point's direct radiance towards the eye, throughput included, the rays traced
+/// for it, and whether one of them crossed a moving object's box.
 fn slot_direct(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,
     slot: u32,
-) -> (Vec3, u64) {
+) -> (Vec3, u64, bool) {
     let material = &scene.materials[hp.material as usize];
     let mut direct = if hp.flags & hit_flags::FRONT != 0 {
         Vec3::from(material.emission)
@@ -74,27 +77,31 @@ fn slot_direct(
     };
     let albedo = Vec3::from(material.albedo);
     let mut rays = 0;
+    let mut near = false;
     if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
-        direct += estimate_irradiance(params, scene, hp, slot) * albedo * FRAC_1_PI;
+        let (irradiance, crossed) = estimate_irradiance(params, scene, hp, slot);
+        direct += irradiance * albedo * FRAC_1_PI;
         rays = u64::from(params.samples * RAYS_PER_SAMPLE);
+        near = crossed;
     }
-    (Vec3::from(hp.throughput) * direct, rays)
+    (Vec3::from(hp.throughput) * direct, rays, near)
 }
 
 /// Irradiance from the lights, `E = integral of Le cos_x`: per sample, light sampling
 /// (`Le cos_x / p_light`, `p_light` the solid-angle density of a point chosen by power then by
 /// area) and cosine sampling (`Le pi` where the ray meets a light's front), each weighted by
-/// the power heuristic against the other.
+/// the power heuristic against the other. Also says whether a ray crossed a mover's box.
 fn estimate_irradiance(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,
     slot: u32,
-) -> Vec3 {
+) -> (Vec3, bool) {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
     let origin = x + n * params.ray_epsilon;
     let mut sum = Vec3::ZERO;
+    let mut near = false;
     for s in 0..params.samples {
         let index = params.iteration * params.samples + s;
         let pair = |p| stratified_pair(params.seed, PassKind::DirectLight, slot, p, index);
@@ -109,6 +116,7 @@ fn estimate_irradiance(
         if dist2 > 0.0 {
             let dist = dist2.sqrt();
             let w = to_light / dist;
+            near |= scene.near_mover(origin, w, dist);
             let cos_x = n.dot(w);
             let cos_l = -Vec3::from(light.normal).dot(w);
             if cos_x > 0.0
@@ -123,7 +131,16 @@ fn estimate_irradiance(
         let (v1, v2) = pair(PAIR_DIRECTION);
         let local = cosine_hemisphere(v1, v2);
         let w = to_world(local, n);
-        if let Some(hit) = scene.closest_hit(origin, w, f32::INFINITY) {
+        let hit = scene.closest_hit(origin, w, f32::INFINITY);
+        // A cosine ray changes with a move only if it reached a light across a mover's box
+        // (it may be blocked in another pose) or met a mover (it may reach a light in
+        // another pose): one blocked in every pose adds nothing either way.
+        if let Some(h) = hit {
+            let reached_light = scene.triangles[h.triangle as usize].light != NO_MATERIAL;
+            near |= (reached_light || scene.in_mover(origin + w * h.t))
+                && scene.near_mover(origin, w, h.t);
+        }
+        if let Some(hit) = hit {
             let tri = &scene.triangles[hit.triangle as usize];
             let cos_l = -Vec3::from(tri.normal).dot(w);
             if tri.light != NO_MATERIAL && cos_l > 0.0 {
@@ -134,5 +151,5 @@ fn estimate_irradiance(
             }
         }
     }
-    sum / params.samples as f32
+    (sum / params.samples as f32, near)
 }

@@ -52,7 +52,7 @@ fn trace_eye_path(
             normal: [0.0; 3],
             material: NO_MATERIAL,
             throughput: [0.0; 3],
-            flags: out.flags & hit_flags::UPDATED,
+            flags: out.flags & hit_flags::KEPT,
             ..*out
         }
     } else {
@@ -79,7 +79,11 @@ fn trace_eye_path(
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
     for depth in 0..=params.max_depth {
-        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+        let hit = scene.closest_hit(origin, dir, f32::INFINITY);
+        if scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t)) {
+            out.flags |= hit_flags::EYE_NEAR_MOVER;
+        }
+        let Some(hit) = hit else {
             return u64::from(depth) + 1;
         };
         let tri = &scene.triangles[hit.triangle as usize];

@@ -6,8 +6,8 @@ use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use ppm_core::compile::CompiledScene;
-use ppm_core::geometry::intersect_triangle;
-use ppm_core::layout::{GpuLight, GpuMaterial, GpuTriangle};
+use ppm_core::geometry::{intersect_triangle, segment_meets_box};
+use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle};
 
 /// The scene as the CPU passes read it: the same flat buffers a GPU backend binds.
 #[derive(Clone)]
@@ -20,6 +20,8 @@ pub struct SceneData {
     pub materials: Vec<GpuMaterial>,
     /// Emitting triangles.
     pub lights: Vec<GpuLight>,
+    /// Boxes the moving objects stay inside ([`CompiledScene::movers`]).
+    pub movers: Vec<GpuBounds>,
 }
 
 /// The nearest surface a ray meets.
@@ -39,7 +41,25 @@ impl SceneData {
             bvh: scene.bvh.clone(),
             materials: scene.materials.clone(),
             lights: scene.lights.clone(),
+            movers: scene.movers.clone(),
         }
+    }
+
+    /// Whether the segment from `origin` along `dir` to `tmax` (may be infinite) crosses the
+    /// box of a moving object.
+    #[inline]
+    pub fn near_mover(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        self.movers
+            .iter()
+            .any(|b| segment_meets_box(origin, dir, tmax, b.min.into(), b.max.into()))
+    }
+
+    /// Whether `p` lies in the box of a moving object.
+    #[inline]
+    pub fn in_mover(&self, p: Vec3) -> bool {
+        self.movers
+            .iter()
+            .any(|b| p.cmpge(b.min.into()).all() && p.cmple(b.max.into()).all())
     }
 
     /// Nearest hit with `tmin < t < tmax`.

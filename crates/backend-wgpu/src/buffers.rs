@@ -3,6 +3,7 @@
 use crate::context::GpuContext;
 use bytemuck::Pod;
 use ppm_core::compile::CompiledScene;
+use ppm_core::layout::GpuBounds;
 use ppm_core::passes::BackendError;
 use wgpu::util::DeviceExt;
 
@@ -105,6 +106,8 @@ pub struct SceneBuffers {
     pub materials: wgpu::Buffer,
     /// Emitting triangles.
     pub lights: wgpu::Buffer,
+    /// Boxes of the moving objects (one empty box when nothing moves).
+    pub movers: wgpu::Buffer,
     /// Camera as uploaded (resolution decides the hit-point count).
     pub camera_value: ppm_core::layout::GpuCamera,
     /// Emitting triangles (the buffer holds a zeroed one when there are none).
@@ -129,6 +132,11 @@ impl SceneBuffers {
             nodes: storage_init(ctx, "nodes", &scene.nodes),
             materials: storage_init(ctx, "materials", &scene.materials),
             lights: storage_init(ctx, "lights", &scene.lights),
+            movers: if scene.movers.is_empty() {
+                storage_init(ctx, "movers", &[GpuBounds::EMPTY])
+            } else {
+                storage_init(ctx, "movers", &scene.movers)
+            },
             camera_value: scene.camera,
             light_count: scene.lights.len(),
         })

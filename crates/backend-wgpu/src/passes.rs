@@ -28,7 +28,9 @@ impl EyePassKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
-        let slots = [Uniform, Uniform, Read, Read, Read, ReadWrite, ReadWrite];
+        let slots = [
+            Uniform, Uniform, Read, Read, Read, ReadWrite, ReadWrite, Read,
+        ];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -58,6 +60,7 @@ impl EyePassKernel {
                 &scene.materials,
                 slots.hit_points,
                 slots.counters,
+                &scene.movers,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);
@@ -71,7 +74,7 @@ impl DirectLightKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
-        let slots = [Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite];
+        let slots = [Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, Read];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -101,6 +104,7 @@ impl DirectLightKernel {
                 &scene.lights,
                 slots.hit_points,
                 slots.counters,
+                &scene.movers,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);

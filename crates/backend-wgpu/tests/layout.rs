@@ -91,6 +91,12 @@ fn buffer_elements_match_their_wgsl_twins() {
         emission,
         ior
     });
+    same_layout!(GpuBounds {
+        min,
+        _pad0,
+        max,
+        _pad1
+    });
     same_layout!(GpuLight {
         v0,
         area,

@@ -266,6 +266,7 @@ pub fn chart(
         MoveMode::Thesis => [0.1, 0.3, 0.9],
         MoveMode::Area => [0.1, 0.6, 0.2],
         MoveMode::Difference => [0.9, 0.6, 0.0],
+        MoveMode::Local => [0.6, 0.1, 0.7],
     };
     let mut series: Vec<Series> = runs
         .iter()

@@ -1,7 +1,7 @@
 //! Turns a [`Scene`] into the flat buffers every backend consumes, with the BVH built by obvhs.
 
 use crate::layout::{
-    BvhNode, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
+    BvhNode, GpuBounds, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
 };
 use crate::scene::{MaterialKind, Scene};
 use glam::{Vec3, Vec3A};
@@ -52,7 +52,16 @@ pub struct CompiledScene {
     pub bvh_build_time: Duration,
     /// Levels of the deepest leaf (the root is level 1): bounds a traversal stack.
     pub bvh_depth: usize,
+    /// A box per moving object that holds it in every pose of its move (from this pose to
+    /// the move's end, unless the caller sets the boxes of a whole animation): eye and
+    /// direct-light paths that cross one are flagged, so a move knows what it may change.
+    /// Empty when nothing moves.
+    pub movers: Vec<GpuBounds>,
 }
+
+/// Margin of the movers' boxes, relative to the scene's extent: ten times the ray offset,
+/// so a path ending on a moving object's surface always crosses its box despite rounding.
+pub const MOVER_MARGIN_RELATIVE: f32 = 1e-4;
 
 /// Flattens `scene` for an image of `width` x `height`.
 pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
@@ -115,6 +124,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         .collect();
     let bvh_depth = tree_depth(&nodes);
     let (lo, hi) = bounds(&triangles);
+    let extent = (hi - lo).length();
     CompiledScene {
         camera: gpu_camera(scene, width, height),
         triangles,
@@ -133,10 +143,11 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 .any(|m| matches!(m.kind, MaterialKind::Glass { .. })),
             moving_objects: !scene.moves.is_empty(),
         },
-        extent: (hi - lo).length(),
+        extent,
         light_power,
         bvh_build_time,
         bvh_depth,
+        movers: scene.swept_bounds(MOVER_MARGIN_RELATIVE * extent),
     }
 }
 

@@ -177,6 +177,34 @@ fn sign_nonzero(v: f32) -> f32 {
     if v >= 0.0 { 1.0 } else { -1.0 }
 }
 
+/// Whether the segment `origin + t dir`, `0 <= t <= t_max` (`t_max` may be infinite), meets
+/// the closed box `[lo, hi]`: the slab test, written so that a direction parallel to a slab
+/// never forms `0 * inf`. An empty box (`lo > hi`) is never met.
+pub fn segment_meets_box(origin: Vec3, dir: Vec3, t_max: f32, lo: Vec3, hi: Vec3) -> bool {
+    if !lo.cmple(hi).all() {
+        return false;
+    }
+    let mut t0 = 0.0f32;
+    let mut t1 = t_max;
+    for axis in 0..3 {
+        let (o, d) = (origin[axis], dir[axis]);
+        if d == 0.0 {
+            if o < lo[axis] || o > hi[axis] {
+                return false;
+            }
+            continue;
+        }
+        let a = (lo[axis] - o) / d;
+        let b = (hi[axis] - o) / d;
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -249,5 +277,65 @@ mod tests {
             let back = oct_decode(oct_encode(n));
             assert!(back.dot(n) > 0.99999, "{n} -> {back}");
         }
+    }
+
+    #[test]
+    fn segments_meet_boxes_they_cross_and_no_others() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
+        let x = Vec3::X;
+        // Through, stopping short, starting beyond, parallel inside and outside a slab.
+        assert!(segment_meets_box(
+            Vec3::new(-1.0, 0.5, 0.5),
+            x,
+            10.0,
+            lo,
+            hi
+        ));
+        assert!(!segment_meets_box(
+            Vec3::new(-1.0, 0.5, 0.5),
+            x,
+            0.5,
+            lo,
+            hi
+        ));
+        assert!(!segment_meets_box(
+            Vec3::new(2.0, 0.5, 0.5),
+            x,
+            f32::INFINITY,
+            lo,
+            hi
+        ));
+        assert!(segment_meets_box(
+            Vec3::new(-1.0, 1.0, 0.5),
+            x,
+            f32::INFINITY,
+            lo,
+            hi
+        ));
+        assert!(!segment_meets_box(
+            Vec3::new(-1.0, 1.5, 0.5),
+            x,
+            f32::INFINITY,
+            lo,
+            hi
+        ));
+        // Starting inside, diagonal, and the empty box.
+        assert!(segment_meets_box(Vec3::splat(0.5), -x, 0.0, lo, hi));
+        let d = Vec3::ONE.normalize();
+        assert!(segment_meets_box(
+            Vec3::splat(-1.0),
+            d,
+            f32::INFINITY,
+            lo,
+            hi
+        ));
+        let empty = crate::layout::GpuBounds::EMPTY;
+        assert!(!segment_meets_box(
+            Vec3::splat(-1.0),
+            d,
+            f32::INFINITY,
+            empty.min.into(),
+            empty.max.into()
+        ));
     }
 }

@@ -26,6 +26,14 @@ pub mod hit_flags {
     pub const FRONT: u32 = 2;
     /// The slot was reset by the last hit-point update (ALGORITHM.md 2.4).
     pub const UPDATED: u32 = 4;
+    /// Some eye path of the slot since its statistics started crossed the bounds a moving
+    /// object sweeps: a move may change what the slot saw (local mode resets it).
+    pub const EYE_NEAR_MOVER: u32 = 8;
+    /// Some shadow or cosine ray of the slot's direct sum crossed those bounds: a move may
+    /// change its direct light (local mode restarts the sum).
+    pub const SHADOW_NEAR_MOVER: u32 = 16;
+    /// The flags a slot keeps from iteration to iteration (`sppm`).
+    pub const KEPT: u32 = UPDATED | EYE_NEAR_MOVER | SHADOW_NEAR_MOVER;
     /// The index of the object hit sits in the bits from here up (24 bits).
     pub const OBJECT_SHIFT: u32 = 8;
 }
@@ -174,6 +182,40 @@ pub struct GpuMaterial {
     pub emission: [f32; 3],
     /// Index of refraction (glass only).
     pub ior: f32,
+}
+
+/// An axis-aligned box that a moving object stays inside through all its poses. 32 bytes.
+/// An empty box (`min > max`) stands for "nothing moves" and no ray crosses it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuBounds {
+    /// Smallest corner.
+    pub min: [f32; 3],
+    /// Padding.
+    pub _pad0: u32,
+    /// Largest corner.
+    pub max: [f32; 3],
+    /// Padding.
+    pub _pad1: u32,
+}
+
+impl GpuBounds {
+    /// The box no ray crosses.
+    pub const EMPTY: GpuBounds = GpuBounds {
+        min: [1.0; 3],
+        _pad0: 0,
+        max: [-1.0; 3],
+        _pad1: 0,
+    };
+
+    /// The box between two corners.
+    pub fn new(min: glam::Vec3, max: glam::Vec3) -> Self {
+        GpuBounds {
+            min: min.into(),
+            max: max.into(),
+            ..Self::EMPTY
+        }
+    }
 }
 
 /// One emitting triangle, with what photon emission needs precomputed. 64 bytes.

@@ -187,15 +187,20 @@ pub enum MoveMode {
     /// the same random numbers, so every path the move changed is removed and re-added, not
     /// only those whose first segment crosses the emitting rectangle.
     Difference,
+    /// Ours (`sppm` only): resets only the slots whose eye paths crossed a mover's box,
+    /// keeps the direct light of the rest unless their rays crossed one, and corrects their
+    /// indirect light with difference passes (`harness::driver` module `local`).
+    Local,
 }
 
 impl MoveMode {
     /// Every mode, in report order.
-    pub const ALL: [MoveMode; 4] = [
+    pub const ALL: [MoveMode; 5] = [
         MoveMode::Restart,
         MoveMode::Thesis,
         MoveMode::Area,
         MoveMode::Difference,
+        MoveMode::Local,
     ];
 
     /// The mode's name on the command line and in reports.
@@ -205,6 +210,7 @@ impl MoveMode {
             MoveMode::Thesis => "thesis",
             MoveMode::Area => "area",
             MoveMode::Difference => "difference",
+            MoveMode::Local => "local",
         }
     }
 }

@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh lights
+// #import layout rng qmc sampling geometry bvh lights movers
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
@@ -9,6 +9,10 @@
 @group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(7) var<storage, read> movers: array<GpuBounds>;
+
+// Whether a ray of this invocation's estimate crossed a mover's box.
+var<private> near: bool;
 
 // Stratified pairs of each sample (see backend-cpu's direct_light.rs).
 const PAIR_LIGHT_POINT: u32 = 0u;
@@ -31,6 +35,7 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
         if dist2 > 0.0 {
             let dist = sqrt(dist2);
             let w = to_light / dist;
+            near = near || near_mover(origin, w, dist);
             let cos_x = dot(hp.normal, w);
             let cos_l = -dot(light.normal, w);
             if cos_x > 0.0 && cos_l > 0.0 && !occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
@@ -43,6 +48,12 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
         let local = cosine_hemisphere(v.x, v.y);
         let w = to_world(local, hp.normal);
         let hit = closest_hit(origin, w, T_MISS);
+        // Changes with a move only if it reached a light across a mover's box or met a mover
+        // (backend-cpu's direct_light.rs says why).
+        if hit.triangle != 0xffffffffu {
+            let reached_light = triangles[hit.triangle].light != NO_MATERIAL;
+            near = near || ((reached_light || in_mover(origin + w * hit.t)) && near_mover(origin, w, hit.t));
+        }
         if hit.triangle != 0xffffffffu {
             let tri = triangles[hit.triangle];
             let cos_l = -dot(tri.normal, w);
@@ -65,6 +76,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     var hp = hit_points[slot];
     var estimate = vec3<f32>(0.0);
+    near = false;
     if (hp.flags & HIT_VALID) != 0u {
         let material = materials[hp.material];
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
@@ -73,6 +85,9 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }
         estimate = hp.throughput * direct;
+    }
+    if near {
+        hp.flags |= HIT_SHADOW_NEAR_MOVER;
     }
     if params.accumulate != 0u {
         hp.direct += estimate;

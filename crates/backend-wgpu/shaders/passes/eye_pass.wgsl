@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh
+// #import layout rng qmc sampling geometry bvh movers
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -9,6 +9,7 @@
 @group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(7) var<storage, read> movers: array<GpuBounds>;
 
 const DIM_GLASS: u32 = 2u;
 
@@ -20,7 +21,7 @@ fn cleared_slot(slot: u32, pixel: u32) -> HitPoint {
         hp.position = vec3<f32>(0.0);
         hp.normal = vec3<f32>(0.0);
         hp.throughput = vec3<f32>(0.0);
-        hp.flags &= HIT_UPDATED;
+        hp.flags &= HIT_KEPT;
     } else {
         hp.pixel = pixel;
         hp.r2 = params.r2_initial;
@@ -51,6 +52,9 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     var rays = params.max_depth + 1u;
     for (var depth = 0u; depth <= params.max_depth; depth++) {
         let hit = closest_hit(origin, dir, T_MISS);
+        if near_mover(origin, dir, hit.t) {
+            out.flags |= HIT_EYE_NEAR_MOVER;
+        }
         if hit.triangle == 0xffffffffu {
             rays = depth + 1u;
             break;

@@ -8,6 +8,9 @@ const MATERIAL_GLASS: u32 = 2u;
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
 const HIT_UPDATED: u32 = 4u;
+const HIT_EYE_NEAR_MOVER: u32 = 8u;
+const HIT_SHADOW_NEAR_MOVER: u32 = 16u;
+const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_NEAR_MOVER | HIT_SHADOW_NEAR_MOVER;
 const HIT_OBJECT_SHIFT: u32 = 8u;
 const NO_MATERIAL: u32 = 0xffffffffu;
 
@@ -206,4 +209,11 @@ fn is_finite_f32(x: f32) -> bool {
 
 fn is_finite_vec3(v: vec3<f32>) -> bool {
     return is_finite_f32(v.x) && is_finite_f32(v.y) && is_finite_f32(v.z);
+}
+
+struct GpuBounds {
+    min: vec3<f32>,
+    _pad0: u32,
+    max: vec3<f32>,
+    _pad1: u32,
 }

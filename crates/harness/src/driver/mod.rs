@@ -11,6 +11,7 @@
 //! to the slot's sum, then traces and gathers one photon pass; `ppm` traces its hit points
 //! and direct light once per pose, and an iteration is a photon pass and its gather.
 
+mod local;
 pub mod moves;
 pub mod schedule;
 
@@ -23,8 +24,9 @@ use crate::report::{RenderReport, left_out};
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
-    PhotonPassParams, RecordedPath, ResolveParams, eye_flags, first_hit, gather_kind,
+    DirectLightParams, EyePassParams, GatherParams, GpuBounds, GpuLight, GpuMaterial,
+    GuidedEmission, PhotonPassParams, RecordedPath, ResolveParams, eye_flags, first_hit,
+    gather_kind,
 };
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{BackendError, DynamicBackend, PhotonStats};
@@ -44,6 +46,10 @@ pub struct Renderer<'a> {
     lights: Vec<GpuLight>,
     materials: Vec<GpuMaterial>,
     extent: f32,
+    /// The boxes the moving objects stay inside from the start pose through their moves:
+    /// kept for every pose, so the paths flagged before a move are flagged against the same
+    /// boxes as those after it.
+    movers: Vec<GpuBounds>,
     /// Poses loaded or moved to so far: keys `ppm`'s eye and direct passes.
     frame: u32,
     /// `sppm` iterations so far: keys their eye and direct passes.
@@ -81,6 +87,7 @@ impl<'a> Renderer<'a> {
             lights: Vec::new(),
             materials: Vec::new(),
             extent: 0.0,
+            movers: compiled.movers.clone(),
             frame: 0,
             iteration: 0,
             fresh: true,
@@ -112,6 +119,14 @@ impl<'a> Renderer<'a> {
             self.direct_light(self.frame, false)?;
         }
         Ok(())
+    }
+
+    /// Flattens `scene` (a pose of this render's scene) with the start's mover boxes.
+    fn compile(&self, scene: &Scene) -> CompiledScene {
+        CompiledScene {
+            movers: self.movers.clone(),
+            ..compile_scene(scene, self.params.width, self.params.height)
+        }
     }
 
     fn adopt(&mut self, scene: Scene, compiled: &CompiledScene) {

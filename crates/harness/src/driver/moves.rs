@@ -10,7 +10,6 @@
 
 use super::Renderer;
 use glam::Vec3;
-use ppm_core::compile::compile_scene;
 use ppm_core::emission::ordinary_emission;
 use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, gather_kind, region_mode};
 use ppm_core::params::{Estimator, MoveMode};
@@ -64,6 +63,9 @@ pub struct MoveReport {
     pub updated: u64,
     /// Slots that kept their statistics.
     pub kept: u64,
+    /// Kept slots whose direct-light sum restarted (local mode: a shadow ray of theirs crossed
+    /// a mover's box); the other modes restart every slot's.
+    pub direct_restarted: u64,
     /// Testing-photon paths recorded for guiding.
     pub recorded_paths: usize,
     /// Why the move restarted instead of compensating, if it did.
@@ -74,7 +76,7 @@ pub struct MoveReport {
 
 /// What compensates a move: region photons through the emitting rectangle (thesis and area
 /// modes) or difference photons over the whole emission (difference mode).
-enum Compensation {
+pub(super) enum Compensation {
     Region {
         region: EmissionRegion,
         /// Thesis mode's raw counts applied pass by pass; otherwise weighted and deferred.
@@ -92,6 +94,7 @@ impl Renderer<'_> {
             region_area: 0.0,
             updated: 0,
             kept: 0,
+            direct_restarted: 0,
             recorded_paths: 0,
             restarted: None,
             seconds: 0.0,
@@ -105,13 +108,13 @@ impl Renderer<'_> {
         let plan = if self.fresh && self.params.estimator == Estimator::Sppm {
             Err("no iteration has run: nothing to keep".to_owned())
         } else {
-            self.compensation_plan(mode, &vertices)
+            self.compensation_plan(mode, &vertices, &next)
         };
         let plan = match plan {
             Ok(plan) => plan,
             Err(why) => {
                 self.frame += 1;
-                let compiled = compile_scene(&next, self.params.width, self.params.height);
+                let compiled = self.compile(&next);
                 self.load(next, &compiled)?;
                 report.restarted = Some(why);
                 report.seconds = start.elapsed().as_secs_f64();
@@ -119,13 +122,16 @@ impl Renderer<'_> {
                 return Ok(report);
             }
         };
+        if mode == MoveMode::Local {
+            return self.move_locally(next, report, start);
+        }
         if let Compensation::Region { region, .. } = &plan {
             report.region_area = region.area;
         }
         // Negative photons in pose A, then (same random numbers) positive ones in pose B:
         // where nothing changed their paths coincide and the two cancel almost exactly.
         self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
-        let compiled = compile_scene(&next, self.params.width, self.params.height);
+        let compiled = self.compile(&next);
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, &compiled);
@@ -197,10 +203,17 @@ impl Renderer<'_> {
         Ok(report)
     }
 
-    /// How `mode` compensates a move of `vertices` (both poses), or why it must restart.
-    fn compensation_plan(&self, mode: MoveMode, vertices: &[Vec3]) -> Result<Compensation, String> {
+    /// How `mode` compensates a move of `vertices` (both poses) to `next`, or why it must
+    /// restart.
+    fn compensation_plan(
+        &self,
+        mode: MoveMode,
+        vertices: &[Vec3],
+        next: &Scene,
+    ) -> Result<Compensation, String> {
         let kind = match mode {
             MoveMode::Restart => return Err("restart mode".to_owned()),
+            MoveMode::Local => return self.local_plan(next),
             MoveMode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
             MoveMode::Difference => return Ok(Compensation::Difference),
             MoveMode::Thesis => region_mode::POINT,
@@ -221,7 +234,11 @@ impl Renderer<'_> {
     /// All negative (pose A) or all positive (pose B) passes of a move, gathered as `kind`.
     /// Together the passes of one sign remove (or re-add) their share once: each gathers with
     /// the photons of all of them as its `N_c`.
-    fn compensate(&mut self, plan: &Compensation, kind: u32) -> Result<(), BackendError> {
+    pub(super) fn compensate(
+        &mut self,
+        plan: &Compensation,
+        kind: u32,
+    ) -> Result<(), BackendError> {
         let sign = if kind == gather_kind::REGION_NEGATIVE {
             -1.0
         } else {

@@ -1,5 +1,6 @@
 //! The scene model: what a scene is, independent of any file format or backend.
 
+use crate::layout::GpuBounds;
 use crate::params::Estimator;
 use glam::{Quat, Vec3};
 
@@ -164,6 +165,37 @@ impl Scene {
             .collect()
     }
 
+    /// A box per move that its object stays inside for every pose `at_time(t)`,
+    /// `0 <= t <= 1`, of this (unmoved) scene, widened by `margin` on every side: for a
+    /// translation, the box around both poses' boxes; with a rotation about the box centre,
+    /// the centre's path widened by the object's largest distance from it.
+    pub fn swept_bounds(&self, margin: f32) -> Vec<GpuBounds> {
+        self.moves
+            .iter()
+            .map(|m| {
+                let object = &self.objects[m.object];
+                let (lo, hi) = object.bounds();
+                let (lo, hi) = if m.rotation == Quat::IDENTITY {
+                    (lo.min(lo + m.translation), hi.max(hi + m.translation))
+                } else {
+                    let centre = (lo + hi) * 0.5;
+                    let reach = object
+                        .triangles
+                        .iter()
+                        .flatten()
+                        .map(|v| v.distance(centre))
+                        .fold(0.0f32, f32::max);
+                    let end = centre + m.translation;
+                    (
+                        centre.min(end) - Vec3::splat(reach),
+                        centre.max(end) + Vec3::splat(reach),
+                    )
+                };
+                GpuBounds::new(lo - Vec3::splat(margin), hi + Vec3::splat(margin))
+            })
+            .collect()
+    }
+
     /// Index of the object called `name`.
     pub fn object_index(&self, name: &str) -> Option<usize> {
         self.objects.iter().position(|o| o.name == name)
@@ -176,14 +208,20 @@ impl Scene {
 }
 
 impl Object {
-    /// Centre of the axis-aligned bounding box of the object's vertices.
-    pub fn bounds_centre(&self) -> Vec3 {
+    /// Smallest and largest corner of the axis-aligned bounding box of the object's vertices.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for v in self.triangles.iter().flatten() {
             lo = lo.min(*v);
             hi = hi.max(*v);
         }
+        (lo, hi)
+    }
+
+    /// Centre of the axis-aligned bounding box of the object's vertices.
+    pub fn bounds_centre(&self) -> Vec3 {
+        let (lo, hi) = self.bounds();
         (lo + hi) * 0.5
     }
 
