@@ -8,7 +8,7 @@ use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::geometry::to_world;
 use ppm_core::layout::NO_MATERIAL;
-use ppm_core::layout::{DirectLightParams, HitPoint, hit_flags};
+use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate, hit_flags};
 use ppm_core::passes::DirectStats;
 use ppm_core::rng::{PassKind, stratified_pair};
 use ppm_core::sampling::{
@@ -40,6 +40,13 @@ pub fn direct_light_main(
         .enumerate()
         .with_min_len(256)
         .map(|(slot, hp)| {
+            let correcting = params.accumulate == direct_accumulate::CORRECT;
+            if correcting
+                && (hp.flags & hit_flags::SHADOW_NEAR_MOVER == 0
+                    || hp.flags & hit_flags::UPDATED != 0)
+            {
+                return 0;
+            }
             let (estimate, rays, near) = if hp.is_valid() {
                 slot_direct(params, scene, hp, slot as u32)
             } else {
@@ -48,7 +55,10 @@ pub fn direct_light_main(
             if near {
                 hp.flags |= hit_flags::SHADOW_NEAR_MOVER;
             }
-            if params.accumulate != 0 {
+            if correcting {
+                let shift = params.sign * hp.iterations as f32 * estimate;
+                hp.direct = (Vec3::from(hp.direct) + shift).into();
+            } else if params.accumulate == direct_accumulate::ADD {
                 hp.direct = (Vec3::from(hp.direct) + estimate).into();
                 hp.iterations += 1;
             } else {

@@ -137,7 +137,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         iteration,
         ray_epsilon,
         accumulate,
-        _pad0,
+        sign,
         _pad1,
         _pad2
     });

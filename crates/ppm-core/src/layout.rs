@@ -307,15 +307,29 @@ pub struct DirectLightParams {
     pub iteration: u32,
     /// Offset along the normal for shadow-ray origins.
     pub ray_epsilon: f32,
-    /// 1: add this estimate to each slot's direct sum as one more iteration (`sppm`);
-    /// 0: replace the sum with it (`ppm`, once per frame).
+    /// One of [`direct_accumulate`].
     pub accumulate: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// With [`direct_accumulate::CORRECT`]: -1 in the pose before a move, +1 in the pose
+    /// after it.
+    pub sign: f32,
     /// Padding.
     pub _pad1: u32,
     /// Padding.
     pub _pad2: u32,
+}
+
+/// What the direct-light pass does with its estimate, in [`DirectLightParams::accumulate`].
+pub mod direct_accumulate {
+    /// Replace each slot's direct sum with it (`ppm`, once per frame).
+    pub const REPLACE: u32 = 0;
+    /// Add it to the sum as one more iteration (`sppm`).
+    pub const ADD: u32 = 1;
+    /// Local mode's paired correction: only at kept slots flagged `SHADOW_NEAR_MOVER`, add
+    /// `sign * iterations * estimate` to the sum, the iteration count unchanged. Run with
+    /// the same random numbers before (`sign` -1) and after (+1) a move, the two passes
+    /// shift the slot's mean by an unbiased estimate of the change of its direct light; where
+    /// the move changed none of the rays, they cancel exactly.
+    pub const CORRECT: u32 = 2;
 }
 
 /// How the photon pass treats the first surface a photon meets after leaving the light.

@@ -75,6 +75,10 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     var hp = hit_points[slot];
+    let correcting = params.accumulate == DIRECT_CORRECT;
+    if correcting && ((hp.flags & HIT_SHADOW_NEAR_MOVER) == 0u || (hp.flags & HIT_UPDATED) != 0u) {
+        return;
+    }
     var estimate = vec3<f32>(0.0);
     near = false;
     if (hp.flags & HIT_VALID) != 0u {
@@ -89,7 +93,9 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if near {
         hp.flags |= HIT_SHADOW_NEAR_MOVER;
     }
-    if params.accumulate != 0u {
+    if correcting {
+        hp.direct += params.sign * f32(hp.iterations) * estimate;
+    } else if params.accumulate == DIRECT_ADD {
         hp.direct += estimate;
         hp.iterations += 1u;
     } else {

@@ -114,10 +114,15 @@ struct DirectLightParams {
     iteration: u32,
     ray_epsilon: f32,
     accumulate: u32,
-    _pad0: u32,
+    sign: f32,
     _pad1: u32,
     _pad2: u32,
 }
+
+// DirectLightParams::accumulate (ppm_core::layout::direct_accumulate).
+const DIRECT_REPLACE: u32 = 0u;
+const DIRECT_ADD: u32 = 1u;
+const DIRECT_CORRECT: u32 = 2u;
 
 struct PhotonPassParams {
     seed: u32,

@@ -7,7 +7,10 @@
 //! - a slot whose eye paths crossed a box starts over: what it saw may change (this covers
 //!   pixels the object newly covers, and paths through mirrors and glass);
 //! - any other slot keeps its visible points, the light it saw directly and its photon
-//!   statistics; its direct-light sum restarts only if one of its rays crossed a box;
+//!   statistics; if one of its direct-light rays crossed a box, its direct sum is corrected
+//!   by [`CORRECTION_SAMPLES`] shadow-ray samples traced at its visible point in both poses
+//!   with the same random numbers (an unbiased estimate of the change, exactly zero where
+//!   the move blocks or frees none of them);
 //! - the kept slots' indirect light is corrected by difference passes: ordinary photons
 //!   traced in both poses with the same random numbers, whose deferred net sum is the change
 //!   of every photon path the move changed.
@@ -16,17 +19,23 @@
 
 use super::Renderer;
 use super::moves::{Compensation, MoveReport};
-use ppm_core::layout::{HitPoint, gather_kind, hit_flags};
+use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate, gather_kind, hit_flags};
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
 use ppm_core::scene::{MaterialKind, Move, Scene};
 use std::time::Instant;
 
-/// Slots a move reset, kept, and kept with their direct sum restarted.
+/// Direct-light samples per slot of the paired correction, in each pose.
+pub const CORRECTION_SAMPLES: u32 = 8;
+
+/// Keys the correction's random numbers apart from every iteration's.
+const CORRECTION_SEED: u32 = 0x5eed_c0de;
+
+/// Slots a move reset, kept, and kept with their direct sum corrected.
 struct Resets {
     reset: u64,
     kept: u64,
-    direct_restarted: u64,
+    direct_corrected: u64,
 }
 
 impl Renderer<'_> {
@@ -58,25 +67,33 @@ impl Renderer<'_> {
         Ok(Compensation::Difference)
     }
 
-    /// Moves to `next`: difference passes in pose A, the resets, difference passes in pose
-    /// B, their net change applied once to the kept slots.
+    /// Moves to `next`: the resets, then difference passes and the paired direct-light
+    /// correction in pose A and in pose B, their net change applied once to the kept slots.
     pub(super) fn move_locally(
         &mut self,
         next: Scene,
         mut report: MoveReport,
         start: Instant,
     ) -> Result<MoveReport, BackendError> {
+        // The resets depend only on the flags (the boxes hold every pose), so they come
+        // first: the passes below then skip the reset slots in both poses alike.
         let changed = self.scene.moving_vertices() != next.moving_vertices();
+        let resets = self.reset_near_movers(changed)?;
+        report.updated = resets.reset;
+        report.kept = resets.kept;
+        report.direct_corrected = resets.direct_corrected;
         self.compensate(&Compensation::Difference, gather_kind::REGION_NEGATIVE)?;
+        if changed {
+            self.correct_direct(-1.0)?;
+        }
         let compiled = self.compile(&next);
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, &compiled);
         self.frame += 1;
-        let resets = self.reset_near_movers(changed)?;
-        report.updated = resets.reset;
-        report.kept = resets.kept;
-        report.direct_restarted = resets.direct_restarted;
+        if changed {
+            self.correct_direct(1.0)?;
+        }
         self.compensate(&Compensation::Difference, gather_kind::REGION_POSITIVE)?;
         self.difference_pass += self.moves.difference_passes;
         if self.moves.difference_passes > 0 {
@@ -89,15 +106,33 @@ impl Renderer<'_> {
         Ok(report)
     }
 
-    /// Starts over the slots whose eye paths crossed a mover's box and restarts the direct
-    /// sums of those whose rays did (only when the geometry `changed`); marks the reset slots
-    /// `UPDATED`, so the compensation skips them.
+    /// Half of the paired direct-light correction, in the current pose (`sign` -1 before the
+    /// move, +1 after it; the same random numbers both times).
+    fn correct_direct(&mut self, sign: f32) -> Result<(), BackendError> {
+        let params = DirectLightParams {
+            seed: self.params.seed ^ CORRECTION_SEED,
+            samples: CORRECTION_SAMPLES,
+            iteration: self.difference_pass,
+            accumulate: direct_accumulate::CORRECT,
+            sign,
+            ..self.direct_params(0, true)
+        };
+        let t = Instant::now();
+        let stats = self.backend.direct_light(&params)?;
+        self.report.times.direct += t.elapsed().as_secs_f64();
+        self.report.rays.shadow += stats.rays;
+        Ok(())
+    }
+
+    /// Starts over the slots whose eye paths crossed a mover's box (only when the geometry
+    /// `changed`) and marks them `UPDATED`, so the compensation skips them; counts the kept
+    /// slots whose direct sums the paired correction reaches.
     fn reset_near_movers(&mut self, changed: bool) -> Result<Resets, BackendError> {
         let mut slots = self.backend.read_hit_points()?;
         let mut resets = Resets {
             reset: 0,
             kept: 0,
-            direct_restarted: 0,
+            direct_corrected: 0,
         };
         let r2_initial = self.params.initial_radius * self.params.initial_radius;
         for hp in &mut slots {
@@ -111,11 +146,8 @@ impl Renderer<'_> {
                 continue;
             }
             hp.flags &= !hit_flags::UPDATED;
-            if changed && hp.flags & hit_flags::SHADOW_NEAR_MOVER != 0 {
-                hp.direct = [0.0; 3];
-                hp.iterations = 0;
-                hp.flags &= !hit_flags::SHADOW_NEAR_MOVER;
-                resets.direct_restarted += 1;
+            if hp.flags & hit_flags::SHADOW_NEAR_MOVER != 0 {
+                resets.direct_corrected += 1;
             }
             resets.kept += 1;
         }

@@ -25,8 +25,8 @@ use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuBounds, GpuLight, GpuMaterial,
-    GuidedEmission, PhotonPassParams, RecordedPath, ResolveParams, eye_flags, first_hit,
-    gather_kind,
+    GuidedEmission, PhotonPassParams, RecordedPath, ResolveParams, direct_accumulate, eye_flags,
+    first_hit, gather_kind,
 };
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{BackendError, DynamicBackend, PhotonStats};
@@ -252,7 +252,11 @@ impl<'a> Renderer<'a> {
             },
             iteration: key,
             ray_epsilon: self.ray_epsilon(),
-            accumulate: u32::from(accumulate),
+            accumulate: if accumulate {
+                direct_accumulate::ADD
+            } else {
+                direct_accumulate::REPLACE
+            },
             ..Default::default()
         }
     }

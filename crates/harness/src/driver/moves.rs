@@ -63,9 +63,9 @@ pub struct MoveReport {
     pub updated: u64,
     /// Slots that kept their statistics.
     pub kept: u64,
-    /// Kept slots whose direct-light sum restarted (local mode: a shadow ray of theirs crossed
-    /// a mover's box); the other modes restart every slot's.
-    pub direct_restarted: u64,
+    /// Kept slots whose direct-light sum was corrected by paired shadow rays (local mode: a
+    /// ray of theirs crossed a mover's box); the other modes restart every slot's sum.
+    pub direct_corrected: u64,
     /// Testing-photon paths recorded for guiding.
     pub recorded_paths: usize,
     /// Why the move restarted instead of compensating, if it did.
@@ -94,7 +94,7 @@ impl Renderer<'_> {
             region_area: 0.0,
             updated: 0,
             kept: 0,
-            direct_restarted: 0,
+            direct_corrected: 0,
             recorded_paths: 0,
             restarted: None,
             seconds: 0.0,
