@@ -80,7 +80,7 @@ fn cancel(neg_index: u32, pos_index: u32) -> (Image, Image) {
             first_hit: first_hit::SKIP,
             ray_epsilon: 1e-5 * compiled.extent,
             power_scale: scale,
-            first_path: 0,
+            ..Default::default()
         };
         b.region_photon_pass(&params, &region).unwrap();
         b.gather_pass(&GatherParams {
@@ -169,7 +169,7 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
             first_hit: first_hit::SKIP,
             ray_epsilon: 1e-5 * compiled.extent,
             power_scale: -1.0,
-            first_path: 0,
+            ..Default::default()
         },
         &region,
     )

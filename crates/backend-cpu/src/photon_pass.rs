@@ -5,7 +5,7 @@ use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::emission::{EMISSION_DIMS, Emission};
 use ppm_core::geometry::{oct_encode, specular_bounce, to_world};
-use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind};
+use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind, photon_flags};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::{PassKind, StreamKey};
 use ppm_core::sampling::cosine_hemisphere;
@@ -101,9 +101,13 @@ fn trace_photon(
     let mut origin = emission.origin + emission.normal * params.ray_epsilon;
     let mut power = emission.power * params.power_scale;
     let mut rays = 0;
+    // Whether the path has crossed a mover's box, when only such deposits are stored.
+    let mut changed = params.flags & photon_flags::CHANGED_ONLY == 0;
     for bounce in 0..params.max_depth {
         rays += 1;
-        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+        let hit = scene.closest_hit(origin, dir, f32::INFINITY);
+        changed = changed || scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t));
+        let Some(hit) = hit else {
             break;
         };
         let tri = &scene.triangles[hit.triangle as usize];
@@ -118,7 +122,7 @@ fn trace_photon(
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         match material.kind {
             material_kind::DIFFUSE => {
-                if bounce > 0 || params.first_hit == first_hit::DEPOSIT {
+                if changed && (bounce > 0 || params.first_hit == first_hit::DEPOSIT) {
                     out.push(Photon {
                         position: position.into(),
                         path,

@@ -139,7 +139,7 @@ impl PhotonPassKernel {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
             Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
-            ReadWrite,
+            ReadWrite, Read,
         ];
         let kernel = |entry, kind: u32| {
             Kernel::specialised(
@@ -182,6 +182,7 @@ impl PhotonPassKernel {
                 targets.emitter,
                 targets.recorded,
                 targets.weights,
+                &scene.movers,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);

@@ -149,7 +149,11 @@ fn pass_parameters_match_their_wgsl_twins() {
         first_hit,
         ray_epsilon,
         power_scale,
-        first_path
+        first_path,
+        flags,
+        _pad0,
+        _pad1,
+        _pad2
     });
     same_layout!(GatherParams {
         alpha,

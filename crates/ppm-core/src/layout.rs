@@ -340,7 +340,7 @@ pub mod first_hit {
     pub const DEPOSIT: u32 = 1;
 }
 
-/// Parameters of one photon pass. 32 bytes.
+/// Parameters of one photon pass. 48 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PhotonPassParams {
@@ -361,6 +361,23 @@ pub struct PhotonPassParams {
     /// Index of the first path traced: paths `first_path .. first_path + photon_count`. Lets a
     /// backend split a pass into batches that still draw the numbers of the whole pass.
     pub first_path: u32,
+    /// [`photon_flags`] bits.
+    pub flags: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
+}
+
+/// Bits of [`PhotonPassParams::flags`].
+pub mod photon_flags {
+    /// Store only the deposits whose path crossed a mover's box before reaching them
+    /// (local mode's difference passes): a path that has not met a box is the same in every
+    /// pose, so its deposits would cancel between the two poses; dropping them in both is
+    /// exact, and the gathers then cost in proportion to the light the move touches.
+    pub const CHANGED_ONLY: u32 = 1;
 }
 
 /// Which photons a gather folds in, who gathers them, and with which update

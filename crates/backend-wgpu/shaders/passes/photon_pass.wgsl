@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bvh lights emission
+// #import layout rng sampling geometry bvh lights emission movers
 // Photon pass (ALGORITHM.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -29,6 +29,7 @@ struct Emitter {
 @group(0) @binding(8) var<uniform> emitter: Emitter;
 @group(0) @binding(9) var<storage, read> recorded: array<RecordedPath>;
 @group(0) @binding(10) var<storage, read_write> weights: array<f32>;
+@group(0) @binding(11) var<storage, read> movers: array<GpuBounds>;
 
 // The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
 // carry no region or guided code.
@@ -78,9 +79,12 @@ fn trace_photon(path: u32) -> u32 {
     var power = emission.power * params.power_scale;
     var rays = 0u;
     let rank_base = (path - params.first_path) * params.max_depth;
+    // Whether the path has crossed a mover's box, when only such deposits are stored.
+    var changed = (params.flags & PHOTON_CHANGED_ONLY) == 0u;
     for (var bounce = 0u; bounce < params.max_depth; bounce++) {
         rays++;
         let hit = closest_hit(origin, dir, T_MISS);
+        changed = changed || near_mover(origin, dir, hit.t);
         if hit.triangle == 0xffffffffu {
             break;
         }
@@ -91,7 +95,7 @@ fn trace_photon(path: u32) -> u32 {
         let facing = select(-tri.normal, tri.normal, front);
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         if material.kind == MATERIAL_DIFFUSE {
-            if bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT {
+            if changed && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
                 let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
                 if slot < arrayLength(&photons) {
                     photons[slot] = Photon(position, path, power, oct_encode(facing));

@@ -133,7 +133,14 @@ struct PhotonPassParams {
     ray_epsilon: f32,
     power_scale: f32,
     first_path: u32,
+    flags: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
+
+// PhotonPassParams::flags (ppm_core::layout::photon_flags).
+const PHOTON_CHANGED_ONLY: u32 = 1u;
 
 struct GatherParams {
     alpha: f32,

@@ -13,7 +13,10 @@
 //!   the move blocks or frees none of them);
 //! - the kept slots' indirect light is corrected by difference passes: ordinary photons
 //!   traced in both poses with the same random numbers, whose deferred net sum is the change
-//!   of every photon path the move changed.
+//!   of every photon path the move changed. A path is the same in both poses until it
+//!   crosses a box, so only deposits made after that are stored (in both poses): the
+//!   gathers cost in proportion to the light the object touches, and what would cancel
+//!   leaves no rounding behind. Every path is still traced in both poses.
 //!
 //! A move to the same pose resets nothing, and its difference passes cancel.
 
@@ -27,6 +30,10 @@ use std::time::Instant;
 
 /// Direct-light samples per slot of the paired correction, in each pose.
 pub const CORRECTION_SAMPLES: u32 = 8;
+
+/// Local mode's indirect correction: difference passes that store only the deposits of paths
+/// that crossed a mover's box (the others cancel between the poses).
+const LOCAL: Compensation = Compensation::Difference { changed_only: true };
 
 /// Keys the correction's random numbers apart from every iteration's.
 const CORRECTION_SEED: u32 = 0x5eed_c0de;
@@ -64,7 +71,7 @@ impl Renderer<'_> {
         if self.movers.len() != next.moves.len() || !inside(&self.scene) || !inside(next) {
             return Err("the move leaves the boxes flagged since the start".to_owned());
         }
-        Ok(Compensation::Difference)
+        Ok(LOCAL)
     }
 
     /// Moves to `next`: the resets, then difference passes and the paired direct-light
@@ -82,7 +89,9 @@ impl Renderer<'_> {
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
-        self.compensate(&Compensation::Difference, gather_kind::REGION_NEGATIVE)?;
+        let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
+        let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
+        self.compensate(&LOCAL, gather_kind::REGION_NEGATIVE)?;
         if changed {
             self.correct_direct(-1.0)?;
         }
@@ -94,10 +103,19 @@ impl Renderer<'_> {
         if changed {
             self.correct_direct(1.0)?;
         }
-        self.compensate(&Compensation::Difference, gather_kind::REGION_POSITIVE)?;
+        self.compensate(&LOCAL, gather_kind::REGION_POSITIVE)?;
         self.difference_pass += self.moves.difference_passes;
         if self.moves.difference_passes > 0 {
             self.gather(gather_kind::REGION_APPLY, 0.0, 0.0)?;
+        }
+        let stored = self.counts.compensation.deposited + self.counts.region.deposited;
+        let emitted = self.counts.compensation.emitted + self.counts.region.emitted;
+        let ordinary = &self.counts.ordinary;
+        if emitted > emitted_before && ordinary.deposited > 0 {
+            let per_photon = ordinary.deposited as f64 / ordinary.emitted as f64;
+            report.changed_share = Some(
+                (stored - stored_before) as f64 / ((emitted - emitted_before) as f64 * per_photon),
+            );
         }
         self.guide = None;
         self.steps_since_move = 0;

@@ -287,7 +287,7 @@ impl<'a> Renderer<'a> {
             },
             ray_epsilon: self.ray_epsilon(),
             power_scale,
-            first_path: 0,
+            ..Default::default()
         }
     }
 

@@ -11,7 +11,10 @@
 use super::Renderer;
 use glam::Vec3;
 use ppm_core::emission::ordinary_emission;
-use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, gather_kind, region_mode};
+use ppm_core::layout::{
+    EmissionRegion, GuidedEmission, PhotonPassParams, RecordedPath, gather_kind, photon_flags,
+    region_mode,
+};
 use ppm_core::params::{Estimator, MoveMode};
 use ppm_core::passes::{BackendError, PhotonStats};
 use ppm_core::region::{RegionError, emitting_region};
@@ -66,6 +69,9 @@ pub struct MoveReport {
     /// Kept slots whose direct-light sum was corrected by paired shadow rays (local mode: a
     /// ray of theirs crossed a mover's box); the other modes restart every slot's sum.
     pub direct_corrected: u64,
+    /// Local mode: the share of the difference passes' deposits stored (their paths crossed
+    /// a mover's box), against what ordinary passes deposit per photon; the rest were culled.
+    pub changed_share: Option<f64>,
     /// Testing-photon paths recorded for guiding.
     pub recorded_paths: usize,
     /// Why the move restarted instead of compensating, if it did.
@@ -75,14 +81,17 @@ pub struct MoveReport {
 }
 
 /// What compensates a move: region photons through the emitting rectangle (thesis and area
-/// modes) or difference photons over the whole emission (difference mode).
+/// modes) or difference photons over the whole emission (difference and local modes).
 pub(super) enum Compensation {
     Region {
         region: EmissionRegion,
         /// Thesis mode's raw counts applied pass by pass; otherwise weighted and deferred.
         raw: bool,
     },
-    Difference,
+    Difference {
+        /// Store only deposits of paths that crossed a mover's box (local mode).
+        changed_only: bool,
+    },
 }
 
 impl Renderer<'_> {
@@ -95,6 +104,7 @@ impl Renderer<'_> {
             updated: 0,
             kept: 0,
             direct_corrected: 0,
+            changed_share: None,
             recorded_paths: 0,
             restarted: None,
             seconds: 0.0,
@@ -166,7 +176,7 @@ impl Renderer<'_> {
                 self.region_pass += self.moves.compensation_passes;
                 (self.moves.compensation_passes, !raw)
             }
-            Compensation::Difference => {
+            Compensation::Difference { .. } => {
                 self.difference_pass += self.moves.difference_passes;
                 (self.moves.difference_passes, true)
             }
@@ -215,7 +225,11 @@ impl Renderer<'_> {
             MoveMode::Restart => return Err("restart mode".to_owned()),
             MoveMode::Local => return self.local_plan(next),
             MoveMode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
-            MoveMode::Difference => return Ok(Compensation::Difference),
+            MoveMode::Difference => {
+                return Ok(Compensation::Difference {
+                    changed_only: false,
+                });
+            }
             MoveMode::Thesis => region_mode::POINT,
             MoveMode::Area => region_mode::AREA,
         };
@@ -264,14 +278,21 @@ impl Renderer<'_> {
                     self.gather(kind | flag, 0.0, total)?;
                 }
             }
-            Compensation::Difference => {
+            Compensation::Difference { changed_only } => {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
                 let n = self.params.photons_per_pass;
                 let total = (n * self.moves.difference_passes) as f32;
                 for k in 0..self.moves.difference_passes {
                     let index = DIFFERENCE_PASS_BASE + self.difference_pass + k;
-                    let params = self.photon_params(index, n, sign);
+                    let params = PhotonPassParams {
+                        flags: if *changed_only {
+                            photon_flags::CHANGED_ONLY
+                        } else {
+                            0
+                        },
+                        ..self.photon_params(index, n, sign)
+                    };
                     let t = Instant::now();
                     let stats = self.backend.photon_pass(&params)?;
                     self.count_photons(&stats, t);
