@@ -435,16 +435,50 @@ fn an_output_that_is_a_folder_is_refused() {
     insta::assert_snapshot!(err.replace(dir.to_str().unwrap(), "DIR"));
 }
 
+/// Runs `ppm ARGS`, waits for a line of its standard error that starts with `started`, lets it
+/// work half a second more, sends SIGINT (as Ctrl-C does), and returns its exit code and
+/// standard error.
+fn interrupted(args: &[&str], started: &str) -> (Option<i32>, String) {
+    use std::io::{BufRead, BufReader, Read};
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ppm"))
+        .args(args)
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut seen = String::new();
+    let mut line = String::new();
+    while !line.starts_with(started) {
+        line.clear();
+        let read = stderr.read_line(&mut line).unwrap();
+        seen.push_str(&line);
+        assert!(read > 0, "ppm ended before {started:?}: {seen}");
+    }
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    stderr.read_to_string(&mut seen).unwrap();
+    (status.code(), seen)
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// Ctrl-C during a render: the iteration in progress finishes, the image of every completed
 /// iteration is written with a report that says so, and the command exits with 130.
 #[test]
 fn an_interrupted_render_writes_what_it_completed_and_exits_130() {
-    use std::io::{BufRead, BufReader, Read};
-    use std::process::Stdio;
-    let dir = scratch("interrupt");
+    let dir = scratch("interrupt-render");
     let exr = dir.join("cb.exr");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ppm"))
-        .args([
+    let (code, err) = interrupted(
+        &[
             "render",
             "cornell-box",
             "--width",
@@ -457,35 +491,121 @@ fn an_interrupted_render_writes_what_it_completed_and_exits_130() {
             "20000",
             "-o",
             exr.to_str().unwrap(),
-        ])
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    while !line.starts_with("rendering") {
-        line.clear();
-        assert!(stderr.read_line(&mut line).unwrap() > 0, "ppm ended early");
-    }
-    // The render has started; give it time for a few iterations.
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let status = child.wait().unwrap();
-    let mut rest = String::new();
-    stderr.read_to_string(&mut rest).unwrap();
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("cb.json")).unwrap()).unwrap();
+        ],
+        "rendering",
+    );
+    let report = json(&dir.join("cb.json"));
     let written = exr.is_file() && dir.join("cb.png").is_file();
     std::fs::remove_dir_all(&dir).ok();
-    assert_eq!(status.code(), Some(130), "{rest}");
-    assert!(written, "{rest}");
-    assert!(rest.contains("interrupted: the image holds the"), "{rest}");
+    assert_eq!(code, Some(130), "{err}");
+    assert!(written, "{err}");
+    assert!(err.contains("interrupted: the image holds the"), "{err}");
     assert_eq!(report["interrupted"], true);
     let passes = report["passes"].as_u64().unwrap();
     assert!((1..1_000_000).contains(&passes), "{passes}");
+}
+
+/// Ctrl-C during a reference: the samples of the completed rounds are written, marked.
+#[test]
+fn an_interrupted_reference_writes_its_completed_rounds() {
+    let dir = scratch("interrupt-reference");
+    let exr = dir.join("ref.exr");
+    let (code, err) = interrupted(
+        &[
+            "reference",
+            "cornell-box",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "100000000",
+            "-o",
+            exr.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let summary = json(&dir.join("ref.json"));
+    let written = exr.is_file() && dir.join("ref.var.exr").is_file();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert!(written, "{err}");
+    assert_eq!(summary["interrupted"], true);
+    let spp = summary["spp"].as_u64().unwrap();
+    assert!((8..100_000_000).contains(&spp), "{spp}");
+}
+
+/// Ctrl-C during an animation keeps the frames completed and writes no partial one.
+#[test]
+fn an_interrupted_animation_keeps_its_completed_frames() {
+    let dir = scratch("interrupt-animate");
+    let out = dir.join("frames");
+    let (code, err) = interrupted(
+        &[
+            "animate",
+            "cornell-box",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--photons-per-pass",
+            "5000",
+            "--steps",
+            "1000",
+            "--time-per-frame",
+            "0.05",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let frames = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension() == Some("json".as_ref()))
+        .count();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert!((1..1001).contains(&frames), "{frames} frames");
+    assert!(
+        err.contains(&format!("interrupted: the {frames} frames completed")),
+        "{err}"
+    );
+}
+
+/// Ctrl-C during a convergence report: the rows measured so far are written, marked.
+#[test]
+fn an_interrupted_report_writes_the_rows_measured() {
+    let dir = scratch("interrupt-report");
+    let out = dir.join("report");
+    let (code, err) = interrupted(
+        &[
+            "report",
+            "convergence",
+            "cornell-box",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--photons-per-pass",
+            "5000",
+            "--seconds",
+            "1000",
+            "--reference-spp",
+            "8",
+            "--cache",
+            dir.join("cache").to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let report = json(&out.join("convergence.json"));
+    let rows = std::fs::read_to_string(out.join("convergence.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert_eq!(report["interrupted"], true);
+    assert!(rows >= 2, "{rows} lines");
 }

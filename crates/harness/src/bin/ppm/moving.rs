@@ -125,6 +125,13 @@ pub fn animate(args: AnimateArgs) -> Result<()> {
     output_folder(&args.output, &format!("-o {}", args.output.display()))?;
     let mut backend = args.common.backend.start()?;
     let schedule = Schedule::animation(args.steps, args.mode, Budget::seconds(args.time_per_frame));
+    eprintln!(
+        "rendering {} in {} steps ({}), {}s a frame",
+        scene.name,
+        args.steps,
+        args.mode.name(),
+        args.time_per_frame
+    );
     let mut writer = FrameWriter {
         args: &args,
         scene: &scene.name,

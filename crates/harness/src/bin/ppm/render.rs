@@ -261,6 +261,10 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
     let paths = OutputPaths::new(&args.output)?;
     let pool = thread_pool(args.threads)?;
     let compiled = ppm_core::compile::compile_scene(&scene.at_frame(args.frame), width, height);
+    eprintln!(
+        "rendering the reference of {} at {width}x{height}",
+        scene.name
+    );
     let bar = spp_bar(budget.spp);
     let reference = pool.install(|| {
         render_reference(&compiled, args.seed, budget, &mut |spp, s| {
