@@ -1,14 +1,19 @@
 //! Bad input never panics: mutations of `cornell-box.toml` (numbers replaced by extremes,
-//! lines deleted or duplicated, random bytes) and of OBJ and PLY meshes go through the
+//! lines deleted or duplicated, random bytes), of its Mitsuba and pbrt exports, and of OBJ
+//! and PLY meshes go through the
 //! loaders, validation and compilation, and the scenes that survive render a tiny image. Every
 //! error names the file. Cases are drawn from a fixed seed, so a failure reproduces; their
-//! counts (2,000 in all) keep the whole file within seconds in release.
+//! counts (3,000 in all) keep the whole file within seconds in release.
 
 use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::compile::compile_scene;
 use ppm_core::params::{MoveParams, RenderParams};
-use ppm_core::scene::{Scene, SceneError, load_scene_file, mesh_file::read_ply};
+use ppm_core::scene::mitsuba::{export_mitsuba, load_mitsuba_file};
+use ppm_core::scene::pbrt::{export_pbrt, load_pbrt_file};
+use ppm_core::scene::{
+    Export, ExportOptions, Scene, SceneError, load_scene_file, mesh_file::read_ply,
+};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
 use std::path::PathBuf;
@@ -287,6 +292,53 @@ fn mutated_ply_files_are_refused_or_read() {
             }
         }
     });
+}
+
+/// Mutated Mitsuba and pbrt exports of cornell-box (their PLY meshes left whole): loaded and
+/// rendered, or refused naming the file; never a panic.
+#[test]
+fn mutated_mitsuba_and_pbrt_files_are_refused_or_render() {
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let options = ExportOptions {
+        samples_per_pixel: 16,
+        frame: 0,
+    };
+    let dir = scratch("import");
+    type Load = fn(&std::path::Path) -> Result<Scene, SceneError>;
+    let formats: [(&str, Export, Load); 2] = [
+        (
+            "mitsuba",
+            export_mitsuba(&scene, &options),
+            load_mitsuba_file,
+        ),
+        ("pbrt", export_pbrt(&scene, &options), load_pbrt_file),
+    ];
+    for (name, export, load) in formats {
+        let original = export.write(&dir).unwrap();
+        let extension = original.extension().unwrap().to_str().unwrap().to_owned();
+        assert!(load(&original).is_ok(), "{name}: the export itself loads");
+        let text = std::fs::read_to_string(&original).unwrap();
+        let case = AtomicU32::new(0);
+        fuzz(name, &text, 500, |mutated| {
+            let n = case.fetch_add(1, Ordering::Relaxed);
+            let path = dir.join(format!("case-{n}.{extension}"));
+            std::fs::write(&path, mutated).unwrap();
+            let loaded = load(&path);
+            std::fs::remove_file(&path).ok();
+            match loaded {
+                Err(e) => {
+                    let message = e.to_string();
+                    prop_assert!(
+                        message.starts_with(&path.display().to_string()),
+                        "{message}"
+                    );
+                    Ok(Outcome::Refused)
+                }
+                Ok(scene) => render_tiny(&scene),
+            }
+        });
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The inputs the fuzz mutates are valid: a refusal of a mutant is the mutation's doing.
