@@ -428,6 +428,26 @@ mod tests {
         assert_eq!(mesh.normals.unwrap()[2], Vec3::Z);
     }
 
+    /// Counts in a file are not trusted: a list of 2^31 indices reserves nothing (it ends
+    /// where the data ends), a billion billion elements without properties read nothing, and
+    /// a negative index is no index.
+    #[test]
+    fn corrupt_counts_and_indices_are_errors_not_allocations_or_hangs() {
+        let huge_list = b"ply\nformat binary_little_endian 1.0\nelement face 1\n\
+                          property list int int vertex_indices\nend_header\n\xff\xff\xff\x7f";
+        assert_eq!(parse_ply(huge_list).unwrap_err(), "the data ends early");
+        let empty = "ply\nformat ascii 1.0\nelement junk 1000000000000000000\nend_header\n";
+        assert_eq!(parse_ply(empty.as_bytes()).unwrap(), MeshData::default());
+        let negative = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                        property float y\nproperty float z\nelement face 1\n\
+                        property list uchar int vertex_indices\nend_header\n\
+                        0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n";
+        assert_eq!(
+            parse_ply(negative.as_bytes()).unwrap_err(),
+            "face index -1 is not a vertex index"
+        );
+    }
+
     #[test]
     fn truncated_binary_ply_is_an_error() {
         let text = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n\
