@@ -6,7 +6,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    // Read at run time: `env!` would bake in the folder this script was first compiled in, and
+    // a target folder copied from another checkout would then assemble that checkout's shaders.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let root = Path::new(&manifest).join("shaders");
     println!("cargo:rerun-if-changed={}", root.display());
     let out = std::env::var("OUT_DIR").expect("cargo sets OUT_DIR");
     let mut passes: Vec<_> = std::fs::read_dir(root.join("passes"))

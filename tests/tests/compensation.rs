@@ -15,6 +15,7 @@ use ppm_core::metrics::relative_rmse;
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::region::emitting_region;
 use ppm_core::scene::Scene;
+use std::ops::ControlFlow;
 use tests::luminance;
 
 fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
@@ -216,7 +217,7 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
                     spp: Some(256),
                     seconds: None,
                 };
-                render_reference(&compiled, 99, budget, &mut |_, _| {}).image
+                render_reference(&compiled, 99, budget, &mut |_, _| ControlFlow::Continue(())).image
             }
             Estimator::Ppm => {
                 let mut reference = p.clone();

@@ -7,6 +7,7 @@ use harness::reference::{ReferenceBudget, ReferenceImage, render_reference};
 use ppm_core::compile::compile_scene;
 use ppm_core::scene::Scene;
 use scenes::analytic::{furnace, furnace_radiance, specular_furnace};
+use std::ops::ControlFlow;
 
 fn path_trace(scene: &Scene, size: u32, spp: u32, seed: u32) -> ReferenceImage {
     let compiled = compile_scene(scene, size, size);
@@ -14,7 +15,9 @@ fn path_trace(scene: &Scene, size: u32, spp: u32, seed: u32) -> ReferenceImage {
         spp: Some(spp),
         seconds: None,
     };
-    let reference = render_reference(&compiled, seed, budget, &mut |_, _| {});
+    let reference = render_reference(&compiled, seed, budget, &mut |_, _| {
+        ControlFlow::Continue(())
+    });
     assert!(reference.error.is_none(), "{:?}", reference.error);
     reference
 }

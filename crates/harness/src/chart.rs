@@ -1,10 +1,12 @@
-//! Log-log line charts drawn with plotters, written as PNG and SVG.
+//! Log-log line charts drawn with plotters, written (atomically) as PNG and SVG.
 //!
 //! Text is drawn with a copy of DejaVu Sans kept in `assets/` (plotters' `ab_glyph` font
 //! path), so a machine without system fonts draws the same chart.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use ppm_core::image::write_png_rgb;
+use ppm_core::output::write_bytes;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 use thiserror::Error;
@@ -79,12 +81,21 @@ pub fn write_loglog_chart(
         let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
         draw(&root, title, x_label, y_label, series).map_err(draw_err(&png))?;
     }
-    write_png(&png, &rgb, w, h)?;
+    write_png_rgb(&png, &rgb, w, h).map_err(write_err(&png))?;
+    let mut text = String::new();
     {
-        let root = SVGBackend::new(&svg, (w, h)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
         draw(&root, title, x_label, y_label, series).map_err(draw_err(&svg))?;
     }
-    Ok(())
+    write_bytes(&svg, text).map_err(write_err(&svg))
+}
+
+fn write_err(path: &Path) -> impl FnOnce(std::io::Error) -> ChartError {
+    let path = path.display().to_string();
+    move |e| ChartError::Write {
+        path,
+        reason: e.to_string(),
+    }
 }
 
 fn with_extension(stem: &Path, ext: &str) -> PathBuf {
@@ -94,21 +105,6 @@ fn with_extension(stem: &Path, ext: &str) -> PathBuf {
     PathBuf::from(name)
 }
 
-fn write_png(path: &Path, rgb: &[u8], w: u32, h: u32) -> Result<(), ChartError> {
-    let fail = |e: &dyn std::fmt::Display| ChartError::Write {
-        path: path.display().to_string(),
-        reason: e.to_string(),
-    };
-    let file = std::fs::File::create(path).map_err(|e| fail(&e))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| fail(&e))?;
-    writer.write_image_data(rgb).map_err(|e| fail(&e))?;
-    writer.finish().map_err(|e| fail(&e))
-}
-
-/// The decades `[lo, hi]` (as powers of ten) that hold every value, at least one wide.
 fn decades(values: impl Iterator<Item = f64>) -> (i32, i32) {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
         (lo.min(v), hi.max(v))

@@ -5,7 +5,7 @@
 
 use crate::chart::{ChartError, Series, write_loglog_chart};
 use crate::driver::schedule::EachIteration;
-use crate::driver::{Budget, Progress, Renderer, RunError, Schedule, run};
+use crate::driver::{Budget, Progress, Renderer, RunError, Schedule, Stoppable, run};
 use crate::reference::Truth;
 use crate::report::RenderReport;
 use ppm_core::image::Image;
@@ -58,7 +58,8 @@ pub fn measure(image: &Image, truth: &Truth, seconds: f64, passes: u32) -> Point
 
 /// Renders `scene` at `frame` from scratch on `backend` for `seconds` of rendering, measuring
 /// against `truth` after the first iteration, whenever rendering time has grown by
-/// [`CHECKPOINT_GROWTH`], and after the last.
+/// [`CHECKPOINT_GROWTH`], and after the last; ends early, with the points measured so far,
+/// when `stop` says so (the report says `interrupted`).
 pub fn run_from_scratch(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
@@ -66,6 +67,7 @@ pub fn run_from_scratch(
     params: &RenderParams,
     seconds: f64,
     truth: &Truth,
+    stop: &dyn Fn() -> bool,
 ) -> Result<(Vec<Point>, RenderReport), RunError> {
     let mut points = Vec::new();
     let mut next = 0.0;
@@ -85,7 +87,10 @@ pub fn run_from_scratch(
         params,
         &MoveParams::default(),
         &schedule,
-        &mut observer,
+        &mut Stoppable {
+            observer: &mut observer,
+            stop,
+        },
     )?;
     if let Some(e) = outcome.error {
         return Err(e.into());

@@ -4,7 +4,7 @@
 use crate::chart::{ChartError, Series, write_loglog_chart};
 use crate::driver::{
     Budget, MoveReport, Observer, ObserverResult, PhotonCounts, Progress, Renderer, RunError,
-    Schedule, Step, run,
+    Schedule, Step, Stoppable, run,
 };
 use ppm_core::image::Image;
 use ppm_core::layout::{HitPoint, hit_flags};
@@ -166,7 +166,8 @@ impl Observer for AfterMove<'_> {
 
 /// Runs `mode` after a move: warm-up on frame 0 (not for restart, which starts on frame 1),
 /// the move, then iterations until `settings.seconds`, measuring after each; `reset` (from
-/// [`reset_pixels`]) splits the error.
+/// [`reset_pixels`]) splits the error. Ends early, with the measurements so far, when `stop`
+/// says so.
 pub fn run_mode(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
@@ -174,6 +175,7 @@ pub fn run_mode(
     settings: &ErrorSettings,
     truth: &Image,
     reset: &[bool],
+    stop: &dyn Fn() -> bool,
 ) -> Result<ModeRun, RunError> {
     let schedule = Schedule::after_move(
         Budget::seconds(settings.warmup_seconds),
@@ -195,7 +197,10 @@ pub fn run_mode(
         &settings.params,
         &settings.moves,
         &schedule,
-        &mut observer,
+        &mut Stoppable {
+            observer: &mut observer,
+            stop,
+        },
     )?;
     if let Some(e) = outcome.error {
         return Err(e.into());
@@ -213,7 +218,8 @@ pub fn run_mode(
 /// pixels as good as a from-scratch render of frame 1 for the warm-up time (every change
 /// removed, nothing stale, no compensation noise), its reset pixels as restart's. Unless
 /// guiding makes the reset pixels converge faster than restart's, no compensating mode gets
-/// below this curve: it says what the method can win on the scene at all.
+/// below this curve: it says what the method can win on the scene at all. `None` when `stop`
+/// ended the render early (its kept pixels would be judged on less than the warm-up).
 pub fn perfect_compensation(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
@@ -221,20 +227,38 @@ pub fn perfect_compensation(
     truth: &Image,
     reset: &[bool],
     restart: &ModeRun,
-) -> Result<Vec<(f64, f64)>, RunError> {
+    stop: &dyn Fn() -> bool,
+) -> Result<Option<Vec<(f64, f64)>>, RunError> {
     let mut params = settings.params.clone();
     params.seed = params.seed.wrapping_add(1);
     let schedule = Schedule::frame(1, Budget::seconds(settings.warmup_seconds));
-    let outcome = run(backend, scene, &params, &settings.moves, &schedule, &mut ())?;
+    let mut nothing = ();
+    let mut observer = Stoppable {
+        observer: &mut nothing,
+        stop,
+    };
+    let outcome = run(
+        backend,
+        scene,
+        &params,
+        &settings.moves,
+        &schedule,
+        &mut observer,
+    )?;
     if let Some(e) = outcome.error {
         return Err(e.into());
     }
+    if outcome.stopped {
+        return Ok(None);
+    }
     let (kept, _) = relative_rmse_parts(&outcome.image, truth, reset);
-    Ok(restart
-        .measurements
-        .iter()
-        .map(|m| (m.seconds, kept.hypot(m.reset)))
-        .collect())
+    Ok(Some(
+        restart
+            .measurements
+            .iter()
+            .map(|m| (m.seconds, kept.hypot(m.reset)))
+            .collect(),
+    ))
 }
 
 /// The CSV of all measurements: `mode,seconds,rel_rmse,kept,reset`.

@@ -77,6 +77,9 @@ pub struct RenderReport {
     pub non_finite_pixels_zeroed: u64,
     /// The error that stopped the render early, if any.
     pub error: Option<String>,
+    /// The render was asked to stop (Ctrl-C) before its budget was spent: the image holds
+    /// the iterations completed.
+    pub interrupted: bool,
 }
 
 impl RenderReport {
@@ -105,6 +108,7 @@ impl RenderReport {
             left_out: Vec::new(),
             non_finite_pixels_zeroed: 0,
             error: None,
+            interrupted: false,
         }
     }
 }

@@ -246,3 +246,366 @@ fn export_refuses_a_third_frame() {
     assert!(!out.status.success());
     insta::assert_snapshot!(stderr(&out).trim_end());
 }
+
+/// The error of `ppm ARGS`, which must fail.
+fn refusal(args: &[&str]) -> String {
+    let out = ppm(args);
+    assert!(!out.status.success(), "accepted {args:?}");
+    stderr(&out).trim_end().to_owned()
+}
+
+/// Options that parse but mean nothing are refused before rendering, naming option and value.
+#[test]
+fn nonsense_options_are_refused_with_option_and_value() {
+    let cases: &[&[&str]] = &[
+        &["render", "cornell-box", "--passes", "0", "-o", "unused.exr"],
+        &[
+            "render",
+            "cornell-box",
+            "--time-budget",
+            "NaN",
+            "-o",
+            "unused.exr",
+        ],
+        &[
+            "render",
+            "cornell-box",
+            "--time-budget=-3",
+            "-o",
+            "unused.exr",
+        ],
+        &[
+            "render",
+            "cornell-box",
+            "--radius",
+            "1e20",
+            "-o",
+            "unused.exr",
+        ],
+        &[
+            "render",
+            "cornell-box",
+            "--threads",
+            "0",
+            "-o",
+            "unused.exr",
+        ],
+        &[
+            "animate",
+            "cornell-box",
+            "--time-per-frame",
+            "0",
+            "-o",
+            "unused",
+        ],
+        &[
+            "animate",
+            "cornell-box",
+            "--time-per-frame",
+            "NaN",
+            "-o",
+            "unused",
+        ],
+        &[
+            "animate",
+            "cornell-box",
+            "--cone-deg",
+            "NaN",
+            "-o",
+            "unused",
+        ],
+        &[
+            "animate",
+            "cornell-box",
+            "--region-photons",
+            "0",
+            "-o",
+            "unused",
+        ],
+        &[
+            "report",
+            "error-vs-time",
+            "cornell-box",
+            "--warmup",
+            "NaN",
+            "-o",
+            "unused",
+        ],
+        &[
+            "report",
+            "convergence",
+            "cornell-box",
+            "--seconds",
+            "0",
+            "-o",
+            "unused",
+        ],
+        &["diff", "cornell-box", "--independent", "--runs", "1"],
+        &["diff", "cornell-box", "--independent", "--runs", "0"],
+    ];
+    let report: Vec<String> = cases
+        .iter()
+        .map(|args| format!("ppm {}\n  {}", args.join(" "), refusal(args)))
+        .collect();
+    insta::assert_snapshot!(report.join("\n"));
+}
+
+/// `--threads` beyond the ceiling names it (the core count in the message varies).
+#[test]
+fn thousands_of_threads_are_refused_naming_the_ceiling() {
+    let err = refusal(&[
+        "render",
+        "cornell-box",
+        "--threads",
+        "100000",
+        "-o",
+        "unused.exr",
+    ]);
+    assert!(
+        err.starts_with("error: --threads = 100000: at most 1024 (this machine has "),
+        "{err}"
+    );
+}
+
+/// A device never ends: it is refused at once, not read.
+#[test]
+fn a_device_as_scene_file_is_refused_at_once() {
+    insta::assert_snapshot!(refusal(&["render", "/dev/zero", "-o", "unused.exr"]));
+}
+
+/// Sizes that cannot fit in memory are refused before allocation, saying what was asked,
+/// what fits and which option to change (what fits depends on the machine).
+#[test]
+fn renders_beyond_memory_are_refused_before_allocation() {
+    let slots = refusal(&[
+        "render",
+        "cornell-box",
+        "--width",
+        "60000",
+        "--height",
+        "60000",
+        "-o",
+        "unused.exr",
+    ]);
+    assert!(
+        slots.starts_with(
+            "error: command line: width * height * spp = 60000 * 60000 * 1 = 3600000000: \
+             hit points of 96 bytes need 345.6 GB; "
+        ) && slots.ends_with(": lower --width, --height or --spp"),
+        "{slots}"
+    );
+    let photons = refusal(&[
+        "render",
+        "cornell-box",
+        "--photons-per-pass",
+        "4000000000",
+        "-o",
+        "unused.exr",
+    ]);
+    assert!(
+        photons.starts_with("error: command line: photons_per_pass = 4000000000: ")
+            && photons
+                .contains(" deposits of 32 bytes (3.6 per path for albedo 0.725) need 465.5 GB; ")
+            && photons.ends_with(": lower --photons-per-pass"),
+        "{photons}"
+    );
+}
+
+/// A folder where no file can be created is refused before rendering (procfs refuses
+/// everyone, root included).
+#[test]
+fn an_unwritable_output_folder_is_refused_before_rendering() {
+    let err = refusal(&["render", "cornell-box", "-o", "/proc/self/out.exr"]);
+    assert!(
+        err.starts_with(
+            "error: -o /proc/self/out.exr: cannot write files in /proc/self (nothing was \
+             rendered): "
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn an_output_that_is_a_folder_is_refused() {
+    let dir = scratch("output-folder");
+    std::fs::create_dir_all(dir.join("x.png")).unwrap();
+    let exr = dir.join("x.exr");
+    let err = refusal(&["render", "cornell-box", "-o", exr.to_str().unwrap()]);
+    std::fs::remove_dir_all(&dir).ok();
+    insta::assert_snapshot!(err.replace(dir.to_str().unwrap(), "DIR"));
+}
+
+/// Runs `ppm ARGS`, waits for a line of its standard error that starts with `started`, lets it
+/// work half a second more, sends SIGINT (as Ctrl-C does), and returns its exit code and
+/// standard error.
+fn interrupted(args: &[&str], started: &str) -> (Option<i32>, String) {
+    use std::io::{BufRead, BufReader, Read};
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ppm"))
+        .args(args)
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut seen = String::new();
+    let mut line = String::new();
+    while !line.starts_with(started) {
+        line.clear();
+        let read = stderr.read_line(&mut line).unwrap();
+        seen.push_str(&line);
+        assert!(read > 0, "ppm ended before {started:?}: {seen}");
+    }
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    stderr.read_to_string(&mut seen).unwrap();
+    (status.code(), seen)
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Ctrl-C during a render: the iteration in progress finishes, the image of every completed
+/// iteration is written with a report that says so, and the command exits with 130.
+#[test]
+fn an_interrupted_render_writes_what_it_completed_and_exits_130() {
+    let dir = scratch("interrupt-render");
+    let exr = dir.join("cb.exr");
+    let (code, err) = interrupted(
+        &[
+            "render",
+            "cornell-box",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--passes",
+            "1000000",
+            "--photons-per-pass",
+            "20000",
+            "-o",
+            exr.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let report = json(&dir.join("cb.json"));
+    let written = exr.is_file() && dir.join("cb.png").is_file();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert!(written, "{err}");
+    assert!(err.contains("interrupted: the image holds the"), "{err}");
+    assert_eq!(report["interrupted"], true);
+    let passes = report["passes"].as_u64().unwrap();
+    assert!((1..1_000_000).contains(&passes), "{passes}");
+}
+
+/// Ctrl-C during a reference: the samples of the completed rounds are written, marked.
+#[test]
+fn an_interrupted_reference_writes_its_completed_rounds() {
+    let dir = scratch("interrupt-reference");
+    let exr = dir.join("ref.exr");
+    let (code, err) = interrupted(
+        &[
+            "reference",
+            "cornell-box",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "100000000",
+            "-o",
+            exr.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let summary = json(&dir.join("ref.json"));
+    let written = exr.is_file() && dir.join("ref.var.exr").is_file();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert!(written, "{err}");
+    assert_eq!(summary["interrupted"], true);
+    let spp = summary["spp"].as_u64().unwrap();
+    assert!((8..100_000_000).contains(&spp), "{spp}");
+}
+
+/// Ctrl-C during an animation keeps the frames completed and writes no partial one.
+#[test]
+fn an_interrupted_animation_keeps_its_completed_frames() {
+    let dir = scratch("interrupt-animate");
+    let out = dir.join("frames");
+    let (code, err) = interrupted(
+        &[
+            "animate",
+            "cornell-box",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--photons-per-pass",
+            "5000",
+            "--steps",
+            "1000",
+            "--time-per-frame",
+            "0.05",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let frames = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension() == Some("json".as_ref()))
+        .count();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert!((1..1001).contains(&frames), "{frames} frames");
+    assert!(
+        err.contains(&format!("interrupted: the {frames} frames completed")),
+        "{err}"
+    );
+}
+
+/// Ctrl-C during a convergence report: the rows measured so far are written, marked.
+#[test]
+fn an_interrupted_report_writes_the_rows_measured() {
+    let dir = scratch("interrupt-report");
+    let out = dir.join("report");
+    let (code, err) = interrupted(
+        &[
+            "report",
+            "convergence",
+            "cornell-box",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--photons-per-pass",
+            "5000",
+            "--seconds",
+            "1000",
+            "--reference-spp",
+            "8",
+            "--cache",
+            dir.join("cache").to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "rendering",
+    );
+    let report = json(&out.join("convergence.json"));
+    let rows = std::fs::read_to_string(out.join("convergence.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, Some(130), "{err}");
+    assert_eq!(report["interrupted"], true);
+    assert!(rows >= 2, "{rows} lines");
+}

@@ -95,7 +95,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         let (t, material, object) = tris[p as usize];
         let mut gpu = gpu_triangle(t, material, object);
         if let MaterialKind::Light { .. } = scene.materials[material as usize].kind {
-            let area = 0.5 * Vec3::from(gpu.e1).cross(Vec3::from(gpu.e2)).length();
+            let area = light_area(Vec3::from(gpu.e1), Vec3::from(gpu.e2));
             if area > 0.0 {
                 gpu.light = lights.len() as u32;
                 lights.push(GpuLight {
@@ -226,8 +226,30 @@ fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
         object,
         e2: e2.into(),
         light: NO_MATERIAL,
-        normal: e1.cross(e2).normalize_or_zero().into(),
+        normal: unit_normal(e1, e2).into(),
         _pad0: 0,
+    }
+}
+
+/// The unit normal of edges `e1`, `e2`: in `f32`, or in `f64` where the cross product's
+/// squared length overflows `f32` (edges beyond ~1e9, which `MAX_COORDINATE` admits), so that
+/// ordinary scenes keep their bits and large ones their normals.
+fn unit_normal(e1: Vec3, e2: Vec3) -> Vec3 {
+    e1.cross(e2).try_normalize().unwrap_or_else(|| {
+        e1.as_dvec3()
+            .cross(e2.as_dvec3())
+            .normalize_or_zero()
+            .as_vec3()
+    })
+}
+
+/// A light triangle's area, in `f32` or, where that overflows, in `f64` (see [`unit_normal`]).
+fn light_area(e1: Vec3, e2: Vec3) -> f32 {
+    let area = 0.5 * e1.cross(e2).length();
+    if area.is_finite() {
+        area
+    } else {
+        (0.5 * e1.as_dvec3().cross(e2.as_dvec3()).length()) as f32
     }
 }
 

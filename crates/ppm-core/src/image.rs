@@ -1,5 +1,7 @@
 //! Linear RGB images: EXR output (exact floats), a tone-mapped PNG preview, and error metrics.
 
+use crate::output::write_bytes;
+use std::io;
 use std::path::Path;
 use thiserror::Error;
 
@@ -70,17 +72,25 @@ impl Image {
         self.pixels.iter().flatten().all(|v| v.is_finite())
     }
 
-    /// Writes a linear float EXR (RGB, f32).
+    /// Writes a linear float EXR (RGB, f32), atomically.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
+        use exr::prelude::{SpecificChannels, Vec2, WritableImage};
         let w = self.width as usize;
-        exr::prelude::write_rgb_file(path, w, self.height as usize, |x, y| {
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
             let p = self.pixels[y * w + x];
             (p[0], p[1], p[2])
-        })
-        .map_err(|e| ImageError::Write {
-            path: path.display().to_string(),
-            reason: e.to_string(),
-        })
+        });
+        let image = exr::prelude::Image::from_channels((w, self.height as usize), channels);
+        let mut encoded = io::Cursor::new(Vec::new());
+        image
+            .write()
+            .to_buffered(&mut encoded)
+            .map_err(io::Error::other)
+            .and_then(|()| write_bytes(path, encoded.into_inner()))
+            .map_err(|e| ImageError::Write {
+                path: path.display().to_string(),
+                reason: e.to_string(),
+            })
     }
 
     /// Reads the RGB channels of an EXR written by any renderer, refusing it (before its
@@ -132,27 +142,32 @@ impl Image {
         Ok(read.layer_data.channel_data.pixels)
     }
 
-    /// Writes an 8-bit sRGB PNG preview: radiance times `exposure`, clamped, sRGB-encoded.
+    /// Writes an 8-bit sRGB PNG preview: radiance times `exposure`, clamped, sRGB-encoded;
+    /// atomically.
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), ImageError> {
-        let err = |reason: String| ImageError::Write {
-            path: path.display().to_string(),
-            reason,
-        };
-        let file = std::fs::File::create(path).map_err(|e| err(e.to_string()))?;
-        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
         let bytes: Vec<u8> = self
             .pixels
             .iter()
             .flatten()
             .map(|v| (srgb_encode(v * exposure) * 255.0 + 0.5) as u8)
             .collect();
-        let mut writer = encoder.write_header().map_err(|e| err(e.to_string()))?;
-        writer
-            .write_image_data(&bytes)
-            .map_err(|e| err(e.to_string()))
+        write_png_rgb(path, &bytes, self.width, self.height).map_err(|e| ImageError::Write {
+            path: path.display().to_string(),
+            reason: e.to_string(),
+        })
     }
+}
+
+/// Writes 8-bit RGB `rgb` (`width * height * 3` bytes) as a PNG file, atomically.
+pub fn write_png_rgb(path: &Path, rgb: &[u8], width: u32, height: u32) -> io::Result<()> {
+    let mut encoded = Vec::new();
+    let mut encoder = png::Encoder::new(&mut encoded, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(io::Error::other)?;
+    writer.write_image_data(rgb).map_err(io::Error::other)?;
+    writer.finish().map_err(io::Error::other)?;
+    write_bytes(path, encoded)
 }
 
 /// The sRGB transfer function of a linear value, clamped to [0, 1]; NaN maps to 0.

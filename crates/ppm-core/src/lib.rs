@@ -8,7 +8,8 @@
 //! - [`scene`], [`compile`]: the scene model, its file format, and its flattening into buffers.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping.
 //! - [`params`], [`image`], [`metrics`]: render settings, images and their EXR/PNG files, and
-//!   the distances error reports measure.
+//!   the distances error reports measure; [`output`]: every file written whole or not at all;
+//!   [`limits`]: the sizes and magnitudes refused before anything is allocated or traced.
 
 pub mod check;
 pub mod compile;
@@ -17,7 +18,9 @@ pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod layout;
+pub mod limits;
 pub mod metrics;
+pub mod output;
 pub mod params;
 pub mod passes;
 pub mod qmc;

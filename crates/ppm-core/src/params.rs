@@ -1,6 +1,6 @@
 //! Settings of one render, with checks that name the offending option.
 
-use crate::scene::{Scene, SceneError};
+use crate::scene::{MAX_COORDINATE, Scene, SceneError, number};
 use serde::{Deserialize, Serialize};
 
 /// Which progressive estimator renders (ALGORITHM.md 1).
@@ -135,6 +135,9 @@ impl RenderParams {
                 "exceeds 2^32 hit-point slots",
             );
         }
+        if self.passes == 0 {
+            return bad("passes", &self.passes, "must be at least 1");
+        }
         if self.photons_per_pass == 0 {
             return bad(
                 "photons_per_pass",
@@ -150,6 +153,13 @@ impl RenderParams {
         }
         if self.initial_radius * self.initial_radius == 0.0 {
             return bad("radius", &self.initial_radius, "its square underflows f32");
+        }
+        if self.initial_radius > MAX_COORDINATE {
+            return bad(
+                "radius",
+                &number(self.initial_radius),
+                &format!("above {MAX_COORDINATE:e}: its square overflows f32"),
+            );
         }
         if let Some(t) = self.time_budget
             && !(t.is_finite() && t > 0.0)
@@ -246,6 +256,33 @@ pub struct MoveParams {
     pub update_epsilon: f32,
     /// Difference passes per move (each one negative and one positive ordinary pass).
     pub difference_passes: u32,
+}
+
+impl MoveParams {
+    /// Checks every setting; `source` names where they came from in the error.
+    pub fn validate(&self, source: &str) -> Result<(), SceneError> {
+        let bad = |field: &str, value: &dyn std::fmt::Display, problem: &str| {
+            Err(SceneError::invalid(source, field, value, problem))
+        };
+        if self.region_photons == 0 {
+            return bad("region_photons", &self.region_photons, "must be at least 1");
+        }
+        // The guided photons' solid angle is `2 pi (1 - cos cone)`: zero at 0 degrees.
+        if !(self.cone_deg > 0.0 && self.cone_deg <= 180.0) {
+            return bad("cone_deg", &self.cone_deg, "must lie in (0, 180] degrees");
+        }
+        if !(0.0..=1.0).contains(&self.beta) {
+            return bad("beta", &self.beta, "must lie in [0, 1]");
+        }
+        if !(self.update_epsilon.is_finite() && self.update_epsilon > 0.0) {
+            return bad(
+                "update_epsilon",
+                &self.update_epsilon,
+                "must be a positive number",
+            );
+        }
+        Ok(())
+    }
 }
 
 impl Default for MoveParams {

@@ -17,7 +17,7 @@ pub mod schedule;
 
 pub use moves::{MoveReport, PhotonCounts};
 pub use schedule::{
-    Budget, Observer, ObserverResult, Outcome, Progress, RunError, Schedule, Step, run,
+    Budget, Observer, ObserverResult, Outcome, Progress, RunError, Schedule, Step, Stoppable, run,
 };
 
 use crate::report::{RenderReport, left_out};
@@ -36,6 +36,11 @@ use std::time::Instant;
 /// Offset of secondary ray origins, relative to the scene's extent: ~150 f32 ulps at the
 /// largest coordinate, far below any feature of the canonical scenes.
 pub const RAY_EPSILON_RELATIVE: f32 = 1e-5;
+
+/// The largest extent, in initial gather radii, that ray offsets follow: cornell-box spans
+/// 48 radii, so its offsets are the extent's; beyond a thousand, geometry lies far outside
+/// anything the gather resolves.
+pub const OFFSET_RADII: f32 = 1000.0;
 
 /// A progressive render on one backend, carried across moves.
 pub struct Renderer<'a> {
@@ -211,8 +216,11 @@ impl<'a> Renderer<'a> {
         &self.report
     }
 
+    /// Relative to the scene's extent, but never to more of it than [`OFFSET_RADII`] initial
+    /// gather radii: geometry far from the rest (a vertex at 1e8 beside a 0.5 m box) must not
+    /// push every ray offset past the features the gather resolves.
     fn ray_epsilon(&self) -> f32 {
-        RAY_EPSILON_RELATIVE * self.extent
+        RAY_EPSILON_RELATIVE * self.extent.min(OFFSET_RADII * self.params.initial_radius)
     }
 
     /// The eye pass keyed by `key`, starting the slots fresh or keeping their statistics.

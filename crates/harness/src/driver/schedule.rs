@@ -1,7 +1,8 @@
 //! Schedules: what a render does, as data. A schedule starts from one pose of the scene and
 //! runs steps in order (render for a budget, move to another pose); [`run`] executes it on the
 //! [`Renderer`] and calls an [`Observer`] after each iteration, move and step, with the time
-//! the observer takes not counted as rendering.
+//! the observer takes not counted as rendering. An observer can also end the run early
+//! ([`Observer::stop_requested`]: a Ctrl-C), which keeps every iteration completed.
 
 use super::{MoveReport, PhotonCounts, Renderer};
 use crate::clock::Stopwatch;
@@ -152,10 +153,44 @@ pub trait Observer {
     fn step_done(&mut self, _at: &Progress, _renderer: &mut Renderer) -> ObserverResult {
         Ok(())
     }
+
+    /// Asked after each iteration, move and step: `true` ends the run there, as if every
+    /// budget were spent (the step in progress gets no `step_done`), and the run resolves
+    /// the image of the iterations completed.
+    fn stop_requested(&mut self) -> bool {
+        false
+    }
 }
 
 /// Watches nothing.
 impl Observer for () {}
+
+/// An observer that also ends the run when `stop` says so (a Ctrl-C): lets a caller that
+/// only holds a stop condition make any observer stoppable.
+pub struct Stoppable<'a> {
+    /// The observer told of everything.
+    pub observer: &'a mut dyn Observer,
+    /// Whether to stop now.
+    pub stop: &'a dyn Fn() -> bool,
+}
+
+impl Observer for Stoppable<'_> {
+    fn iteration(&mut self, at: &Progress, renderer: &mut Renderer) -> ObserverResult {
+        self.observer.iteration(at, renderer)
+    }
+
+    fn moved(&mut self, at: &Progress, m: &MoveReport, renderer: &mut Renderer) -> ObserverResult {
+        self.observer.moved(at, m, renderer)
+    }
+
+    fn step_done(&mut self, at: &Progress, renderer: &mut Renderer) -> ObserverResult {
+        self.observer.step_done(at, renderer)
+    }
+
+    fn stop_requested(&mut self) -> bool {
+        (self.stop)() || self.observer.stop_requested()
+    }
+}
 
 /// Why a run could not go on.
 #[derive(Debug, Error)]
@@ -180,6 +215,9 @@ pub struct Outcome {
     pub counts: PhotonCounts,
     /// The pass error that stopped the run early, if any: the image holds what came before.
     pub error: Option<BackendError>,
+    /// The observer ended the run before its schedule was done (see
+    /// [`Observer::stop_requested`]).
+    pub stopped: bool,
 }
 
 /// Runs `schedule` on `backend`: `scene` posed at its start, `params` and `moves` for every
@@ -204,6 +242,7 @@ pub fn run(
     };
     let mut move_reports = Vec::new();
     let mut error = None;
+    let mut stopped = false;
     'steps: for (index, step) in schedule.steps.iter().enumerate() {
         at.step = index;
         at.step_iterations = 0;
@@ -223,6 +262,11 @@ pub fn run(
                     let observed = observer.iteration(&at, &mut renderer);
                     clock.resume();
                     observed.map_err(RunError::Observer)?;
+                    let spent = budget.spent(at.step_iterations, clock.seconds() - step_start);
+                    if !spent && observer.stop_requested() {
+                        stopped = true;
+                        break 'steps;
+                    }
                 }
                 clock.pause();
                 observer.step_done(&at, &mut renderer)
@@ -247,6 +291,10 @@ pub fn run(
         };
         clock.resume();
         observed.map_err(RunError::Observer)?;
+        if observer.stop_requested() {
+            stopped = index + 1 < schedule.steps.len();
+            break;
+        }
     }
     let mut image = renderer.resolve()?;
     let mut report = renderer.report().clone();
@@ -262,12 +310,14 @@ pub fn run(
     }
     report.times.total = total.elapsed().as_secs_f64();
     report.error = error.as_ref().map(ToString::to_string);
+    report.interrupted = stopped;
     Ok(Outcome {
         image,
         report,
         moves: move_reports,
         counts: renderer.counts.clone(),
         error,
+        stopped,
     })
 }
 
@@ -298,6 +348,48 @@ mod tests {
         assert!(both.spent(1, 1.0));
         assert!(Budget::default().spent(0, 0.0), "no limit: nothing to run");
         assert!(Budget::iterations(0).spent(0, 0.0));
+    }
+
+    /// An observer asking to stop from the start: a run of a hundred iterations ends after
+    /// the first (the one in progress when asked), keeps it, and says it was stopped.
+    #[test]
+    fn a_stop_request_ends_the_run_after_the_iteration_in_progress() {
+        let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+        let mut params = RenderParams::for_scene(&scene);
+        (params.width, params.height, params.photons_per_pass) = (8, 8, 1000);
+        let mut backend = backend_cpu::CpuBackend::new();
+        let mut seen = 0;
+        let mut count = EachIteration(|_: &Progress, _: &mut Renderer| {
+            seen += 1;
+            Ok(())
+        });
+        let stop = || true;
+        let mut observer = Stoppable {
+            observer: &mut count,
+            stop: &stop,
+        };
+        let outcome = run(
+            &mut backend,
+            &scene,
+            &params,
+            &MoveParams::default(),
+            &Schedule::frame(0, Budget::iterations(100)),
+            &mut observer,
+        )
+        .unwrap();
+        assert!(outcome.stopped && outcome.report.interrupted);
+        assert_eq!((outcome.report.passes, seen), (1, 1));
+        let unstopped = run(
+            &mut backend,
+            &scene,
+            &params,
+            &MoveParams::default(),
+            &Schedule::frame(0, Budget::iterations(2)),
+            &mut (),
+        )
+        .unwrap();
+        assert!(!unstopped.stopped && !unstopped.report.interrupted);
+        assert_eq!(unstopped.report.passes, 2);
     }
 
     #[test]

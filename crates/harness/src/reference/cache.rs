@@ -9,6 +9,7 @@ use super::{ReferenceBudget, ReferenceImage, Truth, render_reference, variance_p
 use ppm_core::compile::compile_scene;
 use ppm_core::image::ImageError;
 use ppm_core::scene::{MaterialKind, Scene};
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -33,6 +34,16 @@ pub enum ReferenceError {
     /// The path tracer stopped on a non-finite sample.
     #[error("reference path tracer: {0}")]
     Render(String),
+    /// The render was stopped (Ctrl-C) before its samples were taken; nothing was cached.
+    #[error(
+        "the reference was interrupted after {spp} of {wanted} samples per pixel; nothing was cached"
+    )]
+    Interrupted {
+        /// Samples per pixel taken.
+        spp: u32,
+        /// Samples per pixel asked for.
+        wanted: u32,
+    },
 }
 
 /// What a cached reference renders.
@@ -106,7 +117,7 @@ pub fn cached_reference(
     cache: &Path,
     scene: &Scene,
     request: &ReferenceRequest,
-    on_round: &mut dyn FnMut(u32, f64),
+    on_round: &mut dyn FnMut(u32, f64) -> ControlFlow<()>,
 ) -> Result<Truth, ReferenceError> {
     let path = reference_path(cache, scene, request);
     let source = format!(
@@ -131,11 +142,12 @@ pub fn cached_reference(
     Ok(Truth::from((&reference, source)))
 }
 
-/// Renders the reference `request` asks for; a stop on a non-finite sample is an error.
+/// Renders the reference `request` asks for; a stop on a non-finite sample or by `on_round`
+/// is an error.
 pub fn render(
     scene: &Scene,
     request: &ReferenceRequest,
-    on_round: &mut dyn FnMut(u32, f64),
+    on_round: &mut dyn FnMut(u32, f64) -> ControlFlow<()>,
 ) -> Result<ReferenceImage, ReferenceError> {
     let compiled = compile_scene(
         &scene.at_frame(request.frame),
@@ -147,10 +159,16 @@ pub fn render(
         seconds: None,
     };
     let reference = render_reference(&compiled, request.seed, budget, on_round);
-    match reference.error {
-        Some(e) => Err(ReferenceError::Render(e)),
-        None => Ok(reference),
+    if let Some(e) = reference.error {
+        return Err(ReferenceError::Render(e));
     }
+    if reference.interrupted {
+        return Err(ReferenceError::Interrupted {
+            spp: reference.spp,
+            wanted: request.spp,
+        });
+    }
+    Ok(reference)
 }
 
 /// 64-bit FNV-1a: stable across Rust versions and platforms (the standard hasher is not).
@@ -261,6 +279,52 @@ mod tests {
             reference_key(&scene, &request()),
             reference_key(&scene, &one)
         );
+    }
+
+    /// A scene named like a path: the reference is rendered and cached, and every file it
+    /// wrote is in the cache folder, named by the key.
+    #[test]
+    fn a_scene_named_like_a_path_writes_only_into_the_cache() {
+        let root = std::env::temp_dir().join(format!("ppm-cache-escape-{}", std::process::id()));
+        let cache = root.join("a/b/c/cache");
+        let mut scene = cornell();
+        scene.name = "x/../../../../tmp/y".into();
+        let small = ReferenceRequest {
+            width: 4,
+            height: 4,
+            spp: 8,
+            ..request()
+        };
+        cached_reference(
+            &cache,
+            &scene,
+            &small,
+            &mut |_, _| ControlFlow::Continue(()),
+        )
+        .unwrap();
+        let mut written = Vec::new();
+        let mut folders = vec![root.clone()];
+        while let Some(dir) = folders.pop() {
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    folders.push(path);
+                } else {
+                    written.push(path);
+                }
+            }
+        }
+        std::fs::remove_dir_all(&root).ok();
+        assert_eq!(written.len(), 4, "{written:?}");
+        for path in &written {
+            let name = path.file_name().unwrap().to_str().unwrap();
+            assert!(
+                path.parent() == Some(cache.as_path()) && name.starts_with("reference-"),
+                "{}",
+                path.display()
+            );
+        }
+        assert!(!Path::new("/tmp/y.exr").exists() && !Path::new("/tmp/y.json").exists());
     }
 
     #[test]

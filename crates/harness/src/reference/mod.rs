@@ -16,6 +16,7 @@ use ppm_core::metrics::reference_noise;
 use rayon::prelude::*;
 use sampler::BATCHES;
 use serde::Serialize;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
 /// Offset of new ray origins, relative to the scene's extent (as the photon passes use).
@@ -43,6 +44,8 @@ pub struct ReferenceImage {
     pub seconds: f64,
     /// Why the render stopped before its budget, if it did (a non-finite sample).
     pub error: Option<String>,
+    /// The caller stopped the render (Ctrl-C) before its budget was spent.
+    pub interrupted: bool,
 }
 
 impl ReferenceImage {
@@ -67,6 +70,7 @@ impl ReferenceImage {
             max_bounces: path_tracer::MAX_BOUNCES,
             relative_noise: self.noise(),
             error: self.error.clone(),
+            interrupted: self.interrupted,
         }
     }
 
@@ -77,9 +81,11 @@ impl ReferenceImage {
         self.image.write_png(&path.with_extension("png"), 1.0)?;
         self.variance.write_exr(&variance_path(path))?;
         let json = serde_json::to_string_pretty(summary).expect("a summary serialises");
-        std::fs::write(path.with_extension("json"), json).map_err(|e| ImageError::Write {
-            path: path.with_extension("json").display().to_string(),
-            reason: e.to_string(),
+        ppm_core::output::write_bytes(&path.with_extension("json"), json).map_err(|e| {
+            ImageError::Write {
+                path: path.with_extension("json").display().to_string(),
+                reason: e.to_string(),
+            }
         })
     }
 }
@@ -111,6 +117,8 @@ pub struct ReferenceSummary {
     pub relative_noise: f64,
     /// Why it stopped early, if it did.
     pub error: Option<String>,
+    /// It was stopped (Ctrl-C) before its budget was spent: it holds the rounds completed.
+    pub interrupted: bool,
 }
 
 /// Where the variance of the reference at `path` is stored: `NAME.var.exr` beside `NAME.exr`.
@@ -120,7 +128,8 @@ pub fn variance_path(path: &Path) -> PathBuf {
 
 /// Renders `compiled` by path tracing until `budget` is spent, in rounds of one sample per
 /// batch ([`sampler::BATCHES`]) per pixel, so a sample count is rounded up to a multiple of
-/// it; `on_round(spp, seconds)` is called after each round.
+/// it; `on_round(spp, seconds)` is called after each round, and ends the render there when
+/// it breaks (a Ctrl-C).
 ///
 /// Each pixel sums its own samples in order, so the result does not depend on the thread
 /// count. A non-finite sample stops the render: the complete rounds before it are returned,
@@ -129,7 +138,7 @@ pub fn render_reference(
     compiled: &CompiledScene,
     seed: u32,
     budget: ReferenceBudget,
-    on_round: &mut dyn FnMut(u32, f64),
+    on_round: &mut dyn FnMut(u32, f64) -> ControlFlow<()>,
 ) -> ReferenceImage {
     let scene = SceneData::new(compiled);
     let camera = &compiled.camera;
@@ -143,6 +152,7 @@ pub fn render_reference(
     let clock = Stopwatch::start();
     let mut spp = 0;
     let mut error = None;
+    let mut interrupted = false;
     while budget.spp.is_none_or(|n| spp < n) && budget.seconds.is_none_or(|s| clock.seconds() < s) {
         let round: Vec<[Vec3; BATCHES as usize]> = (0..sums.len() as u32)
             .into_par_iter()
@@ -173,7 +183,11 @@ pub fn render_reference(
             }
         });
         spp += BATCHES;
-        on_round(spp, clock.seconds());
+        let spent = budget.spp.is_some_and(|n| spp >= n);
+        if on_round(spp, clock.seconds()).is_break() && !spent {
+            interrupted = true;
+            break;
+        }
     }
     let (image, variance) = mean_and_variance(&sums, width, height, spp / BATCHES);
     ReferenceImage {
@@ -182,6 +196,7 @@ pub fn render_reference(
         spp,
         seconds: clock.seconds(),
         error,
+        interrupted,
     }
 }
 

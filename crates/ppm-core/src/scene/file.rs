@@ -5,12 +5,14 @@
 //! and the value.
 
 use super::error::SceneError;
+use super::magnitude::{MAX_COORDINATE, check_magnitudes, number};
 use super::model::{
     Camera, Material, MaterialKind, Move, Object, RenderDefaults, Scene, quad_triangles,
     triangle_area,
 };
+use crate::limits::{MESH_FILE_LIMIT, SCENE_FILE_LIMIT, check_file_size, read_text_limited};
 use crate::params::Estimator;
-use glam::{EulerRot, Quat, Vec3};
+use glam::{DVec3, EulerRot, Quat, Vec3};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -109,9 +111,9 @@ struct MoveFile {
 /// Reads and validates a scene file; OBJ paths are relative to the file's folder.
 pub fn load_scene_file(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
+    let text = read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
         file: file.clone(),
-        reason: e.to_string(),
+        reason,
     })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_scene(&text, &file, &base)
@@ -169,18 +171,29 @@ impl Converter<'_> {
                 "no object uses a material of type \"light\": the scene has no light",
             ));
         }
+        for (i, o) in objects.iter().enumerate() {
+            if let Some(first) = objects[..i].iter().position(|p| p.name == o.name) {
+                return Err(self.err(
+                    format!("objects[{i}].name"),
+                    format!("\"{}\"", o.name),
+                    &format!("also the name of objects[{first}]: a move names one object"),
+                ));
+            }
+        }
         let mut moves = Vec::new();
         for (i, m) in raw.moves.iter().enumerate() {
             moves.push(self.movement(i, m, &objects)?);
         }
-        Ok(Scene {
+        let scene = Scene {
             name: raw.name,
             camera,
             materials,
             objects,
             render,
             moves,
-        })
+        };
+        check_magnitudes(&scene, self.file)?;
+        Ok(scene)
     }
 
     fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
@@ -210,25 +223,32 @@ impl Converter<'_> {
         Ok(c)
     }
 
+    /// The camera, its directions judged in `f64` (in `f32`, lengths at 1e20 square to
+    /// infinity and at 1e-30 to zero); `up` is stored normalised, so that the `f32` camera
+    /// basis is well defined at any scale.
     fn camera(&self, c: &CameraFile) -> Result<Camera, SceneError> {
         let eye = self.vec3("camera.eye", c.eye)?;
         let look_at = self.vec3("camera.look_at", c.look_at)?;
         let up = self.vec3("camera.up", c.up)?;
-        let forward = look_at - eye;
-        if forward.length_squared() == 0.0 {
+        let forward = look_at.as_dvec3() - eye.as_dvec3();
+        if forward == DVec3::ZERO {
             return Err(self.err(
                 "camera.look_at",
                 list(look_at),
                 "equals camera.eye: the camera has no view direction",
             ));
         }
-        if forward.normalize().cross(up).length_squared() < 1e-12 {
+        let up64 = up.as_dvec3();
+        if up64 == DVec3::ZERO
+            || forward.normalize().cross(up64.normalize()).length_squared() < 1e-12
+        {
             return Err(self.err(
                 "camera.up",
                 list(up),
                 "is zero or parallel to the view direction",
             ));
         }
+        let up = up64.normalize().as_vec3();
         if !(c.fov.is_finite() && c.fov > 0.0 && c.fov < 180.0) {
             return Err(self.err(
                 "camera.fov",
@@ -259,6 +279,13 @@ impl Converter<'_> {
             if !(radius.is_finite() && radius > 0.0) {
                 return Err(self.err("render.initial_radius", radius, "must be a positive number"));
             }
+            if radius > MAX_COORDINATE {
+                return Err(self.err(
+                    "render.initial_radius",
+                    number(radius),
+                    &format!("above {MAX_COORDINATE:e}: its square overflows f32"),
+                ));
+            }
             d.initial_radius = radius;
         }
         if let Some(alpha) = r.alpha {
@@ -274,6 +301,9 @@ impl Converter<'_> {
             d.photons_per_pass = p;
         }
         if let Some(p) = r.passes {
+            if p == 0 {
+                return Err(self.err("render.passes", p, "must be at least 1"));
+            }
             d.passes = p;
         }
         if let Some(e) = r.estimator {
@@ -353,33 +383,22 @@ impl Converter<'_> {
         for v in triangles.iter_mut().flatten() {
             *v = rotation * (*v * o.scale) + translate;
         }
-        let object = Object {
+        Ok(Object {
             name: o.name.clone(),
             material,
             triangles,
-        };
-        if let MaterialKind::Light { .. } = materials[material].kind {
-            let area = object.area();
-            if !(area > 0.0 && area.is_finite()) {
-                return Err(self.err(
-                    format!("{at}.area"),
-                    area,
-                    "a light must have a positive, finite area",
-                ));
-            }
-        }
-        Ok(object)
+        })
     }
 
     fn load_obj(&self, field: &str, name: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
         let path: PathBuf = self.base.join(name);
-        if !path.is_file() {
-            return Err(self.err(
+        check_file_size(&path, MESH_FILE_LIMIT).map_err(|e| {
+            self.err(
                 field,
                 format!("\"{name}\""),
-                &format!("no such file: {}", path.display()),
-            ));
-        }
+                &format!("{e}: {}", path.display()),
+            )
+        })?;
         let options = tobj::LoadOptions {
             triangulate: true,
             single_index: true,
@@ -397,12 +416,32 @@ impl Converter<'_> {
             let p = &model.mesh.positions;
             let vertex = |i: u32| -> Result<Vec3, SceneError> {
                 let i = i as usize * 3;
-                let v = Vec3::new(p[i], p[i + 1], p[i + 2]);
+                let Some(&[x, y, z]) = p.get(i..i + 3) else {
+                    return Err(self.err(
+                        field,
+                        format!("\"{name}\""),
+                        "has a face that refers to a vertex that does not exist",
+                    ));
+                };
+                let v = Vec3::new(x, y, z);
                 if !v.is_finite() {
                     return Err(self.err(
                         field,
                         format!("\"{name}\""),
                         "has a vertex that is not finite",
+                    ));
+                }
+                if v.abs().max_element() > MAX_COORDINATE {
+                    return Err(self.err(
+                        field,
+                        format!("\"{name}\""),
+                        &format!(
+                            "has a vertex beyond +-{MAX_COORDINATE:e}, where squared distances \
+                             overflow f32: [{}, {}, {}]",
+                            number(x),
+                            number(y),
+                            number(z)
+                        ),
                     ));
                 }
                 Ok(v)

@@ -8,6 +8,7 @@
 //! Mitsuba's `look_at` as written and pbrt's `LookAt` after `Scale -1 1 1`.
 
 use super::error::SceneError;
+use super::magnitude::check_magnitudes;
 use super::mesh_file::{MeshData, write_ply};
 use super::model::{Camera, Material, MaterialKind, Object, RenderDefaults, Scene};
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -70,7 +71,7 @@ impl Export {
             write_ply(&path, triangles).map_err(fail(&path))?;
         }
         let path = dir.join(&self.scene_file);
-        std::fs::write(&path, &self.text).map_err(fail(&path))?;
+        crate::output::write_bytes(&path, &self.text).map_err(fail(&path))?;
         Ok(path)
     }
 }
@@ -303,6 +304,7 @@ impl SceneBuilder {
             mirror_x(&mut scene);
         }
         scene.render.initial_radius = default_radius(&scene);
+        check_magnitudes(&scene, &self.file)?;
         Ok(scene)
     }
 }

@@ -4,6 +4,7 @@
 //! PLY is the mesh format Mitsuba 3 (`ply`) and pbrt-v4 (`plymesh`) both load, and a binary
 //! file stores each `f32` bit for bit, so an exported mesh comes back identical.
 
+use crate::limits::{MESH_FILE_LIMIT, check_file_size, read_limited};
 use glam::Vec3;
 use std::collections::HashMap;
 use std::io::Write;
@@ -67,21 +68,21 @@ pub fn write_ply(path: &Path, triangles: &[[Vec3; 3]]) -> std::io::Result<()> {
             out.extend_from_slice(&(*i as i32).to_le_bytes());
         }
     }
-    std::fs::write(path, out)
+    crate::output::write_bytes(path, out)
 }
 
 /// Reads a PLY file's `vertex` (x, y, z, optional nx, ny, nz) and `face` (`vertex_indices`
 /// or `vertex_index`) elements; other elements are skipped. The error says what is wrong.
 pub fn read_ply(path: &Path) -> Result<MeshData, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let bytes = read_limited(path, MESH_FILE_LIMIT)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     parse_ply(&bytes).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Reads an OBJ file with tobj: every object and group, polygons triangulated.
 pub fn read_obj(path: &Path) -> Result<MeshData, String> {
-    if !path.is_file() {
-        return Err(format!("cannot read {}: no such file", path.display()));
-    }
+    check_file_size(path, MESH_FILE_LIMIT)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -119,6 +120,13 @@ pub fn read_obj(path: &Path) -> Result<MeshData, String> {
     }
     if all_have_normals && !mesh.positions.is_empty() {
         mesh.normals = Some(normals);
+    }
+    let count = mesh.positions.len() as u32;
+    if mesh.triangles.iter().flatten().any(|&i| i >= count) {
+        return Err(format!(
+            "{}: a face refers to a vertex beyond the {count} there are",
+            path.display()
+        ));
     }
     Ok(mesh)
 }
@@ -303,7 +311,13 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, String> {
             return Err("the vertex element lacks x, y or z".into());
         }
         let has_normals = is_vertex && !nxyz.contains(&None);
-        for _ in 0..element.count {
+        // An element without properties has nothing to read, however many it counts.
+        let count = if element.properties.is_empty() {
+            0
+        } else {
+            element.count
+        };
+        for _ in 0..count {
             let mut scalars = [0.0f64; 6];
             for (k, p) in element.properties.iter().enumerate() {
                 match p.list {
@@ -314,12 +328,19 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, String> {
                         }
                     }
                     Some(count_type) => {
+                        // No capacity from the count: a corrupt one would allocate before
+                        // the data runs out.
                         let n = reader.read(count_type)? as usize;
-                        let mut polygon = Vec::with_capacity(n);
+                        let mut polygon = Vec::new();
                         for _ in 0..n {
                             polygon.push(reader.read(p.value)?);
                         }
                         if element.name == "face" && indices == Some(k) {
+                            if let Some(bad) = polygon.iter().find(|&&i| {
+                                !(i >= 0.0 && i.fract() == 0.0 && i <= f64::from(u32::MAX))
+                            }) {
+                                return Err(format!("face index {bad} is not a vertex index"));
+                            }
                             for i in 1..n.saturating_sub(1) {
                                 mesh.triangles.push(
                                     [polygon[0], polygon[i], polygon[i + 1]].map(|x| x as u32),
@@ -405,6 +426,26 @@ mod tests {
         let mesh = parse_ply(text.as_bytes()).unwrap();
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(mesh.normals.unwrap()[2], Vec3::Z);
+    }
+
+    /// Counts in a file are not trusted: a list of 2^31 indices reserves nothing (it ends
+    /// where the data ends), a billion billion elements without properties read nothing, and
+    /// a negative index is no index.
+    #[test]
+    fn corrupt_counts_and_indices_are_errors_not_allocations_or_hangs() {
+        let huge_list = b"ply\nformat binary_little_endian 1.0\nelement face 1\n\
+                          property list int int vertex_indices\nend_header\n\xff\xff\xff\x7f";
+        assert_eq!(parse_ply(huge_list).unwrap_err(), "the data ends early");
+        let empty = "ply\nformat ascii 1.0\nelement junk 1000000000000000000\nend_header\n";
+        assert_eq!(parse_ply(empty.as_bytes()).unwrap(), MeshData::default());
+        let negative = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+                        property float y\nproperty float z\nelement face 1\n\
+                        property list uchar int vertex_indices\nend_header\n\
+                        0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n";
+        assert_eq!(
+            parse_ply(negative.as_bytes()).unwrap_err(),
+            "face index -1 is not a vertex index"
+        );
     }
 
     #[test]

@@ -4,6 +4,7 @@
 mod error;
 mod file;
 pub mod interop;
+mod magnitude;
 pub mod mesh_file;
 pub mod mitsuba;
 mod model;
@@ -12,6 +13,7 @@ pub mod pbrt;
 pub use error::SceneError;
 pub use file::{degenerate_triangle_count, load_scene_file, parse_scene};
 pub use interop::{Export, ExportError, ExportOptions};
+pub use magnitude::{MAX_COORDINATE, MAX_LIGHT_POWER, MIN_EXTENT, check_magnitudes, number};
 pub use model::{
     Camera, Material, MaterialKind, Move, Object, RenderDefaults, Scene, quad_triangles,
     triangle_area,

@@ -1,6 +1,7 @@
 //! `ppm diff`: renders one seeded scene on the CPU (reference) and wgpu backends, prints the
 //! comparison as a table, writes `diff.json` and a heat map, and fails when they disagree.
 
+use crate::render::output_folder;
 use anyhow::{Context, Result, bail};
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
@@ -8,6 +9,8 @@ use harness::diff::history::{self, pixel_history};
 use harness::diff::independent;
 use harness::diff::same_seed;
 use harness::diff::{OTHER_SEED_OFFSET, record, runs_of};
+use ppm_core::limits::{MemoryBudget, check_render_memory};
+use ppm_core::output::write_bytes;
 use ppm_core::params::{Estimator, RenderParams};
 use std::path::PathBuf;
 
@@ -76,6 +79,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
     params.height = args.height;
     params.seed = args.seed;
     params.validate("command line")?;
+    check_render_memory(&params, &scene, &MemoryBudget::detect())?;
     if args.independent && args.runs < 2 {
         bail!(
             "--runs = {}: the independent test needs at least 2 runs per backend",
@@ -91,8 +95,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
             params.height
         );
     }
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    output_folder(&args.output, &format!("-o {}", args.output.display()))?;
     let mut cpu = CpuBackend::new();
     let mut gpu = WgpuBackend::new().context("the wgpu backend cannot start")?;
     eprintln!("wgpu adapter: {}", gpu.adapter_name());
@@ -101,8 +104,8 @@ pub fn run(args: DiffArgs) -> Result<()> {
         let b = record(&mut gpu, &scene, 0, &params)?;
         let rows = pixel_history(&[&a, &b], &params, x, y);
         print!("{}", history::format(&rows));
-        std::fs::write(
-            args.output.join("history.json"),
+        write_bytes(
+            &args.output.join("history.json"),
             serde_json::to_string_pretty(&rows)?,
         )?;
     } else if args.independent {
@@ -132,8 +135,8 @@ fn write_outputs(
     report: &impl serde::Serialize,
     heat: &ppm_core::image::Image,
 ) -> Result<()> {
-    std::fs::write(
-        args.output.join("diff.json"),
+    write_bytes(
+        &args.output.join("diff.json"),
         serde_json::to_string_pretty(report)?,
     )?;
     heat.write_exr(&args.output.join("heatmap.exr"))?;

@@ -3,6 +3,7 @@
 
 mod diff;
 mod export;
+mod interrupt;
 mod moving;
 mod options;
 mod render;
@@ -59,6 +60,10 @@ enum ReportCommand {
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<interrupt::Interrupted>() => {
+            eprintln!("{e:#}");
+            ExitCode::from(interrupt::EXIT_INTERRUPTED)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

@@ -1,12 +1,15 @@
 //! `ppm animate` and `ppm report error-vs-time`: scenes whose objects move.
 
+use crate::interrupt::{self, Interrupted};
 use crate::options::{BackendChoice, MoveOptions, RenderOptions, TruthOptions};
-use anyhow::{Context, Result, bail};
+use crate::render::output_folder;
+use anyhow::{Result, bail};
 use harness::driver::{
     Budget, MoveReport, Observer, ObserverResult, Progress, Renderer, Schedule, run,
 };
 use harness::error_report::{self, ErrorSettings};
-use ppm_core::params::{MoveMode, RenderParams};
+use ppm_core::output::write_bytes;
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::scene::Scene;
 use std::path::PathBuf;
 
@@ -25,8 +28,9 @@ pub struct MovingArgs {
 }
 
 impl MovingArgs {
-    /// The scene (which must move) and its settings, 256x256 unless the options say.
-    fn setup(&self) -> Result<(Scene, RenderParams)> {
+    /// The scene (which must move), its settings, 256x256 unless the options say, and the
+    /// settings of its moves.
+    fn setup(&self) -> Result<(Scene, RenderParams, MoveParams)> {
         let scene = harness::load_scene(&self.scene)?;
         if scene.moves.is_empty() {
             bail!(
@@ -35,7 +39,8 @@ impl MovingArgs {
             );
         }
         let params = self.options.params(&scene, Some((256, 256)))?;
-        Ok((scene, params))
+        let moves = self.moves.params(&scene, &params)?;
+        Ok((scene, params, moves))
     }
 }
 
@@ -63,6 +68,8 @@ struct FrameWriter<'a> {
     scene: &'a str,
     last_move: Option<MoveReport>,
     frame_start: (u32, f64),
+    /// Frames written so far.
+    written: u32,
 }
 
 impl Observer for FrameWriter<'_> {
@@ -85,10 +92,11 @@ impl Observer for FrameWriter<'_> {
             "seconds": seconds, "move": self.last_move.take(), "photons": r.counts,
             "left_out": r.report().left_out,
         });
-        std::fs::write(
-            stem.with_extension("json"),
+        write_bytes(
+            &stem.with_extension("json"),
             serde_json::to_string_pretty(&report)?,
         )?;
+        self.written += 1;
         println!(
             "frame {frame}: {iterations} iterations, {seconds:.2}s -> {}",
             stem.with_extension("exr").display()
@@ -96,10 +104,15 @@ impl Observer for FrameWriter<'_> {
         self.frame_start = (at.iterations, at.seconds);
         Ok(())
     }
+
+    fn stop_requested(&mut self) -> bool {
+        interrupt::requested()
+    }
 }
 
 pub fn animate(args: AnimateArgs) -> Result<()> {
-    let (scene, params) = args.common.setup()?;
+    interrupt::install()?;
+    let (scene, params, moves) = args.common.setup()?;
     if args.steps == 0 {
         bail!("--steps = 0: must be at least 1");
     }
@@ -109,26 +122,41 @@ pub fn animate(args: AnimateArgs) -> Result<()> {
             args.time_per_frame
         );
     }
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    output_folder(&args.output, &format!("-o {}", args.output.display()))?;
     let mut backend = args.common.backend.start()?;
     let schedule = Schedule::animation(args.steps, args.mode, Budget::seconds(args.time_per_frame));
+    eprintln!(
+        "rendering {} in {} steps ({}), {}s a frame",
+        scene.name,
+        args.steps,
+        args.mode.name(),
+        args.time_per_frame
+    );
     let mut writer = FrameWriter {
         args: &args,
         scene: &scene.name,
         last_move: None,
         frame_start: (0, 0.0),
+        written: 0,
     };
     let outcome = run(
         backend.as_mut(),
         &scene,
         &params,
-        &args.common.moves.params(),
+        &moves,
         &schedule,
         &mut writer,
     )?;
     if let Some(e) = outcome.error {
         bail!("the animation stopped: {e}");
+    }
+    if outcome.stopped {
+        return Err(Interrupted(format!(
+            "the {} frames completed are in {}",
+            writer.written,
+            args.output.display()
+        ))
+        .into());
     }
     Ok(())
 }
@@ -151,17 +179,17 @@ pub struct ErrorArgs {
 }
 
 pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
-    let (scene, params) = args.common.setup()?;
+    interrupt::install()?;
+    let (scene, params, moves) = args.common.setup()?;
     for (name, v) in [("--warmup", args.warmup), ("--seconds", args.seconds)] {
         if !(v.is_finite() && v > 0.0) {
             bail!("{name} = {v}: must be a positive number of seconds");
         }
     }
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("-o {}: cannot create", args.output.display()))?;
+    output_folder(&args.output, &format!("-o {}", args.output.display()))?;
     let settings = ErrorSettings {
         params,
-        moves: args.common.moves.params(),
+        moves,
         warmup_seconds: args.warmup,
         seconds: args.seconds,
     };
@@ -172,6 +200,9 @@ pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
     let reset = error_report::reset_pixels(backend.as_mut(), &scene, &settings)?;
     let mut runs = Vec::new();
     for mode in MoveMode::ALL {
+        if interrupt::requested() {
+            break;
+        }
         eprintln!("measuring {}", mode.name());
         runs.push(error_report::run_mode(
             backend.as_mut(),
@@ -180,32 +211,38 @@ pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
             &settings,
             truth,
             &reset,
+            &interrupt::requested,
         )?);
     }
-    eprintln!("measuring the perfect-compensation bound");
-    let restart = runs
-        .iter()
-        .find(|r| r.mode == MoveMode::Restart)
-        .context("the restart run is missing")?;
-    let perfect = error_report::perfect_compensation(
-        backend.as_mut(),
-        &scene,
-        &settings,
-        truth,
-        &reset,
-        restart,
-    )?;
+    let restart = runs.iter().find(|r| r.mode == MoveMode::Restart);
+    let perfect = match restart {
+        Some(restart) if !interrupt::requested() => {
+            eprintln!("measuring the perfect-compensation bound");
+            error_report::perfect_compensation(
+                backend.as_mut(),
+                &scene,
+                &settings,
+                truth,
+                &reset,
+                restart,
+                &interrupt::requested,
+            )?
+        }
+        _ => None,
+    }
+    .unwrap_or_default();
+    let interrupted = interrupt::requested();
     let target = error_report::restart_final_error(&runs);
     let perfect_time = target.and_then(|t| error_report::time_to_reach(&perfect, t));
     let out = &args.output;
-    std::fs::write(out.join("error-vs-time.csv"), error_report::csv(&runs))?;
+    write_bytes(&out.join("error-vs-time.csv"), error_report::csv(&runs))?;
     let json = serde_json::json!({ "scene": scene.name, "settings": settings, "runs": runs,
         "reset_pixels": reset.iter().filter(|&&r| r).count(),
         "perfect_compensation": perfect,
         "seconds_to_restart_error": error_report::time_to_restart_error(&runs),
-        "perfect_seconds_to_restart_error": perfect_time });
-    std::fs::write(
-        out.join("error-vs-time.json"),
+        "perfect_seconds_to_restart_error": perfect_time, "interrupted": interrupted });
+    write_bytes(
+        &out.join("error-vs-time.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
     error_report::chart(&out.join("error-vs-time"), &scene.name, &runs, &perfect)?;
@@ -224,5 +261,14 @@ pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
         }
     }
     println!("wrote {}", out.display());
+    if interrupted {
+        return Err(Interrupted(format!(
+            "{} of {} modes measured, the last one partly; rows so far in {}",
+            runs.len(),
+            MoveMode::ALL.len(),
+            out.display()
+        ))
+        .into());
+    }
     Ok(())
 }

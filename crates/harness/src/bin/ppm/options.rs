@@ -1,12 +1,14 @@
 //! Options shared by several commands, and the one place they become render settings.
 
+use crate::interrupt::{self, Interrupted};
 use anyhow::{Context, Result, bail};
 use backend_cpu::CpuBackend;
 use backend_wgpu::WgpuBackend;
 use clap::ValueEnum;
 use harness::reference::Truth;
-use harness::reference::cache::{ReferenceRequest, cached_reference};
+use harness::reference::cache::{ReferenceError, ReferenceRequest, cached_reference};
 use indicatif::{ProgressBar, ProgressStyle};
+use ppm_core::limits::{MemoryBudget, check_deposits, check_reference_memory, check_render_memory};
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
@@ -114,6 +116,7 @@ impl RenderOptions {
             .direct_samples
             .unwrap_or(p.estimator.default_direct_samples());
         p.validate("command line")?;
+        check_render_memory(&p, scene, &MemoryBudget::detect())?;
         Ok(p)
     }
 }
@@ -137,15 +140,25 @@ pub struct MoveOptions {
 }
 
 impl MoveOptions {
-    /// The settings.
-    pub fn params(&self) -> MoveParams {
-        MoveParams {
+    /// The settings, checked; `render` are those of the ordinary passes around the moves.
+    pub fn params(&self, scene: &Scene, render: &RenderParams) -> Result<MoveParams> {
+        let p = MoveParams {
             compensation_passes: self.compensation_passes,
             region_photons: self.region_photons,
             cone_deg: self.cone_deg,
             difference_passes: self.difference_passes,
             ..MoveParams::default()
-        }
+        };
+        p.validate("command line")?;
+        check_deposits(
+            p.region_photons,
+            "region_photons",
+            "--region-photons",
+            render,
+            scene,
+            &MemoryBudget::detect(),
+        )?;
+        Ok(p)
     }
 }
 
@@ -182,6 +195,7 @@ impl TruthOptions {
         if self.reference_spp == 0 {
             bail!("--reference-spp = 0: must be at least 1");
         }
+        check_reference_memory(params.width, params.height, &MemoryBudget::detect())?;
         let request = ReferenceRequest {
             frame,
             width: params.width,
@@ -193,8 +207,15 @@ impl TruthOptions {
         let truth = cached_reference(&self.cache, scene, &request, &mut |spp, s| {
             bar.set_position(u64::from(spp));
             bar.set_message(format!("{s:.1}s"));
-        })?;
+            interrupt::flow()
+        });
         bar.finish_and_clear();
+        let truth = match truth {
+            Err(e @ ReferenceError::Interrupted { .. }) => {
+                return Err(Interrupted(e.to_string()).into());
+            }
+            other => other?,
+        };
         eprintln!("reference: {}", truth.source);
         Ok(truth)
     }
@@ -219,4 +240,109 @@ pub fn check_frame(frame: u32) -> Result<()> {
         bail!("--frame = {frame}: a scene has frames 0 and 1 only");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed, TestRunner};
+
+    /// The numeric options of a render and of its moves, as `ppm animate` takes them.
+    #[derive(Parser)]
+    struct Probe {
+        #[command(flatten)]
+        render: RenderOptions,
+        #[command(flatten)]
+        moves: MoveOptions,
+    }
+
+    const OPTIONS: &[&str] = &[
+        "--width",
+        "--height",
+        "--passes",
+        "--photons-per-pass",
+        "--time-budget",
+        "--seed",
+        "--alpha",
+        "--radius",
+        "--spp",
+        "--direct-samples",
+        "--compensation-passes",
+        "--region-photons",
+        "--cone-deg",
+        "--difference-passes",
+    ];
+
+    /// Values at the edges of what the options' types hold, and past them.
+    const VALUES: &[&str] = &[
+        "0",
+        "-0",
+        "1",
+        "-1",
+        "0.5",
+        "3",
+        "NaN",
+        "inf",
+        "-inf",
+        "1e20",
+        "1e-30",
+        "1e38",
+        "4294967295",
+        "4294967296",
+        "18446744073709551616",
+        "",
+        "x",
+    ];
+
+    /// Any mix of one to four numeric options with extreme values: parsing and validation
+    /// never panic, and a refusal names one of the options given.
+    #[test]
+    fn numeric_options_never_panic_and_refusals_name_the_option() {
+        let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+        let picks = prop::collection::vec((0..OPTIONS.len(), 0..VALUES.len()), 1..5);
+        let config = Config {
+            cases: 2000,
+            failure_persistence: None,
+            rng_seed: RngSeed::Fixed(7),
+            ..Config::default()
+        };
+        let (accepted, refused) = (std::cell::Cell::new(0), std::cell::Cell::new(0));
+        TestRunner::new(config)
+            .run(&picks, |picks| {
+                let args: Vec<String> = std::iter::once("probe".to_owned())
+                    .chain(
+                        picks
+                            .iter()
+                            .map(|&(o, v)| format!("{}={}", OPTIONS[o], VALUES[v])),
+                    )
+                    .collect();
+                let names = |message: &str| {
+                    picks.iter().any(|&(o, _)| {
+                        let name = OPTIONS[o].trim_start_matches("--");
+                        message.contains(name) || message.contains(&name.replace('-', "_"))
+                    })
+                };
+                let checked = Probe::try_parse_from(&args)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|probe| {
+                        let params = probe.render.params(&scene, Some((256, 256)))?;
+                        probe.moves.params(&scene, &params)
+                    });
+                match checked {
+                    Ok(_) => accepted.set(accepted.get() + 1),
+                    Err(e) => {
+                        let message = format!("{e:#}");
+                        prop_assert!(names(&message), "{args:?}: {message}");
+                        refused.set(refused.get() + 1);
+                    }
+                }
+                Ok(())
+            })
+            .unwrap();
+        let (accepted, refused) = (accepted.get(), refused.get());
+        eprintln!("options: {accepted} accepted, {refused} refused");
+        assert!(accepted > 0 && refused > 0);
+    }
 }

@@ -1,14 +1,17 @@
 //! `ppm render`, `ppm reference` and `ppm compare`: one image, its truth, and the distance
 //! between two images.
 
+use crate::interrupt::{self, Interrupted};
 use crate::options::{BackendChoice, RenderOptions, check_frame, spp_bar};
 use anyhow::{Context, Result, bail};
 use harness::convergence;
 use harness::driver::schedule::EachIteration;
-use harness::driver::{Budget, Progress, Renderer, Schedule, run};
+use harness::driver::{Budget, Progress, Renderer, Schedule, Stoppable, run};
 use harness::reference::{ReferenceBudget, Truth, render_reference, variance_path};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::image::Image;
+use ppm_core::limits::{MemoryBudget, check_reference_memory};
+use ppm_core::output::{check_writable_folder, write_bytes};
 use ppm_core::params::{MoveParams, RenderParams};
 use std::path::{Path, PathBuf};
 
@@ -37,6 +40,7 @@ pub struct RenderArgs {
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
+    interrupt::install()?;
     let scene = harness::load_scene(&args.scene)?;
     let params = args.options.params(&scene, None)?;
     check_frame(args.frame)?;
@@ -56,14 +60,26 @@ pub fn render(args: RenderArgs) -> Result<()> {
         bar.set_message(format!("{:.1}s", at.seconds));
         Ok(())
     });
+    eprintln!(
+        "rendering {} ({}) on {}: {}x{}",
+        scene.name,
+        params.estimator.name(),
+        backend.name(),
+        params.width,
+        params.height
+    );
     let outcome = pool.install(|| {
+        let mut observer = Stoppable {
+            observer: &mut progress,
+            stop: &interrupt::requested,
+        };
         run(
             backend.as_mut(),
             &scene,
             &params,
             &MoveParams::default(),
             &Schedule::frame(args.frame, budget),
-            &mut progress,
+            &mut observer,
         )
     })?;
     bar.finish_and_clear();
@@ -71,7 +87,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     outcome.image.write_exr(&paths.exr)?;
     outcome.image.write_png(&paths.png, args.exposure)?;
     let json = serde_json::to_string_pretty(&outcome.report)?;
-    std::fs::write(&paths.json, json)
+    write_bytes(&paths.json, json)
         .with_context(|| format!("{}: cannot write report", paths.json.display()))?;
     let r = &outcome.report;
     println!(
@@ -89,6 +105,14 @@ pub fn render(args: RenderArgs) -> Result<()> {
     if let Some(e) = outcome.error {
         bail!("render stopped early (the image holds the iterations before it): {e}");
     }
+    if outcome.stopped {
+        return Err(Interrupted(format!(
+            "the image holds the {} iterations completed ({})",
+            r.passes,
+            paths.exr.display()
+        ))
+        .into());
+    }
     Ok(())
 }
 
@@ -100,24 +124,67 @@ pub struct OutputPaths {
 }
 
 impl OutputPaths {
-    /// Checks the folder exists (creating it) before hours of rendering, not after.
+    /// Checks before hours of rendering, not after, that the three files can be written:
+    /// see [`output_folder`]; none of them may be a folder.
     pub fn new(output: &Path) -> Result<Self> {
         if output.extension().and_then(|e| e.to_str()) != Some("exr") {
             bail!("-o {}: the output must be an .exr file", output.display());
         }
-        if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("-o {}: cannot create its folder", output.display()))?;
-        }
-        Ok(Self {
+        let paths = Self {
             exr: output.to_path_buf(),
             png: output.with_extension("png"),
             json: output.with_extension("json"),
-        })
+        };
+        let parent = output.parent().unwrap_or(Path::new(""));
+        output_folder(parent, &format!("-o {}", output.display()))?;
+        for path in [&paths.exr, &paths.png, &paths.json] {
+            if path.is_dir() {
+                bail!(
+                    "-o {}: {} is a folder, and would not be replaced by a file",
+                    output.display(),
+                    path.display()
+                );
+            }
+        }
+        Ok(paths)
     }
 }
 
+/// Makes `dir` ready for outputs before anything renders: created when missing (as `mkdir
+/// -p` would: `-o out/x.exr` works in a fresh checkout, and a typo shows in the path
+/// printed at the end), then probed by creating a file in it, so that a read-only folder or
+/// file system is refused now. `option` names it in errors (`-o out/x.exr`).
+pub fn output_folder(dir: &Path, option: &str) -> Result<()> {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{option}: cannot create the folder {}", dir.display()))?;
+    check_writable_folder(dir).with_context(|| {
+        format!(
+            "{option}: cannot write files in {} (nothing was rendered)",
+            dir.display()
+        )
+    })
+}
+
+/// Most worker threads `--threads` may ask for: rayon starts all of them at once, each with
+/// its own stack, and threads beyond the cores only take turns; 1024 is beyond the cores of
+/// any machine this runs on, and a larger number is a typo, not a setting.
+const MAX_THREADS: usize = 1024;
+
 fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    match threads {
+        Some(0) => bail!("--threads = 0: must be at least 1 (leave it out for one per core)"),
+        Some(n) if n > MAX_THREADS => bail!(
+            "--threads = {n}: at most {MAX_THREADS} (this machine has {} cores; leave it out \
+             for one per core)",
+            std::thread::available_parallelism().map_or(1, |c| c.get())
+        ),
+        _ => {}
+    }
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
@@ -170,6 +237,7 @@ pub struct ReferenceArgs {
 }
 
 pub fn reference(args: ReferenceArgs) -> Result<()> {
+    interrupt::install()?;
     let scene = harness::load_scene(&args.scene)?;
     check_frame(args.frame)?;
     let width = args.width.unwrap_or(scene.camera.width);
@@ -180,6 +248,7 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
     if args.spp == Some(0) {
         bail!("--spp = 0: must be at least 1");
     }
+    check_reference_memory(width, height, &MemoryBudget::detect())?;
     if let Some(t) = args.time_budget
         && !(t.is_finite() && t > 0.0)
     {
@@ -192,11 +261,16 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
     let paths = OutputPaths::new(&args.output)?;
     let pool = thread_pool(args.threads)?;
     let compiled = ppm_core::compile::compile_scene(&scene.at_frame(args.frame), width, height);
+    eprintln!(
+        "rendering the reference of {} at {width}x{height}",
+        scene.name
+    );
     let bar = spp_bar(budget.spp);
     let reference = pool.install(|| {
         render_reference(&compiled, args.seed, budget, &mut |spp, s| {
             bar.set_position(u64::from(spp));
             bar.set_message(format!("{s:.1}s"));
+            interrupt::flow()
         })
     });
     bar.finish_and_clear();
@@ -213,6 +287,14 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
     );
     if let Some(e) = reference.error {
         bail!("the path tracer stopped early (the image holds the samples before it): {e}");
+    }
+    if reference.interrupted {
+        return Err(Interrupted(format!(
+            "the image holds the {} samples per pixel completed ({})",
+            summary.spp,
+            paths.exr.display()
+        ))
+        .into());
     }
     Ok(())
 }

@@ -1,8 +1,11 @@
 //! `ppm report convergence`: a render from scratch against the truth over time.
 
+use crate::interrupt::{self, Interrupted};
 use crate::options::{BackendChoice, RenderOptions, TruthOptions, check_frame};
-use anyhow::{Context, Result, bail};
+use crate::render::output_folder;
+use anyhow::{Result, bail};
 use harness::convergence;
+use ppm_core::output::write_bytes;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -31,6 +34,7 @@ pub struct ConvergenceArgs {
 const SHOWN_SECONDS: [f64; 10] = [0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0];
 
 pub fn convergence(args: ConvergenceArgs) -> Result<()> {
+    interrupt::install()?;
     let scene = harness::load_scene(&args.scene)?;
     check_frame(args.frame)?;
     if !(args.seconds.is_finite() && args.seconds > 0.0) {
@@ -38,7 +42,7 @@ pub fn convergence(args: ConvergenceArgs) -> Result<()> {
     }
     let params = args.options.params(&scene, Some((256, 256)))?;
     let out = &args.output;
-    std::fs::create_dir_all(out).with_context(|| format!("-o {}: cannot create", out.display()))?;
+    output_folder(out, &format!("-o {}", out.display()))?;
     let truth = args.truth.truth(&scene, args.frame, &params)?;
     let mut backend = args.backend.start()?;
     eprintln!(
@@ -54,19 +58,20 @@ pub fn convergence(args: ConvergenceArgs) -> Result<()> {
         &params,
         args.seconds,
         &truth,
+        &interrupt::requested,
     )?;
     let noise = truth.noise();
     let from = args.seconds / 8.0;
     let slope = convergence::fitted_slope(&points, from);
-    std::fs::write(out.join("convergence.csv"), convergence::csv(&points))?;
+    write_bytes(&out.join("convergence.csv"), convergence::csv(&points))?;
     let json = serde_json::json!({
         "scene": scene.name, "frame": args.frame, "backend": report.backend,
         "params": params, "reference": truth.source, "reference_noise": noise,
         "fitted_slope": slope, "slope_from_seconds": from,
-        "points": points, "report": report,
+        "points": points, "interrupted": report.interrupted, "report": report,
     });
-    std::fs::write(
-        out.join("convergence.json"),
+    write_bytes(
+        &out.join("convergence.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
     let title = format!(
@@ -109,5 +114,13 @@ pub fn convergence(args: ConvergenceArgs) -> Result<()> {
         println!("fitted slope of log error against log time (from {from:.1}s): {s:.3}");
     }
     println!("wrote {}", out.display());
+    if report.interrupted {
+        return Err(Interrupted(format!(
+            "the {} measurements taken are in {}",
+            points.len(),
+            out.display()
+        ))
+        .into());
+    }
     Ok(())
 }

@@ -1,9 +1,11 @@
 //! `ppm stress`: the stress family on one or both backends.
 
 use crate::options::BackendChoice;
+use crate::render::output_folder;
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
-use std::path::PathBuf;
+use ppm_core::output::write_bytes;
+use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum StressBackends {
@@ -36,6 +38,8 @@ pub fn run(args: StressArgs) -> Result<()> {
         })?],
         None => scenes::stress::STRESS.iter().collect(),
     };
+    let folder = args.output.parent().unwrap_or(Path::new(""));
+    output_folder(folder, &format!("-o {}", args.output.display()))?;
     let choices: &[BackendChoice] = match args.backend {
         StressBackends::Cpu => &[BackendChoice::Cpu],
         StressBackends::Wgpu => &[BackendChoice::Wgpu],
@@ -52,10 +56,7 @@ pub fn run(args: StressArgs) -> Result<()> {
         }
     }
     print!("{}", harness::stress::table(&results));
-    if let Some(dir) = args.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
-    }
-    std::fs::write(&args.output, serde_json::to_string_pretty(&results)?)
+    write_bytes(&args.output, serde_json::to_string_pretty(&results)?)
         .with_context(|| format!("{}: cannot write", args.output.display()))?;
     let failed = results.iter().filter(|r| !r.passed).count();
     if failed > 0 {

@@ -2,6 +2,7 @@
 //!
 //! roxmltree parses the XML: it keeps every element's position, so an error names its line.
 
+use crate::limits::{SCENE_FILE_LIMIT, read_text_limited};
 use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::interop::{
@@ -18,9 +19,9 @@ use std::path::Path;
 /// Reads a Mitsuba 3 scene file; mesh file names are relative to its folder.
 pub fn load_mitsuba_file(path: &Path) -> std::result::Result<Scene, SceneError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
+    let text = read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
         file: file.clone(),
-        reason: e.to_string(),
+        reason,
     })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let name = path

@@ -1,6 +1,7 @@
 //! Reads the subset of pbrt-v4's scene format that we can render.
 
 use super::lexer::{Param, Token, tokenize};
+use crate::limits::{SCENE_FILE_LIMIT, read_text_limited};
 use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::interop::{SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness};
@@ -13,9 +14,9 @@ use std::path::Path;
 /// Reads a pbrt-v4 scene file; PLY file names are relative to its folder.
 pub fn load_pbrt_file(path: &Path) -> std::result::Result<Scene, SceneError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Read {
+    let text = read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
         file: file.clone(),
-        reason: e.to_string(),
+        reason,
     })?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let name = path
