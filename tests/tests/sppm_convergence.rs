@@ -12,6 +12,7 @@ use ppm_core::metrics::{block_relative_rmse, relative_rmse};
 use ppm_core::params::{Estimator, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
+use std::ops::ControlFlow;
 
 const SIZE: u32 = 48;
 const FEW: u32 = 8;
@@ -31,7 +32,7 @@ fn truth(scene: &Scene) -> Image {
         spp: Some(2048),
         seconds: None,
     };
-    let reference = render_reference(&compiled, 7, budget, &mut |_, _| {});
+    let reference = render_reference(&compiled, 7, budget, &mut |_, _| ControlFlow::Continue(()));
     assert!(reference.error.is_none(), "{:?}", reference.error);
     println!("reference noise {:.4}", reference.noise());
     reference.image

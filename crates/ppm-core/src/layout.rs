@@ -549,7 +549,7 @@ mod tests {
             ("GpuCamera", size_of::<GpuCamera>(), 64),
             ("EyePassParams", size_of::<EyePassParams>(), 32),
             ("DirectLightParams", size_of::<DirectLightParams>(), 32),
-            ("PhotonPassParams", size_of::<PhotonPassParams>(), 32),
+            ("PhotonPassParams", size_of::<PhotonPassParams>(), 48),
             ("GatherParams", size_of::<GatherParams>(), 16),
             ("GridParams", size_of::<GridParams>(), 16),
             ("GridPhoton", size_of::<GridPhoton>(), 32),
