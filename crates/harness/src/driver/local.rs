@@ -89,6 +89,9 @@ impl Renderer<'_> {
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
+        // Deposits per photon of the passes so far (counters a caller may reset aside).
+        let per_photon =
+            self.report.photons_deposited as f64 / self.report.photons_emitted.max(1) as f64;
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
         self.compensate(&LOCAL, gather_kind::REGION_NEGATIVE)?;
@@ -110,9 +113,7 @@ impl Renderer<'_> {
         }
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted = self.counts.compensation.emitted + self.counts.region.emitted;
-        let ordinary = &self.counts.ordinary;
-        if emitted > emitted_before && ordinary.deposited > 0 {
-            let per_photon = ordinary.deposited as f64 / ordinary.emitted as f64;
+        if emitted > emitted_before && per_photon > 0.0 {
             report.changed_share = Some(
                 (stored - stored_before) as f64 / ((emitted - emitted_before) as f64 * per_photon),
             );
