@@ -320,13 +320,19 @@ fn both_backends_agree_on_a_compensated_frame() {
     }
 }
 
-/// The object an eye ray through the centre of pixel (x, y) meets first in `scene`.
-fn object_seen(scene: &Scene, size: u32, x: u32, y: u32) -> Option<u32> {
+/// Per pixel of a `size` x `size` image, the object an eye ray through its centre meets
+/// first in `scene`.
+fn objects_seen(scene: &Scene, size: u32) -> Vec<Option<u32>> {
     let compiled = compile_scene(scene, size, size);
     let data = backend_cpu::trace::SceneData::new(&compiled);
-    let dir = camera_ray(&compiled.camera, x as f32 + 0.5, y as f32 + 0.5);
-    data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
-        .map(|h| data.triangles[h.triangle as usize].object)
+    (0..size * size)
+        .map(|i| {
+            let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
+            let dir = camera_ray(&compiled.camera, x, y);
+            data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
+                .map(|h| data.triangles[h.triangle as usize].object)
+        })
+        .collect()
 }
 
 /// Local mode resets every pixel the tall block newly covers (no eye path met the block there
@@ -338,11 +344,9 @@ fn a_local_move_resets_the_pixels_the_object_newly_covers() {
     let (scene, p) = cornell(SIZE, 20_000);
     let block = scene.object_index("tall-block").unwrap() as u32;
     let (a, b) = (scene.at_frame(0), scene.at_frame(1));
+    let (seen_a, seen_b) = (objects_seen(&a, SIZE), objects_seen(&b, SIZE));
     let newly: Vec<u32> = (0..SIZE * SIZE)
-        .filter(|&i| {
-            let (x, y) = (i % SIZE, i / SIZE);
-            object_seen(&a, SIZE, x, y) != Some(block) && object_seen(&b, SIZE, x, y) == Some(block)
-        })
+        .filter(|&i| seen_a[i as usize] != Some(block) && seen_b[i as usize] == Some(block))
         .collect();
     assert!(
         newly.len() > 20,

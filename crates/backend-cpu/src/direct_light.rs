@@ -35,12 +35,12 @@ pub fn direct_light_main(
     scene: &SceneData,
     hit_points: &mut [HitPoint],
 ) -> DirectStats {
+    let correcting = params.accumulate == direct_accumulate::CORRECT;
     let rays = hit_points
         .par_iter_mut()
         .enumerate()
         .with_min_len(256)
         .map(|(slot, hp)| {
-            let correcting = params.accumulate == direct_accumulate::CORRECT;
             if correcting
                 && (hp.flags & hit_flags::SHADOW_NEAR_MOVER == 0
                     || hp.flags & hit_flags::UPDATED != 0)

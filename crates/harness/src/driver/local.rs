@@ -136,11 +136,7 @@ impl Renderer<'_> {
             sign,
             ..self.direct_params(0, true)
         };
-        let t = Instant::now();
-        let stats = self.backend.direct_light(&params)?;
-        self.report.times.direct += t.elapsed().as_secs_f64();
-        self.report.rays.shadow += stats.rays;
-        Ok(())
+        self.run_direct_light(&params)
     }
 
     /// Starts over the slots whose eye paths crossed a mover's box (only when the geometry

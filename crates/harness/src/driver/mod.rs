@@ -270,9 +270,13 @@ impl<'a> Renderer<'a> {
     }
 
     fn direct_light(&mut self, key: u32, accumulate: bool) -> Result<(), BackendError> {
-        let params = self.direct_params(key, accumulate);
+        self.run_direct_light(&self.direct_params(key, accumulate))
+    }
+
+    /// Runs a direct-light pass and counts its time and rays.
+    fn run_direct_light(&mut self, params: &DirectLightParams) -> Result<(), BackendError> {
         let t = Instant::now();
-        let stats = self.backend.direct_light(&params)?;
+        let stats = self.backend.direct_light(params)?;
         self.report.times.direct += t.elapsed().as_secs_f64();
         self.report.rays.shadow += stats.rays;
         Ok(())

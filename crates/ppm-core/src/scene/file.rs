@@ -108,15 +108,43 @@ struct MoveFile {
     rotate: [f32; 3],
 }
 
+/// A scene file read whole (within [`SCENE_FILE_LIMIT`]), with what every format's parser
+/// needs beside its text.
+pub(crate) struct SceneSource {
+    /// The file's contents.
+    pub text: String,
+    /// The path as errors name it.
+    pub file: String,
+    /// The folder mesh file names are relative to.
+    pub base: PathBuf,
+    /// The file stem, the scene's name where the format has none.
+    pub name: String,
+}
+
+impl SceneSource {
+    /// Reads `path`, refusing what is not a regular file or is too large.
+    pub(crate) fn read(path: &Path) -> Result<Self, SceneError> {
+        let file = path.display().to_string();
+        let text =
+            read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
+                file: file.clone(),
+                reason,
+            })?;
+        Ok(Self {
+            text,
+            file,
+            base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            name: path
+                .file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy().into_owned()),
+        })
+    }
+}
+
 /// Reads and validates a scene file; OBJ paths are relative to the file's folder.
 pub fn load_scene_file(path: &Path) -> Result<Scene, SceneError> {
-    let file = path.display().to_string();
-    let text = read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
-        file: file.clone(),
-        reason,
-    })?;
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    parse_scene(&text, &file, &base)
+    let source = SceneSource::read(path)?;
+    parse_scene(&source.text, &source.file, &source.base)
 }
 
 /// Parses and validates scene text. `file` names the source in errors; `base` resolves OBJ paths.

@@ -58,6 +58,27 @@ pub struct ExportError {
 }
 
 impl Export {
+    /// The export of `scene` as `text` in a scene file named after it with `extension`, its
+    /// objects' meshes under `mesh_names` (one per object, in order).
+    pub(crate) fn of(
+        scene: &Scene,
+        extension: &str,
+        text: String,
+        mesh_names: Vec<String>,
+        notes: Vec<String>,
+    ) -> Self {
+        Export {
+            scene_file: format!("{}.{extension}", scene_stem(scene)),
+            text,
+            meshes: mesh_names
+                .into_iter()
+                .zip(&scene.objects)
+                .map(|(n, o)| (n, o.triangles.clone()))
+                .collect(),
+            notes,
+        }
+    }
+
     /// Writes the scene file and its meshes into `dir` (created if missing); returns the
     /// scene file's path.
     pub fn write(&self, dir: &Path) -> Result<PathBuf, ExportError> {
@@ -80,20 +101,7 @@ impl Export {
 pub(crate) fn mesh_names(scene: &Scene) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();
     for object in &scene.objects {
-        let mut stem: String = object
-            .name
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        if stem.is_empty() {
-            stem = "object".into();
-        }
+        let stem = safe_stem(&object.name, "object");
         let mut name = format!("{stem}.ply");
         let mut k = 2;
         while names.contains(&name) {
@@ -107,9 +115,16 @@ pub(crate) fn mesh_names(scene: &Scene) -> Vec<String> {
 
 /// File stem of the scene file: the scene's name made safe for file systems.
 pub(crate) fn scene_stem(scene: &Scene) -> String {
-    let stem: String = scene
-        .name
-        .chars()
+    safe_stem(&scene.name, "scene")
+}
+
+/// `name` with every character but ASCII letters, digits, `-` and `_` replaced by `_`, so it
+/// can never become a path; `empty` when nothing is left.
+fn safe_stem(name: &str, empty: &str) -> String {
+    if name.is_empty() {
+        return empty.into();
+    }
+    name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
                 c
@@ -117,12 +132,7 @@ pub(crate) fn scene_stem(scene: &Scene) -> String {
                 '_'
             }
         })
-        .collect();
-    if stem.is_empty() {
-        "scene".into()
-    } else {
-        stem
-    }
+        .collect()
 }
 
 /// What neither format can hold, whatever the renderer: our photon-mapping settings, the

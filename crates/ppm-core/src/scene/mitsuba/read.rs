@@ -2,9 +2,9 @@
 //!
 //! roxmltree parses the XML: it keeps every element's position, so an error names its line.
 
-use crate::limits::{SCENE_FILE_LIMIT, read_text_limited};
 use crate::scene::Scene;
 use crate::scene::error::SceneError;
+use crate::scene::file::SceneSource;
 use crate::scene::interop::{
     SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness, unit_cube,
     unit_rectangle, vertical_fov,
@@ -18,16 +18,8 @@ use std::path::Path;
 
 /// Reads a Mitsuba 3 scene file; mesh file names are relative to its folder.
 pub fn load_mitsuba_file(path: &Path) -> std::result::Result<Scene, SceneError> {
-    let file = path.display().to_string();
-    let text = read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
-        file: file.clone(),
-        reason,
-    })?;
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let name = path
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    parse_mitsuba(&text, &file, &base, &name)
+    let s = SceneSource::read(path)?;
+    parse_mitsuba(&s.text, &s.file, &s.base, &s.name)
 }
 
 /// Parses Mitsuba 3 XML. `file` names the source in errors, `base` resolves mesh files,

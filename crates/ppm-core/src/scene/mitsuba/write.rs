@@ -1,8 +1,6 @@
 //! Writes a [`Scene`] as a Mitsuba 3 XML scene with PLY meshes beside it.
 
-use crate::scene::interop::{
-    Export, ExportOptions, clip_range, common_notes, list3, mesh_names, scene_stem,
-};
+use crate::scene::interop::{Export, ExportOptions, clip_range, common_notes, list3, mesh_names};
 use crate::scene::model::{MaterialKind, Scene};
 use std::fmt::Write;
 
@@ -141,16 +139,7 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
         let _ = writeln!(w, "    </shape>");
     }
     let _ = writeln!(w, "</scene>");
-    Export {
-        scene_file: format!("{}.xml", scene_stem(scene)),
-        text: x,
-        meshes: names
-            .into_iter()
-            .zip(&scene.objects)
-            .map(|(n, o)| (n, o.triangles.clone()))
-            .collect(),
-        notes,
-    }
+    Export::of(scene, "xml", x, names, notes)
 }
 
 /// Materials and shapes share Mitsuba's id space, and our scenes reuse names across them

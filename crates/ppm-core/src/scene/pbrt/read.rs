@@ -1,9 +1,9 @@
 //! Reads the subset of pbrt-v4's scene format that we can render.
 
 use super::lexer::{Param, Token, tokenize};
-use crate::limits::{SCENE_FILE_LIMIT, read_text_limited};
 use crate::scene::Scene;
 use crate::scene::error::SceneError;
+use crate::scene::file::SceneSource;
 use crate::scene::interop::{SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness};
 use crate::scene::mesh_file::{MeshData, read_ply};
 use crate::scene::model::{Camera, MaterialKind, Object};
@@ -13,16 +13,8 @@ use std::path::Path;
 
 /// Reads a pbrt-v4 scene file; PLY file names are relative to its folder.
 pub fn load_pbrt_file(path: &Path) -> std::result::Result<Scene, SceneError> {
-    let file = path.display().to_string();
-    let text = read_text_limited(path, SCENE_FILE_LIMIT).map_err(|reason| SceneError::Read {
-        file: file.clone(),
-        reason,
-    })?;
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let name = path
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    parse_pbrt(&text, &file, &base, &name)
+    let s = SceneSource::read(path)?;
+    parse_pbrt(&s.text, &s.file, &s.base, &s.name)
 }
 
 /// Parses pbrt-v4 scene text. `file` names the source in errors, `base` resolves PLY files,

@@ -130,16 +130,7 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         );
         let _ = writeln!(w, "AttributeEnd");
     }
-    Export {
-        scene_file: format!("{}.pbrt", scene_stem(scene)),
-        text: t,
-        meshes: names
-            .into_iter()
-            .zip(&scene.objects)
-            .map(|(n, o)| (n, o.triangles.clone()))
-            .collect(),
-        notes,
-    }
+    Export::of(scene, "pbrt", t, names, notes)
 }
 
 /// A pbrt string literal (pbrt strings cannot hold a double quote or a line break).
