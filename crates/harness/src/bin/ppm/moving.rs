@@ -171,6 +171,10 @@ pub struct ErrorArgs {
     /// Seconds measured after the move.
     #[arg(long, default_value_t = 8.0)]
     seconds: f64,
+    /// Modes to measure, comma-separated (default: all); the perfect-compensation bound
+    /// needs `restart`.
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(MoveMode))]
+    modes: Vec<MoveMode>,
     #[command(flatten)]
     truth: TruthOptions,
     /// Output folder: error-vs-time.csv, .json and .png.
@@ -198,8 +202,13 @@ pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
     let mut backend = args.common.backend.start()?;
     eprintln!("finding the pixels the move resets");
     let reset = error_report::reset_pixels(backend.as_mut(), &scene, &settings)?;
+    let modes = if args.modes.is_empty() {
+        MoveMode::ALL.to_vec()
+    } else {
+        args.modes.clone()
+    };
     let mut runs = Vec::new();
-    for mode in MoveMode::ALL {
+    for mode in modes {
         if interrupt::requested() {
             break;
         }
