@@ -384,3 +384,62 @@ fn a_local_move_resets_the_pixels_the_object_newly_covers() {
         "{moved:?}, {untouched} kept slots' direct sums untouched"
     );
 }
+
+/// After a local move the kept slots rest, statistics untouched, while the slots the move
+/// reset iterate; once those hold as many iterations as the kept ones, every slot iterates
+/// again. On both backends.
+#[test]
+fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up() {
+    const WARM: u32 = 5;
+    let (scene, p) = cornell(32, 10_000);
+    let check = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+        let name = backend.name().to_owned();
+        let moves = MoveParams::default();
+        let mut render = Renderer::start(backend, scene.at_frame(0), &p, &moves).unwrap();
+        for _ in 0..WARM {
+            render.iteration().unwrap();
+        }
+        render.move_to(scene.at_frame(1), MoveMode::Local).unwrap();
+        let after_move = render.backend().read_hit_points().unwrap();
+        let reset = |hp: &ppm_core::layout::HitPoint| hp.flags & hit_flags::UPDATED != 0;
+        let kept = after_move.iter().filter(|h| !reset(h)).count();
+        assert!(kept > 0 && kept < after_move.len(), "{name}: {kept} kept");
+        for _ in 0..WARM {
+            render.iteration().unwrap();
+        }
+        let caught_up = render.backend().read_hit_points().unwrap();
+        for (old, new) in after_move.iter().zip(&caught_up) {
+            if reset(old) {
+                assert!(new.flags & hit_flags::RESTING == 0, "{name}: {new:?}");
+                assert!(new.iterations <= WARM, "{name}: {new:?}");
+            } else if old.iterations >= WARM {
+                assert!(new.flags & hit_flags::RESTING != 0, "{name}: {new:?}");
+                let stats = |h: &ppm_core::layout::HitPoint| {
+                    (h.tau, h.n, h.r2, h.emitted, h.direct, h.iterations)
+                };
+                assert_eq!(stats(old), stats(new), "{name}: a resting slot changed");
+            }
+        }
+        let reset_grew = caught_up
+            .iter()
+            .filter(|h| reset(h) && h.iterations == WARM)
+            .count();
+        assert!(reset_grew > 0, "{name}: no reset slot iterated every time");
+        render.iteration().unwrap();
+        let resumed = render.backend().read_hit_points().unwrap();
+        for (old, new) in caught_up.iter().zip(&resumed) {
+            if old.iterations == WARM && old.is_valid() {
+                assert!(
+                    new.flags & hit_flags::RESTING == 0 && new.emitted > old.emitted,
+                    "{name}: a caught-up slot still rests: {new:?}"
+                );
+            }
+        }
+    };
+    check(&mut CpuBackend::new());
+    if let Some(mut gpu) = backend_wgpu::backend_or_skip(
+        "after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up",
+    ) {
+        check(&mut gpu);
+    }
+}

@@ -41,6 +41,9 @@ pub fn direct_light_main(
         .enumerate()
         .with_min_len(256)
         .map(|(slot, hp)| {
+            if hp.flags & hit_flags::RESTING != 0 {
+                return 0;
+            }
             if correcting
                 && (hp.flags & hit_flags::SHADOW_NEAR_MOVER == 0
                     || hp.flags & hit_flags::UPDATED != 0)

@@ -46,7 +46,12 @@ fn trace_eye_path(
     out: &mut HitPoint,
 ) -> u64 {
     let pixel = slot / params.spp;
-    *out = if params.flags & eye_flags::KEEP_STATISTICS != 0 {
+    let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
+    if keep && params.flags & eye_flags::FOCUS != 0 && out.iterations >= params.rest_at {
+        out.flags |= hit_flags::RESTING;
+        return 0;
+    }
+    *out = if keep {
         HitPoint {
             position: [0.0; 3],
             normal: [0.0; 3],

@@ -18,16 +18,20 @@ pub struct PhotonMap<'a> {
     pub grid: &'a PhotonGrid,
     /// Path weights per deposit, when the pass kept them.
     pub weights: Option<&'a [f32]>,
+    /// The pass's [`gather_r2_floor`](ppm_core::layout::PhotonPassParams::gather_r2_floor).
+    pub r2_floor: f32,
 }
 
 /// Whether a slot belongs to the set a pass of `kind` serves (ALGORITHM.md 3, "Who gathers
-/// what"), visible point or not: such a slot counts the pass's photons in `emitted`.
+/// what"), visible point or not: such a slot counts the pass's photons in `emitted`. A
+/// resting slot sits out its iteration's photons.
 pub fn serves(hp: &HitPoint, kind: u32) -> bool {
     let updated = hp.flags & hit_flags::UPDATED != 0;
+    let resting = hp.flags & hit_flags::RESTING != 0;
     match kind & gather_kind::KIND_MASK {
         gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE => !updated,
-        gather_kind::GUIDED => updated,
-        _ => true,
+        gather_kind::GUIDED => updated && !resting,
+        _ => !resting,
     }
 }
 
@@ -51,7 +55,8 @@ pub fn gather_pass_main(
 ) -> GatherStats {
     let kind = params.kind & gather_kind::KIND_MASK;
     if kind == gather_kind::REGION_APPLY {
-        apply_pending(params.alpha, r2_initial, hit_points, pending);
+        let add = params.kind & gather_kind::ADD_FLUX != 0;
+        apply_pending(params.alpha, r2_initial, add, hit_points, pending);
         return GatherStats::default();
     }
     let deferred = params.kind & gather_kind::DEFERRED != 0;
@@ -71,6 +76,10 @@ pub fn gather_pass_main(
                 return (0, 0);
             }
             let (found, weight_sum, flux) = photons_in_disc(hp, map);
+            // Photons found in a floor disc wider than the slot's stand for their density
+            // over the slot's own disc.
+            let shrink = hp.r2 / gather_r2(hp, map);
+            let (weight_sum, flux) = (weight_sum * shrink, flux * shrink);
             // Region photons stand for `emitted / N_c` ordinary photons each, times their
             // path weight (ALGORITHM.md 3, "Power of region photons").
             let scale = if region {
@@ -127,8 +136,14 @@ pub fn gather_pass_main(
     }
 }
 
-/// Count, summed path weight and summed power of the photons within `sqrt(r2)` of the hit
-/// point whose surface faces the same way; summed in the grid's fixed order.
+/// The squared radius a slot gathers the map's photons within: its own, or the pass's floor.
+#[inline]
+pub fn gather_r2(hp: &HitPoint, map: &PhotonMap) -> f32 {
+    hp.r2.max(map.r2_floor)
+}
+
+/// Count, summed path weight and summed power of the photons within the gather radius of
+/// the hit point whose surface faces the same way; summed in the grid's fixed order.
 #[inline]
 fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> (u32, f32, Vec3) {
     let mut found = 0u32;
@@ -142,8 +157,8 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> (u32, f32, Vec3) {
     (found, weight, flux)
 }
 
-/// Calls `visit(index in the pass, photon)` for each photon within the hit point's disc, cell
-/// by cell in z, y, x order (or over all photons, when the disc spans more cells than there
+/// Calls `visit(index in the pass, photon)` for each photon within the hit point's gather
+/// disc, cell by cell in z, y, x order (or over all photons, when the disc spans more cells than there
 /// are photons), in bucket order within a cell.
 #[inline]
 pub fn for_photons_in_disc(
@@ -154,13 +169,14 @@ pub fn for_photons_in_disc(
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
     let grid = map.grid;
+    let r2 = gather_r2(hp, map);
     let mut test = |k: usize, p: &GridPhoton| {
         let d = Vec3::from(p.position) - x;
-        if d.length_squared() < hp.r2 && oct_faces(p.normal_oct, n) {
+        if d.length_squared() < r2 && oct_faces(p.normal_oct, n) {
             visit(grid.order[k] as usize, p);
         }
     };
-    let range = cell_range(x, hp.r2.sqrt(), grid.params.cell_size);
+    let range = cell_range(x, r2.sqrt(), grid.params.cell_size);
     if scan_instead(range, grid.params.photon_count) {
         grid.sorted.iter().enumerate().for_each(|(k, p)| test(k, p));
         return;
@@ -188,9 +204,11 @@ pub fn for_photons_in_disc(
 
 /// Folds each hit point's pending region photons into its statistics as one update: eqs 1-3
 /// when the net count grew, eqs 5-7 with their clamps when it fell; flux clamped at zero.
+/// With `add`, only the flux is added (clamped at zero).
 fn apply_pending(
     alpha: f32,
     r2_initial: f32,
+    add: bool,
     hit_points: &mut [HitPoint],
     pending: &mut [Pending],
 ) {
@@ -207,6 +225,10 @@ fn apply_pending(
                 r2: hp.r2,
                 tau: hp.tau,
             };
+            if add {
+                hp.tau = [hp.tau[0] + t0, hp.tau[1] + t1, hp.tau[2] + t2].map(|t| t.max(0.0));
+                return;
+            }
             let s = if m >= 0.0 {
                 let s = ppm_update(s, m, [t0, t1, t2], alpha);
                 Statistics {
@@ -282,15 +304,19 @@ mod tests {
     }
 
     /// The grid finds exactly the photons a scan of all of them finds, at any scale and with a
-    /// deposit far from the rest (which must not starve the others' buckets).
+    /// deposit far from the rest (which must not starve the others' buckets), within each
+    /// slot's radius or a pass's wider floor.
     #[test]
     fn the_grid_finds_what_a_brute_force_scan_finds() {
-        for (scale, far) in [(1.0, 10.0), (1e-4, 1e-3), (1e4, 1e37), (1.0, 1e8)] {
+        let cases = [(1.0, 10.0), (1e-4, 1e-3), (1e4, 1e37), (1.0, 1e8)];
+        for ((scale, far), floor) in cases.into_iter().flat_map(|c| [(c, 0.0), (c, 0.01)]) {
             let (photons, hit_points) = case(scale, far);
-            let grid = build_photon_grid(&photons, &hit_points);
+            let r2_floor = floor * scale * scale;
+            let grid = build_photon_grid(&photons, &hit_points, r2_floor);
             let map = PhotonMap {
                 grid: &grid,
                 weights: None,
+                r2_floor,
             };
             for hp in &hit_points {
                 let mut found = Vec::new();
@@ -300,11 +326,15 @@ mod tests {
                 let expected: Vec<usize> = (0..photons.len())
                     .filter(|&i| {
                         let p = &photons[i];
-                        (Vec3::from(p.position) - Vec3::from(hp.position)).length_squared() < hp.r2
+                        (Vec3::from(p.position) - Vec3::from(hp.position)).length_squared()
+                            < hp.r2.max(r2_floor)
                             && oct_faces(p.normal_oct, n)
                     })
                     .collect();
-                assert_eq!(found, expected, "scale {scale}, far {far}, {hp:?}");
+                assert_eq!(
+                    found, expected,
+                    "scale {scale}, far {far}, floor {floor}, {hp:?}"
+                );
             }
         }
     }

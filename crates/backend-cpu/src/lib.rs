@@ -48,6 +48,8 @@ pub struct CpuBackend {
     photons: Vec<Photon>,
     /// Path weight per deposit, kept by region passes only.
     weights: Option<Vec<f32>>,
+    /// The last photon pass's `gather_r2_floor`.
+    r2_floor: f32,
     /// Deferred region photons per hit point (area mode).
     pending: Vec<gather_pass::Pending>,
     /// The photon map's grid: `Indexed` once built from the last pass's deposits (at the first
@@ -141,8 +143,12 @@ impl SceneUpdate for CpuBackend {
 }
 
 impl CpuBackend {
-    /// Files `deposits` as the current photon map.
-    fn store(&mut self, deposits: Deposits) -> Result<PhotonStats, BackendError> {
+    /// Files the deposits of the pass `params` as the current photon map.
+    fn store(
+        &mut self,
+        params: &PhotonPassParams,
+        deposits: Deposits,
+    ) -> Result<PhotonStats, BackendError> {
         if let Some((i, p)) = deposits
             .photons
             .iter()
@@ -157,6 +163,7 @@ impl CpuBackend {
             });
         }
         self.grid = PhotonIndex::Pending;
+        self.r2_floor = params.gather_r2_floor;
         self.photons = deposits.photons;
         self.weights = deposits.weights;
         Ok(deposits.stats)
@@ -203,7 +210,7 @@ impl PhotonPass for CpuBackend {
             ordinary_emission(&scene.lights, &scene.materials, key)
         };
         let deposits = photon_pass_main(params, scene, PassKind::Photon, &emit, false);
-        self.store(deposits)
+        self.store(params, deposits)
     }
 }
 
@@ -218,7 +225,7 @@ impl RegionPhotonPass for CpuBackend {
             region_emission(&scene.lights, &scene.materials, region, key)
         };
         let deposits = photon_pass_main(params, scene, PassKind::Region, &emit, true);
-        self.store(deposits)
+        self.store(params, deposits)
     }
 }
 
@@ -234,7 +241,7 @@ impl GuidedPhotonPass for CpuBackend {
             guided_emission(&scene.lights, &scene.materials, guide, paths, key)
         };
         let deposits = photon_pass_main(params, scene, PassKind::Guided, &emit, false);
-        self.store(deposits)
+        self.store(params, deposits)
     }
 }
 
@@ -270,10 +277,11 @@ fn indexed<'a>(
     index: &'a mut PhotonIndex,
     photons: &[Photon],
     hit_points: &[HitPoint],
+    r2_floor: f32,
     pass: &'static str,
 ) -> Result<&'a PhotonGrid, BackendError> {
     if let PhotonIndex::Pending = index {
-        *index = PhotonIndex::Indexed(build_photon_grid(photons, hit_points));
+        *index = PhotonIndex::Indexed(build_photon_grid(photons, hit_points, r2_floor));
     }
     match index {
         PhotonIndex::Indexed(grid) => Ok(grid),
@@ -290,11 +298,13 @@ impl LandingPaths for CpuBackend {
             &mut self.grid,
             &self.photons,
             &self.hit_points,
+            self.r2_floor,
             "landing paths",
         )?;
         let map = PhotonMap {
             grid,
             weights: None,
+            r2_floor: self.r2_floor,
         };
         let mut paths: Vec<u32> = self
             .hit_points
@@ -315,10 +325,17 @@ impl LandingPaths for CpuBackend {
 impl GatherPass for CpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "gather")?;
-        let grid = indexed(&mut self.grid, &self.photons, &self.hit_points, "gather")?;
+        let grid = indexed(
+            &mut self.grid,
+            &self.photons,
+            &self.hit_points,
+            self.r2_floor,
+            "gather",
+        )?;
         let map = PhotonMap {
             grid,
             weights: self.weights.as_deref(),
+            r2_floor: self.r2_floor,
         };
         self.pending.resize(self.hit_points.len(), [0.0; 4]);
         let stats = gather_pass::gather_pass_main(

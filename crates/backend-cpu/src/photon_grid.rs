@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use ppm_core::grid::{RADIUS_BINS, bucket_count, cell_key, cell_of, cell_size, radius_bin};
-use ppm_core::layout::{GridParams, GridPhoton, HitPoint, Photon};
+use ppm_core::layout::{GridParams, GridPhoton, HitPoint, Photon, hit_flags};
 use rayon::prelude::*;
 
 /// Photons filed by bucket.
@@ -20,15 +20,16 @@ pub struct PhotonGrid {
     pub order: Vec<u32>,
 }
 
-/// Builds the grid over `photons` for the gather radii of `hit_points`' visible points.
-pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint]) -> PhotonGrid {
+/// Builds the grid over `photons` for the gather radii of `hit_points`' visible points (not
+/// resting, at least `sqrt(r2_floor)`).
+pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint], r2_floor: f32) -> PhotonGrid {
     let histogram = hit_points
         .par_iter()
-        .filter(|h| h.is_valid())
+        .filter(|h| h.is_valid() && h.flags & hit_flags::RESTING == 0)
         .fold(
             || vec![0u32; RADIUS_BINS as usize],
             |mut h, hp| {
-                h[radius_bin(hp.r2) as usize] += 1;
+                h[radius_bin(hp.r2.max(r2_floor)) as usize] += 1;
                 h
             },
         )

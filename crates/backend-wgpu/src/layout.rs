@@ -27,8 +27,8 @@ pub struct GridBuildParams {
     pub bucket_count: u32,
     /// Hit-point slots (for the largest radius).
     pub hit_point_count: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// The pass's `gather_r2_floor`: the radii the cells are sized to are at least this.
+    pub r2_floor: f32,
 }
 
 /// photon_pass.wgsl's `Emitter`: where this pass's photons start. 96 bytes.

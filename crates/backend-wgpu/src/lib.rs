@@ -87,7 +87,7 @@ pub struct WgpuBackend {
     /// Per hit point: deferred region photons (area mode).
     pending: Option<wgpu::Buffer>,
     /// Uniform vec4 whose x is the initial squared radius of the last eye pass.
-    r2_initial: Option<wgpu::Buffer>,
+    r2_initial: Option<(wgpu::Buffer, f32)>,
     /// Where photon passes append their deposits, kept from pass to pass.
     deposits: Option<DepositBuffers>,
     /// Deposits per path of the last photon pass: sizes the next pass's buffers.
@@ -172,7 +172,7 @@ impl WgpuBackend {
         pass: &'static str,
     ) -> Result<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer), BackendError> {
         match (&self.accumulated, &self.pending, &self.r2_initial) {
-            (Some(a), Some(p), Some(r)) => Ok((a, p, r)),
+            (Some(a), Some(p), Some((r, _))) => Ok((a, p, r)),
             _ => Err(BackendError::OutOfOrder {
                 pass,
                 needs: "an eye pass",
@@ -300,10 +300,9 @@ impl EyePass for WgpuBackend {
         if !keep {
             self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
             self.pending = Some(storage_zeroed(&self.ctx, "pending", slots64 * 16)?);
-            self.r2_initial = Some(buffers::uniform(
-                &self.ctx,
-                "r2_initial",
-                &[params.r2_initial, 0.0, 0.0, 0.0],
+            self.r2_initial = Some((
+                buffers::uniform(&self.ctx, "radii", &[params.r2_initial, 0.0, 0.0, 0.0]),
+                params.r2_initial,
             ));
         }
         self.map = None;
@@ -389,6 +388,12 @@ impl WgpuBackend {
         let mut batches = 0;
         let mut start = 0;
         let (accumulated, _, _) = self.gather_state("photon")?;
+        let r2_initial = self.r2_initial.as_ref().map_or(0.0, |(_, r2)| *r2);
+        let radii = buffers::uniform(
+            &self.ctx,
+            "radii",
+            &[r2_initial, params.gather_r2_floor, 0.0, 0.0],
+        );
         self.run("photon accumulator reset", |encoder| {
             encoder.clear_buffer(accumulated, 0, None);
             Ok(())
@@ -447,7 +452,7 @@ impl WgpuBackend {
                 continue;
             }
             let (hit_points, slots) = self.hit_points("photon")?;
-            let (accumulated, pending, r2_initial) = self.gather_state("photon")?;
+            let (accumulated, pending, _) = self.gather_state("photon")?;
             let slots = Slots {
                 hit_points,
                 counters: &self.counters,
@@ -458,7 +463,7 @@ impl WgpuBackend {
                 materials: &scene.materials,
                 accumulated,
                 pending,
-                r2_initial,
+                radii: &radii,
             };
             self.run("photon map", |encoder| {
                 let built = self.kernels.grid.record(
@@ -473,6 +478,7 @@ impl WgpuBackend {
                         deposited,
                     ),
                     (hit_points, slots.count),
+                    params.gather_r2_floor,
                 )?;
                 self.kernels
                     .gather
@@ -582,10 +588,9 @@ impl HitPointUpdate for WgpuBackend {
             Ok(())
         })?;
         let slots = *slots;
-        self.r2_initial = Some(buffers::uniform(
-            &self.ctx,
-            "r2_initial",
-            &[params.r2_initial, 0.0, 0.0, 0.0],
+        self.r2_initial = Some((
+            buffers::uniform(&self.ctx, "radii", &[params.r2_initial, 0.0, 0.0, 0.0]),
+            params.r2_initial,
         ));
         self.check("hit-point update", &counters)?;
         let updated = u64::from(counters[COUNTER_ITEMS]);
@@ -637,7 +642,7 @@ impl GatherPass for WgpuBackend {
             needs: "a photon pass",
         };
         let map = self.map.as_ref().ok_or(needs_photons)?;
-        let (accumulated, pending, r2_initial) = self.gather_state("gather")?;
+        let (accumulated, pending, radii) = self.gather_state("gather")?;
         let targets = Slots {
             hit_points,
             counters: &self.counters,
@@ -648,7 +653,7 @@ impl GatherPass for WgpuBackend {
             materials: &scene.materials,
             accumulated,
             pending,
-            r2_initial,
+            radii,
         };
         let counters = self.run("gather", |encoder| {
             self.kernels

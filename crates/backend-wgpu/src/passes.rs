@@ -206,8 +206,9 @@ pub struct GatherInputs<'a> {
     pub accumulated: &'a wgpu::Buffer,
     /// Per hit point: deferred region photons.
     pub pending: &'a wgpu::Buffer,
-    /// Uniform vec4 whose x is the initial squared radius.
-    pub r2_initial: &'a wgpu::Buffer,
+    /// Uniform vec4: the initial squared radius, and the photon pass's `gather_r2_floor`
+    /// (read by the accumulation only).
+    pub radii: &'a wgpu::Buffer,
 }
 
 impl GatherKernel {
@@ -266,7 +267,7 @@ impl GatherKernel {
                 slots.counters,
                 &map.weights,
                 inputs.pending,
-                inputs.r2_initial,
+                inputs.radii,
             ],
         );
         kernel.dispatch(encoder, &group, slots.count);

@@ -65,8 +65,8 @@ impl PhotonGridKernels {
     }
 
     /// Records the grid build over `photons` (`count` deposits, ranked in path order by
-    /// `ranks`) into `buffers`, its cells sized to the radii of the hit points' visible
-    /// points; returns the map whose buffers the commands fill.
+    /// `ranks`) into `buffers`, its cells sized to the gather radii of the hit points' visible
+    /// points (at least `sqrt(r2_floor)`, resting slots left out); returns the map whose buffers the commands fill.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -76,6 +76,7 @@ impl PhotonGridKernels {
         buffers: &GridBuffers,
         (photons, weights, ranks, count): (wgpu::Buffer, wgpu::Buffer, &wgpu::Buffer, u32),
         (hit_points, slots): (&wgpu::Buffer, u32),
+        r2_floor: f32,
     ) -> Result<PhotonMap, BackendError> {
         let bucket_count = bucket_count(count);
         let bucket_bytes = (u64::from(bucket_count) + 1) * 4;
@@ -88,7 +89,7 @@ impl PhotonGridKernels {
                 photon_count: count,
                 bucket_count,
                 hit_point_count: slots,
-                _pad0: 0,
+                r2_floor,
             },
         );
         let bindings = [

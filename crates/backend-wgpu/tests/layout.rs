@@ -129,7 +129,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         r2_initial,
         ray_epsilon,
         flags,
-        _pad0
+        rest_at
     });
     same_layout!(DirectLightParams {
         seed,
@@ -153,7 +153,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         flags,
         _pad0,
         _pad1,
-        _pad2
+        gather_r2_floor
     });
     same_layout!(GatherParams {
         alpha,
@@ -235,7 +235,7 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
         photon_count,
         bucket_count,
         hit_point_count,
-        _pad0
+        r2_floor
     });
 }
 
@@ -249,9 +249,13 @@ fn shared_constants_agree() {
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
         ("HIT_UPDATED", hit_flags::UPDATED),
+        ("HIT_EYE_NEAR_MOVER", hit_flags::EYE_NEAR_MOVER),
+        ("HIT_SHADOW_NEAR_MOVER", hit_flags::SHADOW_NEAR_MOVER),
+        ("HIT_RESTING", hit_flags::RESTING),
         ("HIT_OBJECT_SHIFT", hit_flags::OBJECT_SHIFT),
         ("EYE_KEEP_STATISTICS", eye_flags::KEEP_STATISTICS),
         ("EYE_JITTER", eye_flags::JITTER),
+        ("EYE_FOCUS", eye_flags::FOCUS),
         ("NO_MATERIAL", NO_MATERIAL),
         ("FIRST_HIT_SKIP", first_hit::SKIP),
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),
@@ -265,6 +269,7 @@ fn shared_constants_agree() {
         ("GATHER_KIND_MASK", gather_kind::KIND_MASK),
         ("GATHER_RAW_COUNT", gather_kind::RAW_COUNT),
         ("GATHER_DEFERRED", gather_kind::DEFERRED),
+        ("GATHER_ADD_FLUX", gather_kind::ADD_FLUX),
     ] {
         let line = LAYOUT_WGSL
             .lines()

@@ -32,6 +32,10 @@ pub mod hit_flags {
     /// Some shadow or cosine ray of the slot's direct sum crossed those bounds: a move may
     /// change its direct light (local mode restarts the sum).
     pub const SHADOW_NEAR_MOVER: u32 = 16;
+    /// The slot sits out this iteration (an eye pass with [`eye_flags::FOCUS`](super::eye_flags::FOCUS)
+    /// found it ahead of the slots a move reset): it keeps its last visible point and every
+    /// statistic, and no direct light, photon count or gather reaches it.
+    pub const RESTING: u32 = 32;
     /// The flags a slot keeps from iteration to iteration (`sppm`).
     pub const KEPT: u32 = UPDATED | EYE_NEAR_MOVER | SHADOW_NEAR_MOVER;
     /// The index of the object hit sits in the bits from here up (24 bits).
@@ -270,6 +274,10 @@ pub mod eye_flags {
     /// Shoot through a random point of the pixel even with one sample per pixel (`sppm`);
     /// without it one sample per pixel goes through the pixel's centre.
     pub const JITTER: u32 = 2;
+    /// With `KEEP_STATISTICS`: slots whose direct sum already holds
+    /// [`EyePassParams::rest_at`] iterations rest (local mode, after a move: the work of an
+    /// iteration goes to the slots the move reset until they catch up with the kept ones).
+    pub const FOCUS: u32 = 4;
 }
 
 /// Parameters of one eye pass. 32 bytes.
@@ -290,8 +298,8 @@ pub struct EyePassParams {
     pub ray_epsilon: f32,
     /// [`eye_flags`] bits.
     pub flags: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// With [`eye_flags::FOCUS`]: the iteration count from which a slot rests.
+    pub rest_at: u32,
 }
 
 /// Parameters of the direct-light pass. 32 bytes.
@@ -367,8 +375,11 @@ pub struct PhotonPassParams {
     pub _pad0: u32,
     /// Padding.
     pub _pad1: u32,
-    /// Padding.
-    pub _pad2: u32,
+    /// Squared radius within which every slot gathers this pass's photons at least: a slot
+    /// whose `r2` is smaller searches this disc and scales what it finds by `r2 / floor`
+    /// (local mode's correction, which a small converged disc would gather too noisily).
+    /// Zero: each slot gathers within its own radius.
+    pub gather_r2_floor: f32,
 }
 
 /// Bits of [`PhotonPassParams::flags`].
@@ -404,6 +415,10 @@ pub mod gather_kind {
     /// Flag: region photons count raw in `M` (thesis mode) instead of as the ordinary photons
     /// their weights stand for (area mode).
     pub const RAW_COUNT: u32 = 0x100;
+    /// Flag on `REGION_APPLY`: add the pending flux to `tau` (clamped at zero) and leave `n`,
+    /// `r2` and `emitted` alone (local mode: the pending sum corrects the light of the same
+    /// disc; it brings no new photons to shrink the radius with).
+    pub const ADD_FLUX: u32 = 0x400;
 }
 
 /// Parameters of one gather pass. 16 bytes.

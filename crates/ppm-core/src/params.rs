@@ -256,6 +256,9 @@ pub struct MoveParams {
     pub update_epsilon: f32,
     /// Difference passes per move (each one negative and one positive ordinary pass).
     pub difference_passes: u32,
+    /// Local mode gathers its correction within at least this many initial radii (0: each
+    /// slot's own radius). Wider discs trade the correction's noise for a blur of the change.
+    pub correction_radii: f32,
 }
 
 impl MoveParams {
@@ -273,6 +276,13 @@ impl MoveParams {
         }
         if !(0.0..=1.0).contains(&self.beta) {
             return bad("beta", &self.beta, "must lie in [0, 1]");
+        }
+        if !(self.correction_radii.is_finite() && (0.0..=1e3).contains(&self.correction_radii)) {
+            return bad(
+                "correction_radii",
+                &self.correction_radii,
+                "must lie in [0, 1000] initial radii",
+            );
         }
         if !(self.update_epsilon.is_finite() && self.update_epsilon > 0.0) {
             return bad(
@@ -295,6 +305,7 @@ impl Default for MoveParams {
             max_recorded: 1024,
             update_epsilon: 1e-4,
             difference_passes: 8,
+            correction_radii: 2.0,
         }
     }
 }

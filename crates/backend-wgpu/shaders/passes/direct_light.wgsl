@@ -75,6 +75,9 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     var hp = hit_points[slot];
+    if (hp.flags & HIT_RESTING) != 0u {
+        return;
+    }
     let correcting = params.accumulate == DIRECT_CORRECT;
     if correcting && ((hp.flags & HIT_SHADOW_NEAR_MOVER) == 0u || (hp.flags & HIT_UPDATED) != 0u) {
         return;

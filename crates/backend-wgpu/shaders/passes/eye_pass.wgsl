@@ -37,6 +37,15 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         return;
     }
     let pixel = slot / params.spp;
+    let focus = EYE_KEEP_STATISTICS | EYE_FOCUS;
+    if (params.flags & focus) == focus && hit_points[slot].iterations >= params.rest_at {
+        // Ahead of the slots a move reset: keep the last visible point and sit this one out.
+        hit_points[slot].flags |= HIT_RESTING;
+        if (hit_points[slot].flags & HIT_VALID) != 0u {
+            atomicAdd(&counters[COUNTER_ITEMS], 1u);
+        }
+        return;
+    }
     let key = StreamKey(params.seed, PASS_EYE, params.iteration, slot);
     var jitter = vec2<f32>(0.5);
     if params.spp != 1u || (params.flags & EYE_JITTER) != 0u {

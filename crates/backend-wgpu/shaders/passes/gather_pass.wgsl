@@ -20,7 +20,8 @@
 @group(0) @binding(9) var<storage, read> weights: array<f32>;
 // Per hit point: deferred region flux (times BRDF and scale) and signed count.
 @group(0) @binding(10) var<storage, read_write> pending: array<vec4<f32>>;
-@group(0) @binding(11) var<uniform> r2_initial: vec4<f32>;
+// x: the initial squared radius; y: the photon pass's gather_r2_floor (accumulate only).
+@group(0) @binding(11) var<uniform> radii: vec4<f32>;
 
 // Whether deposits carry path weights (region passes): one accumulate pipeline each way, so
 // other passes skip the extra reads.
@@ -33,9 +34,9 @@ struct Found {
     flux: vec3<f32>,
 }
 
-fn visit(found: ptr<function, Found>, hp: HitPoint, p: GridPhoton, k: u32) {
+fn visit(found: ptr<function, Found>, hp: HitPoint, r2: f32, p: GridPhoton, k: u32) {
     let d = p.position - hp.position;
-    if dot(d, d) < hp.r2 && oct_faces(p.normal_oct, hp.normal) {
+    if dot(d, d) < r2 && oct_faces(p.normal_oct, hp.normal) {
         (*found).m++;
         if WEIGHTED {
             (*found).weight += weights[order[k]];
@@ -57,13 +58,14 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         return;
     }
     let g = grid;
-    let r = sqrt(hp.r2);
+    let r2 = max(hp.r2, radii.y);
+    let r = sqrt(r2);
     let lo = cell_of(hp.position - vec3<f32>(r), g.cell_size);
     let hi = cell_of(hp.position + vec3<f32>(r), g.cell_size);
     var found = Found(0u, 0.0, vec3<f32>(0.0));
     if scan_instead(lo, hi, g.photon_count) {
         for (var k = 0u; k < g.photon_count; k++) {
-            visit(&found, hp, sorted[k], k);
+            visit(&found, hp, r2, sorted[k], k);
         }
     } else {
         // One flat loop, one photon or one cell a step (z, y, x order, as the CPU's nested
@@ -77,7 +79,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
             if k < end {
                 let p = sorted[k];
                 if p.cell == key {
-                    visit(&found, hp, p, k);
+                    visit(&found, hp, r2, p, k);
                 }
                 k++;
                 continue;
@@ -105,22 +107,28 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     if !WEIGHTED {
         weight = f32(found.m);
     }
-    accumulated[2u * slot] += vec4<f32>(found.flux, f32(found.m));
+    // Photons found in a floor disc wider than the slot's stand for their density over the
+    // slot's own disc (as the CPU, weight and flux scaled, the count kept).
+    let shrink = hp.r2 / r2;
+    weight *= shrink;
+    accumulated[2u * slot] += vec4<f32>(found.flux * shrink, f32(found.m));
     accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);
 }
 
-// Whether a slot belongs to the set the pass kind serves, visible point or not.
+// Whether a slot belongs to the set the pass kind serves, visible point or not; a resting
+// slot sits out its iteration's photons.
 fn serves(hp: HitPoint, kind: u32) -> bool {
     let updated = (hp.flags & HIT_UPDATED) != 0u;
+    let resting = (hp.flags & HIT_RESTING) != 0u;
     switch kind & GATHER_KIND_MASK {
         case GATHER_REGION_NEGATIVE, GATHER_REGION_POSITIVE: {
             return !updated;
         }
         case GATHER_GUIDED: {
-            return updated;
+            return updated && !resting;
         }
         default: {
-            return true;
+            return !resting;
         }
     }
 }
@@ -158,11 +166,15 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         if (hp.flags & HIT_VALID) == 0u || all(p == vec4<f32>(0.0)) {
             return;
         }
+        if (params.kind & GATHER_ADD_FLUX) != 0u {
+            hit_points[slot].tau = max(hp.tau + p.xyz, vec3<f32>(0.0));
+            return;
+        }
         if p.w >= 0.0 {
             let s = ppm_update(s0, p.w, p.xyz, params.alpha);
             store(slot, hp, Statistics(s.n, s.r2, max(s.tau, vec3<f32>(0.0))), hp.emitted);
         } else {
-            let s = compensation_update(s0, -p.w, p.xyz, params.alpha, r2_initial.x);
+            let s = compensation_update(s0, -p.w, p.xyz, params.alpha, radii.x);
             store(slot, hp, s, select(hp.emitted, 0.0, s.n == 0.0));
         }
         return;
@@ -196,7 +208,7 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     var emitted = hp.emitted + params.emitted_increment;
     if kind == GATHER_REGION_NEGATIVE {
-        let s = compensation_update(s0, m, dtau, params.alpha, r2_initial.x);
+        let s = compensation_update(s0, m, dtau, params.alpha, radii.x);
         if m > 0.0 && s.n == 0.0 {
             emitted = 0.0;
         }

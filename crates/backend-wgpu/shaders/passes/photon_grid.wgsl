@@ -9,7 +9,7 @@ struct GridBuildParams {
     photon_count: u32,
     bucket_count: u32,
     hit_point_count: u32,
-    _pad0: u32,
+    r2_floor: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: GridBuildParams;
@@ -38,8 +38,8 @@ fn grid_histogram_main(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(wo
     }
     workgroupBarrier();
     for (var i = wid.x * 64u + lid.x; i < params.hit_point_count; i += HISTOGRAM_GROUPS * 64u) {
-        if (hit_points[i].flags & HIT_VALID) != 0u {
-            atomicAdd(&local_histogram[radius_bin(hit_points[i].r2)], 1u);
+        if (hit_points[i].flags & (HIT_VALID | HIT_RESTING)) == HIT_VALID {
+            atomicAdd(&local_histogram[radius_bin(max(hit_points[i].r2, params.r2_floor))], 1u);
         }
     }
     workgroupBarrier();

@@ -10,6 +10,7 @@ const HIT_FRONT: u32 = 2u;
 const HIT_UPDATED: u32 = 4u;
 const HIT_EYE_NEAR_MOVER: u32 = 8u;
 const HIT_SHADOW_NEAR_MOVER: u32 = 16u;
+const HIT_RESTING: u32 = 32u;
 const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_NEAR_MOVER | HIT_SHADOW_NEAR_MOVER;
 const HIT_OBJECT_SHIFT: u32 = 8u;
 const NO_MATERIAL: u32 = 0xffffffffu;
@@ -96,6 +97,7 @@ struct GpuCamera {
 
 const EYE_KEEP_STATISTICS: u32 = 1u;
 const EYE_JITTER: u32 = 2u;
+const EYE_FOCUS: u32 = 4u;
 
 struct EyePassParams {
     seed: u32,
@@ -105,7 +107,7 @@ struct EyePassParams {
     r2_initial: f32,
     ray_epsilon: f32,
     flags: u32,
-    _pad0: u32,
+    rest_at: u32,
 }
 
 struct DirectLightParams {
@@ -136,7 +138,7 @@ struct PhotonPassParams {
     flags: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
+    gather_r2_floor: f32,
 }
 
 // PhotonPassParams::flags (ppm_core::layout::photon_flags).
@@ -199,6 +201,7 @@ const GATHER_REGION_APPLY: u32 = 4u;
 const GATHER_KIND_MASK: u32 = 0xffu;
 const GATHER_RAW_COUNT: u32 = 0x100u;
 const GATHER_DEFERRED: u32 = 0x200u;
+const GATHER_ADD_FLUX: u32 = 0x400u;
 
 struct ResolveParams {
     width: u32,

@@ -16,9 +16,18 @@
 //!   of every photon path the move changed. A path is the same in both poses until it
 //!   crosses a box, so only deposits made after that are stored (in both poses): the
 //!   gathers cost in proportion to the light the object touches, and what would cancel
-//!   leaves no rounding behind. Every path is still traced in both poses.
+//!   leaves no rounding behind. Every path is still traced in both poses. The correction is
+//!   gathered within a disc wider than a converged slot's ([`MoveParams::correction_radii`]),
+//!   and added to the flux alone: it brings no new photons to shrink the radius with.
+//!
+//! Then iterations serve the slots with the fewest iterations first: a slot whose direct sum
+//! holds more iterations than the slots the move reset rests (`hit_flags::RESTING`) until
+//! they catch up. Kept slots are already converged; an iteration of the reset slots alone
+//! costs its photon pass and a fraction of the eye, direct-light and gather work.
 //!
 //! A move to the same pose resets nothing, and its difference passes cancel.
+//!
+//! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
 use super::Renderer;
 use super::moves::{Compensation, MoveReport};
@@ -30,10 +39,6 @@ use std::time::Instant;
 
 /// Direct-light samples per slot of the paired correction, in each pose.
 pub const CORRECTION_SAMPLES: u32 = 8;
-
-/// Local mode's indirect correction: difference passes that store only the deposits of paths
-/// that crossed a mover's box (the others cancel between the poses).
-const LOCAL: Compensation = Compensation::Difference { changed_only: true };
 
 /// Keys the correction's random numbers apart from every iteration's.
 const CORRECTION_SEED: u32 = 0x5eed_c0de;
@@ -71,7 +76,21 @@ impl Renderer<'_> {
         if self.movers.len() != next.moves.len() || !inside(&self.scene) || !inside(next) {
             return Err("the move leaves the boxes flagged since the start".to_owned());
         }
-        Ok(LOCAL)
+        Ok(self.local_correction())
+    }
+
+    /// Local mode's indirect correction: difference passes that store only the deposits of
+    /// paths that crossed a mover's box (the others cancel between the poses), gathered
+    /// within `correction_radii` initial radii at least. A converged slot's disc is a
+    /// fraction of the initial one: the few hundred thousand photons of a correction would
+    /// reach it too sparsely, and their noise would stay in statistics built from millions
+    /// (on cornell-box, two initial radii take the kept pixels' error from 0.047 to 0.035).
+    /// The wider disc trades that noise for a blur of the change.
+    fn local_correction(&self) -> Compensation {
+        Compensation::Difference {
+            changed_only: true,
+            r2_floor: (self.moves.correction_radii * self.params.initial_radius).powi(2),
+        }
     }
 
     /// Moves to `next`: the resets, then difference passes and the paired direct-light
@@ -94,7 +113,8 @@ impl Renderer<'_> {
             self.report.photons_deposited as f64 / self.report.photons_emitted.max(1) as f64;
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
-        self.compensate(&LOCAL, gather_kind::REGION_NEGATIVE)?;
+        let correction = self.local_correction();
+        self.compensate(&correction, gather_kind::REGION_NEGATIVE)?;
         if changed {
             self.correct_direct(-1.0)?;
         }
@@ -106,10 +126,10 @@ impl Renderer<'_> {
         if changed {
             self.correct_direct(1.0)?;
         }
-        self.compensate(&LOCAL, gather_kind::REGION_POSITIVE)?;
+        self.compensate(&correction, gather_kind::REGION_POSITIVE)?;
         self.difference_pass += self.moves.difference_passes;
         if self.moves.difference_passes > 0 {
-            self.gather(gather_kind::REGION_APPLY, 0.0, 0.0)?;
+            self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;
         }
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted = self.counts.compensation.emitted + self.counts.region.emitted;
@@ -160,7 +180,7 @@ impl Renderer<'_> {
                 resets.reset += 1;
                 continue;
             }
-            hp.flags &= !hit_flags::UPDATED;
+            hp.flags &= !(hit_flags::UPDATED | hit_flags::RESTING);
             if hp.flags & hit_flags::SHADOW_NEAR_MOVER != 0 {
                 resets.direct_corrected += 1;
             }

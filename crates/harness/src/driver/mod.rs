@@ -66,6 +66,8 @@ pub struct Renderer<'a> {
     difference_pass: u32,
     guided_pass: u32,
     steps_since_move: u32,
+    /// Iterations serve the slots with the fewest iterations first (after a local move).
+    focus: bool,
     guide: Option<(GuidedEmission, Vec<RecordedPath>)>,
     /// Photons emitted and deposited so far, per kind.
     pub counts: PhotonCounts,
@@ -101,6 +103,7 @@ impl<'a> Renderer<'a> {
             difference_pass: 0,
             guided_pass: 0,
             steps_since_move: 0,
+            focus: false,
             guide: None,
             counts: PhotonCounts::default(),
             report,
@@ -118,6 +121,7 @@ impl<'a> Renderer<'a> {
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(scene, compiled);
         self.guide = None;
+        self.focus = false;
         self.fresh = true;
         if self.params.estimator == Estimator::Ppm {
             self.eye_pass(self.frame, false)?;
@@ -229,6 +233,15 @@ impl<'a> Renderer<'a> {
         if self.params.estimator == Estimator::Sppm {
             flags |= eye_flags::JITTER;
         }
+        // After a local move the reset slots hold `steps_since_move` iterations: the slots
+        // that hold more rest until those catch up.
+        let rest_at = match self.focus {
+            true if keep => {
+                flags |= eye_flags::FOCUS;
+                self.steps_since_move + 1
+            }
+            _ => 0,
+        };
         EyePassParams {
             seed: self.params.seed,
             spp: self.params.spp,
@@ -237,7 +250,7 @@ impl<'a> Renderer<'a> {
             r2_initial: self.params.initial_radius * self.params.initial_radius,
             ray_epsilon: self.ray_epsilon(),
             flags,
-            _pad0: 0,
+            rest_at,
         }
     }
 

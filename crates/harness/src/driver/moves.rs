@@ -91,6 +91,9 @@ pub(super) enum Compensation {
     Difference {
         /// Store only deposits of paths that crossed a mover's box (local mode).
         changed_only: bool,
+        /// Squared radius the passes are gathered within at least (local mode: the initial
+        /// radius; 0: each slot's own).
+        r2_floor: f32,
     },
 }
 
@@ -132,7 +135,8 @@ impl Renderer<'_> {
                 return Ok(report);
             }
         };
-        if mode == MoveMode::Local {
+        self.focus = mode == MoveMode::Local;
+        if self.focus {
             return self.move_locally(next, report, start);
         }
         if let Compensation::Region { region, .. } = &plan {
@@ -228,6 +232,7 @@ impl Renderer<'_> {
             MoveMode::Difference => {
                 return Ok(Compensation::Difference {
                     changed_only: false,
+                    r2_floor: 0.0,
                 });
             }
             MoveMode::Thesis => region_mode::POINT,
@@ -278,7 +283,10 @@ impl Renderer<'_> {
                     self.gather(kind | flag, 0.0, total)?;
                 }
             }
-            Compensation::Difference { changed_only } => {
+            Compensation::Difference {
+                changed_only,
+                r2_floor,
+            } => {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
                 let n = self.params.photons_per_pass;
@@ -291,6 +299,7 @@ impl Renderer<'_> {
                         } else {
                             0
                         },
+                        gather_r2_floor: *r2_floor,
                         ..self.photon_params(index, n, sign)
                     };
                     let t = Instant::now();

@@ -137,6 +137,10 @@ pub struct MoveOptions {
     /// of the ordinary photon count).
     #[arg(long, default_value_t = 8)]
     pub difference_passes: u32,
+    /// Local mode gathers its correction within at least this many initial radii (0: each
+    /// slot's own radius).
+    #[arg(long, default_value_t = 2.0)]
+    pub correction_radii: f32,
 }
 
 impl MoveOptions {
@@ -147,6 +151,7 @@ impl MoveOptions {
             region_photons: self.region_photons,
             cone_deg: self.cone_deg,
             difference_passes: self.difference_passes,
+            correction_radii: self.correction_radii,
             ..MoveParams::default()
         };
         p.validate("command line")?;
@@ -273,6 +278,7 @@ mod tests {
         "--region-photons",
         "--cone-deg",
         "--difference-passes",
+        "--correction-radii",
     ];
 
     /// Values at the edges of what the options' types hold, and past them.
