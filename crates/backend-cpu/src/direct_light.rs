@@ -18,11 +18,23 @@ use rayon::prelude::*;
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// Stratified pairs of each sample: the point on the light, the cosine direction, and the
-/// light's choice (first number). Sample `s` of iteration `k` is point `k * samples + s` of
-/// the slot's sequences, so a slot's samples over all iterations are stratified together.
+/// light's choice (first number). Sample `s` of the slot's iteration `k` is point
+/// `k * samples + s` of the slot's sequences, so a slot's samples over all its iterations
+/// are stratified together, whichever iterations it sat out or started over at ([`sequence_start`]).
 const PAIR_LIGHT_POINT: u32 = 0;
 const PAIR_DIRECTION: u32 = 1;
 const PAIR_LIGHT_CHOICE: u32 = 2;
+
+/// Where this pass's samples start in the slot's sequences: at the slot's own iteration count
+/// when the pass adds to its sum (a slot that rested or was reset continues its own sequence
+/// without gaps, which would clump its samples), at the pass's key otherwise.
+pub fn sequence_start(params: &DirectLightParams, hp: &HitPoint) -> u32 {
+    if params.accumulate == direct_accumulate::ADD {
+        hp.iterations
+    } else {
+        params.iteration
+    }
+}
 
 /// Rays per sample: the shadow ray and the cosine ray.
 pub const RAYS_PER_SAMPLE: u32 = 2;
@@ -116,7 +128,7 @@ fn estimate_irradiance(
     let mut sum = Vec3::ZERO;
     let mut near = false;
     for s in 0..params.samples {
-        let index = params.iteration * params.samples + s;
+        let index = sequence_start(params, hp) * params.samples + s;
         let pair = |p| stratified_pair(params.seed, PassKind::DirectLight, slot, p, index);
         let (choice, _) = pair(PAIR_LIGHT_CHOICE);
         let li = sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice);

@@ -75,7 +75,13 @@ fn trace_eye_path(
     let (jx, jy) = if params.spp == 1 && params.flags & eye_flags::JITTER == 0 {
         (0.5, 0.5)
     } else {
-        let sample = params.iteration * params.spp + slot % params.spp;
+        // Kept slots continue their own sequence (see direct_light::sequence_start).
+        let start = if keep {
+            out.iterations
+        } else {
+            params.iteration
+        };
+        let sample = start * params.spp + slot % params.spp;
         stratified_pair(params.seed, PassKind::Eye, pixel, 0, sample)
     };
     let px = (pixel % camera.width) as f32 + jx;

@@ -20,11 +20,16 @@ const PAIR_DIRECTION: u32 = 1u;
 const PAIR_LIGHT_CHOICE: u32 = 2u;
 const RAYS_PER_SAMPLE: u32 = 2u;
 
+// backend-cpu's direct_light::sequence_start.
+fn sequence_start(hp: HitPoint) -> u32 {
+    return select(params.iteration, hp.iterations, params.accumulate == DIRECT_ADD);
+}
+
 fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
     let origin = hp.position + hp.normal * params.ray_epsilon;
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < params.samples; s++) {
-        let index = params.iteration * params.samples + s;
+        let index = sequence_start(hp) * params.samples + s;
         let choice = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_CHOICE, index);
         let light = lights[sample_light(choice.x)];
         let u = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_POINT, index);

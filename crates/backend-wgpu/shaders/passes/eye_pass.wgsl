@@ -49,7 +49,12 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     let key = StreamKey(params.seed, PASS_EYE, params.iteration, slot);
     var jitter = vec2<f32>(0.5);
     if params.spp != 1u || (params.flags & EYE_JITTER) != 0u {
-        let sample = params.iteration * params.spp + slot % params.spp;
+        // Kept slots continue their own sequence (backend-cpu's eye_pass.rs).
+        var start = params.iteration;
+        if (params.flags & EYE_KEEP_STATISTICS) != 0u {
+            start = hit_points[slot].iterations;
+        }
+        let sample = start * params.spp + slot % params.spp;
         jitter = stratified_pair(params.seed, PASS_EYE, pixel, 0u, sample);
     }
     let px = f32(pixel % camera.width) + jitter.x;

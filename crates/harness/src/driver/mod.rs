@@ -42,6 +42,14 @@ pub const RAY_EPSILON_RELATIVE: f32 = 1e-5;
 /// anything the gather resolves.
 pub const OFFSET_RADII: f32 = 1000.0;
 
+/// After a local move, one iteration in this many serves only the slots with the fewest
+/// iterations (the ones the move reset, until they catch up); the others serve every slot.
+/// Measured on cornell-box, 15 s of warm-up, pixel error 8 s after the move: 0.032 focusing
+/// every second iteration, 0.035 three in four, 0.044 every one, 0.035 none. A kept slot's
+/// correction weighs less with each iteration of its own; a reset slot converges faster with
+/// cheap iterations of its own.
+pub const FOCUS_PERIOD: u32 = 2;
+
 /// A progressive render on one backend, carried across moves.
 pub struct Renderer<'a> {
     backend: &'a mut dyn DynamicBackend,
@@ -233,10 +241,10 @@ impl<'a> Renderer<'a> {
         if self.params.estimator == Estimator::Sppm {
             flags |= eye_flags::JITTER;
         }
-        // After a local move the reset slots hold `steps_since_move` iterations: the slots
-        // that hold more rest until those catch up.
+        // After a local move the reset slots hold `steps_since_move` iterations: every other
+        // iteration, the slots that hold more rest, until those catch up.
         let rest_at = match self.focus {
-            true if keep => {
+            true if keep && self.steps_since_move.is_multiple_of(FOCUS_PERIOD) => {
                 flags |= eye_flags::FOCUS;
                 self.steps_since_move + 1
             }
