@@ -256,6 +256,9 @@ pub struct MoveParams {
     pub update_epsilon: f32,
     /// Difference passes per move (each one negative and one positive ordinary pass).
     pub difference_passes: u32,
+    /// Local mode: skip in pose B the difference paths that crossed no mover's box in pose A,
+    /// which would store nothing; off only to check that culling changes no statistic.
+    pub cull_uncrossed: bool,
 }
 
 impl MoveParams {
@@ -295,6 +298,7 @@ impl Default for MoveParams {
             max_recorded: 1024,
             update_epsilon: 1e-4,
             difference_passes: 8,
+            cull_uncrossed: true,
         }
     }
 }

@@ -16,7 +16,9 @@
 //!   of every photon path the move changed. A path is the same in both poses until it
 //!   crosses a box, so only deposits made after that are stored (in both poses): the
 //!   gathers cost in proportion to the light the object touches, and what would cancel
-//!   leaves no rounding behind. Every path is still traced in both poses.
+//!   leaves no rounding behind. Pose A records, one bit per path, whether the path crossed a
+//!   box at all; pose B traces only those that did, since the others would store nothing
+//!   there (`culled_share` in the report).
 //!
 //! A move to the same pose resets nothing, and its difference passes cancel.
 
@@ -106,7 +108,10 @@ impl Renderer<'_> {
         if changed {
             self.correct_direct(1.0)?;
         }
-        self.compensate(&LOCAL, gather_kind::REGION_POSITIVE)?;
+        let positive = self.compensate(&LOCAL, gather_kind::REGION_POSITIVE)?;
+        if positive.emitted > 0 {
+            report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
+        }
         self.difference_pass += self.moves.difference_passes;
         if self.moves.difference_passes > 0 {
             self.gather(gather_kind::REGION_APPLY, 0.0, 0.0)?;
