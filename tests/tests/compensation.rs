@@ -309,6 +309,15 @@ fn both_backends_agree_on_a_compensated_frame() {
             (wgpu_move.updated, wgpu_move.direct_corrected),
             "{mode:?}: different hit points reset"
         );
+        assert_eq!(
+            cpu_move.culled_share, wgpu_move.culled_share,
+            "{mode:?}: different difference paths culled"
+        );
+        assert_eq!(
+            cpu_move.culled_share.is_some(),
+            mode == MoveMode::Local,
+            "{mode:?}: {cpu_move:?}"
+        );
         let report = harness::diff::same_seed::compare(&cpu, &wgpu, &p, 5);
         println!(
             "{mode:?}: recorded {} vs {} paths\n{}",
@@ -522,4 +531,41 @@ fn local_mode_moves_several_objects_at_once() {
             (wgpu.updated, wgpu.direct_corrected)
         );
     }
+}
+
+/// Local mode's culling skips in pose B only the difference paths that store nothing there:
+/// after a move of the tall block the statistics are bit for bit those of the same move with
+/// every path traced in both poses.
+#[test]
+fn culling_leaves_a_local_move_bit_for_bit() {
+    let (scene, p) = cornell(64, 20_000);
+    let run = |cull_uncrossed: bool| {
+        let moves = MoveParams {
+            cull_uncrossed,
+            ..MoveParams::default()
+        };
+        let mut backend = CpuBackend::new();
+        let mut render = Renderer::start(&mut backend, scene.at_frame(0), &p, &moves).unwrap();
+        for _ in 0..4 {
+            render.iteration().unwrap();
+        }
+        let moved = render.move_to(scene.at_frame(1), MoveMode::Local).unwrap();
+        let slots = render.backend().read_hit_points().unwrap();
+        (moved, render.report().rays.photon, slots)
+    };
+    let (culled, culled_rays, with) = run(true);
+    let (traced, traced_rays, without) = run(false);
+    println!(
+        "culled share {:?}; photon rays {culled_rays} with culling, {traced_rays} without",
+        culled.culled_share
+    );
+    let share = culled.culled_share.unwrap();
+    assert!(share > 0.0 && share < 1.0, "{culled:?}");
+    assert_eq!(traced.culled_share, Some(0.0), "{traced:?}");
+    assert!(culled_rays < traced_rays);
+    assert_eq!(culled.changed_share, traced.changed_share);
+    assert!(
+        bytemuck::cast_slice::<_, u8>(&with) == bytemuck::cast_slice::<_, u8>(&without),
+        "culling changed a statistic"
+    );
 }

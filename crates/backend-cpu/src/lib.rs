@@ -25,7 +25,9 @@ use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
     ResolveParams,
 };
-use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, eye_flags, hit_flags};
+use ppm_core::layout::{
+    EmissionRegion, GuidedEmission, RecordedPath, eye_flags, hit_flags, photon_flags,
+};
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
@@ -35,6 +37,7 @@ use ppm_core::passes::{
 };
 use ppm_core::rng::PassKind;
 use rayon::prelude::*;
+use std::sync::atomic::AtomicU32;
 use trace::SceneData;
 
 /// The rayon backend. Runs on the current rayon pool: install it in a sized pool to choose the
@@ -55,6 +58,9 @@ pub struct CpuBackend {
     /// The photon map's grid: `Indexed` once built from the last pass's deposits (at the first
     /// gather after it, so a perturbation through [`CpuBackend::photons_mut`] reaches it).
     grid: PhotonIndex,
+    /// The crossed-path mask: one bit per path of the passes that record it, kept across
+    /// scene updates so that pose B reads what pose A wrote.
+    crossed: Vec<AtomicU32>,
 }
 
 /// Whether the current photons are indexed yet.
@@ -110,6 +116,22 @@ fn check_slots(pass: &'static str, hit_points: &[HitPoint]) -> Result<(), Backen
     }
 }
 
+/// Words of the crossed-path mask that `params`'s paths reach; refused when a bit index
+/// would not fit 32 bits (the GPU backend indexes the same bits).
+fn mask_words(params: &PhotonPassParams) -> Result<usize, BackendError> {
+    let bits = u64::from(params.mask_offset)
+        + u64::from(params.first_path)
+        + u64::from(params.photon_count);
+    if bits > 1 << 32 {
+        return Err(BackendError::Limit(format!(
+            "crossed-path mask: bit {bits} is past 2^32 (mask_offset {} + paths {})",
+            params.mask_offset,
+            u64::from(params.first_path) + u64::from(params.photon_count)
+        )));
+    }
+    Ok(bits.div_ceil(32) as usize)
+}
+
 /// The loaded scene, or the error for a pass called before `load_scene`.
 fn loaded<'a>(
     scene: &'a Option<(SceneData, GpuCamera)>,
@@ -143,6 +165,19 @@ impl SceneUpdate for CpuBackend {
 }
 
 impl CpuBackend {
+    /// Grows the crossed-path mask to hold the bits a pass that records it writes; the new
+    /// bits are set, so a pass that culls without its record traces every path.
+    fn fit_crossed_mask(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
+        if params.flags & photon_flags::RECORD_CROSSED == 0 {
+            return Ok(());
+        }
+        let words = mask_words(params)?;
+        if self.crossed.len() < words {
+            self.crossed.resize_with(words, || AtomicU32::new(u32::MAX));
+        }
+        Ok(())
+    }
+
     /// Files the deposits of the pass `params` as the current photon map.
     fn store(
         &mut self,
@@ -205,11 +240,13 @@ impl DirectLight for CpuBackend {
 
 impl PhotonPass for CpuBackend {
     fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        self.fit_crossed_mask(params)?;
         let (scene, _) = loaded(&self.scene, "photon")?;
         let emit = |key: &ppm_core::rng::StreamKey| {
             ordinary_emission(&scene.lights, &scene.materials, key)
         };
-        let deposits = photon_pass_main(params, scene, PassKind::Photon, &emit, false);
+        let deposits =
+            photon_pass_main(params, scene, PassKind::Photon, &emit, false, &self.crossed);
         self.store(params, deposits)
     }
 }
@@ -220,11 +257,13 @@ impl RegionPhotonPass for CpuBackend {
         params: &PhotonPassParams,
         region: &EmissionRegion,
     ) -> Result<PhotonStats, BackendError> {
+        self.fit_crossed_mask(params)?;
         let (scene, _) = loaded(&self.scene, "region photon")?;
         let emit = |key: &ppm_core::rng::StreamKey| {
             region_emission(&scene.lights, &scene.materials, region, key)
         };
-        let deposits = photon_pass_main(params, scene, PassKind::Region, &emit, true);
+        let deposits =
+            photon_pass_main(params, scene, PassKind::Region, &emit, true, &self.crossed);
         self.store(params, deposits)
     }
 }
@@ -236,11 +275,13 @@ impl GuidedPhotonPass for CpuBackend {
         guide: &GuidedEmission,
         paths: &[RecordedPath],
     ) -> Result<PhotonStats, BackendError> {
+        self.fit_crossed_mask(params)?;
         let (scene, _) = loaded(&self.scene, "guided photon")?;
         let emit = |key: &ppm_core::rng::StreamKey| {
             guided_emission(&scene.lights, &scene.materials, guide, paths, key)
         };
-        let deposits = photon_pass_main(params, scene, PassKind::Guided, &emit, false);
+        let deposits =
+            photon_pass_main(params, scene, PassKind::Guided, &emit, false, &self.crossed);
         self.store(params, deposits)
     }
 }

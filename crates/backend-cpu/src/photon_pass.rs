@@ -10,6 +10,7 @@ use ppm_core::passes::PhotonStats;
 use ppm_core::rng::{PassKind, StreamKey};
 use ppm_core::sampling::cosine_hemisphere;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Random dimensions: the emission's (see `ppm_core::emission`), then three per bounce.
 const DIM_BOUNCE: u32 = EMISSION_DIMS;
@@ -31,12 +32,15 @@ pub struct Deposits {
 /// Traces paths `first_path .. first_path + photon_count`, each starting where `emit` says;
 /// deposits come back in path order whatever the threads. `keep_weights` stores each
 /// deposit's path weight (region passes count `M` in ordinary-photon units with it).
+/// `crossed` is the crossed-path mask that [`photon_flags::RECORD_CROSSED`] writes and
+/// [`photon_flags::CULL_UNCROSSED`] reads; it must hold the bits a recording pass writes.
 pub fn photon_pass_main(
     params: &PhotonPassParams,
     scene: &SceneData,
     kind: PassKind,
     emit: &(dyn Fn(&StreamKey) -> Emission + Sync),
     keep_weights: bool,
+    crossed: &[AtomicU32],
 ) -> Deposits {
     // No light, no photon: the pass emits its count and deposits nothing.
     let chunks = if scene.lights.is_empty() {
@@ -44,35 +48,50 @@ pub fn photon_pass_main(
     } else {
         params.photon_count.div_ceil(CHUNK)
     };
-    let traced: Vec<(Vec<Photon>, Vec<f32>, u64)> = (0..chunks)
+    let record = params.flags & photon_flags::RECORD_CROSSED != 0;
+    let cull = params.flags & photon_flags::CULL_UNCROSSED != 0;
+    let traced: Vec<(Vec<Photon>, Vec<f32>, u64, u64)> = (0..chunks)
         .into_par_iter()
         .map(|c| {
-            let (mut deposits, mut weights, mut rays) = (Vec::new(), Vec::new(), 0);
+            let (mut deposits, mut weights, mut rays, mut culled) = (Vec::new(), Vec::new(), 0, 0);
             let end = ((c + 1) * CHUNK).min(params.photon_count);
             for local in c * CHUNK..end {
+                let path = params.first_path + local;
+                if cull && !mask_bit(crossed, params.mask_offset + path) {
+                    culled += 1;
+                    continue;
+                }
                 let key = StreamKey {
                     seed: params.seed,
                     kind,
                     pass_index: params.pass_index,
-                    path: params.first_path + local,
+                    path,
                 };
                 let emission = emit(&key);
-                if emission.weight <= 0.0 {
-                    continue;
-                }
                 let before = deposits.len();
-                rays += trace_photon(params, scene, &key, &emission, &mut deposits);
+                let path_crossed = if emission.weight > 0.0 {
+                    let (path_rays, path_crossed) =
+                        trace_photon(params, scene, &key, &emission, &mut deposits);
+                    rays += path_rays;
+                    path_crossed
+                } else {
+                    false
+                };
+                if record {
+                    set_mask_bit(crossed, params.mask_offset + path, path_crossed);
+                }
                 if keep_weights {
                     weights.resize(weights.len() + deposits.len() - before, emission.weight);
                 }
             }
-            (deposits, weights, rays)
+            (deposits, weights, rays, culled)
         })
         .collect();
-    let rays = traced.iter().map(|(_, _, r)| r).sum();
+    let rays = traced.iter().map(|t| t.2).sum();
+    let culled = traced.iter().map(|t| t.3).sum();
     let mut photons = Vec::new();
     let mut weights = Vec::new();
-    for (d, w, _) in traced {
+    for (d, w, _, _) in traced {
         photons.extend(d);
         weights.extend(w);
     }
@@ -80,6 +99,7 @@ pub fn photon_pass_main(
         emitted: u64::from(params.photon_count),
         deposited: photons.len() as u64,
         rays,
+        culled,
     };
     Deposits {
         photons,
@@ -88,25 +108,49 @@ pub fn photon_pass_main(
     }
 }
 
-/// Traces one photon path from `emission`, appending its deposits; returns the ray segments traced.
+/// Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),
+/// so a missing bit never culls.
+fn mask_bit(mask: &[AtomicU32], bit: u32) -> bool {
+    mask.get((bit / 32) as usize)
+        .is_none_or(|w| w.load(Ordering::Relaxed) & (1 << (bit % 32)) != 0)
+}
+
+/// Sets or clears bit `bit` of the crossed-path mask (atomically: neighbouring paths share
+/// the word, as on the GPU).
+fn set_mask_bit(mask: &[AtomicU32], bit: u32, value: bool) {
+    let word = &mask[(bit / 32) as usize];
+    let m = 1 << (bit % 32);
+    if value {
+        word.fetch_or(m, Ordering::Relaxed);
+    } else {
+        word.fetch_and(!m, Ordering::Relaxed);
+    }
+}
+
+/// Traces one photon path from `emission`, appending its deposits; returns the ray segments
+/// traced and whether the path crossed a mover's box (always true when no flag asks).
 fn trace_photon(
     params: &PhotonPassParams,
     scene: &SceneData,
     key: &StreamKey,
     emission: &Emission,
     out: &mut Vec<Photon>,
-) -> u64 {
+) -> (u64, bool) {
     let path = key.path;
     let mut dir = emission.direction;
     let mut origin = emission.origin + emission.normal * params.ray_epsilon;
     let mut power = emission.power * params.power_scale;
     let mut rays = 0;
-    // Whether the path has crossed a mover's box, when only such deposits are stored.
-    let mut changed = params.flags & photon_flags::CHANGED_ONLY == 0;
+    // Whether the path has crossed a mover's box so far; the boxes are tested only when a
+    // flag needs the answer (ordinary passes start it true and skip the test).
+    let tests_movers =
+        params.flags & (photon_flags::CHANGED_ONLY | photon_flags::RECORD_CROSSED) != 0;
+    let mut crossed = !tests_movers;
+    let stores_all = params.flags & photon_flags::CHANGED_ONLY == 0;
     for bounce in 0..params.max_depth {
         rays += 1;
         let hit = scene.closest_hit(origin, dir, f32::INFINITY);
-        changed = changed || scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t));
+        crossed = crossed || scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t));
         let Some(hit) = hit else {
             break;
         };
@@ -122,7 +166,8 @@ fn trace_photon(
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         match material.kind {
             material_kind::DIFFUSE => {
-                if changed && (bounce > 0 || params.first_hit == first_hit::DEPOSIT) {
+                if (stores_all || crossed) && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
+                {
                     out.push(Photon {
                         position: position.into(),
                         path,
@@ -152,5 +197,5 @@ fn trace_photon(
             }
         }
     }
-    rays
+    (rays, crossed)
 }

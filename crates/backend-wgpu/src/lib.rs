@@ -35,7 +35,7 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams, eye_flags,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams, eye_flags, photon_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
@@ -58,6 +58,8 @@ const COUNTER_RAYS: usize = 0;
 const COUNTER_ITEMS: usize = 1;
 const COUNTER_GATHERED: usize = 2;
 const COUNTER_FIRST_BAD: usize = 3;
+/// Photon passes count culled paths in the gathers' slot.
+const COUNTER_CULLED: usize = 2;
 const COUNTERS_RESET: [u32; 4] = [0, 0, 0, u32::MAX];
 
 /// Every pass's pipelines, compiled once per device.
@@ -101,6 +103,9 @@ pub struct WgpuBackend {
     last_pass_paths: u32,
     /// Cap on the bytes of one photon batch (see [`WgpuBackend::set_photon_buffer_limit`]).
     photon_buffer_limit: u64,
+    /// The crossed-path mask (`crossed` in photon_pass.wgsl): one bit per path of the passes
+    /// that record it, kept across scene updates so that pose B reads what pose A wrote.
+    crossed: wgpu::Buffer,
 }
 
 impl WgpuBackend {
@@ -121,6 +126,7 @@ impl WgpuBackend {
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
+        let crossed = buffers::storage_init(&ctx, "crossed", &[u32::MAX; 4]);
         Ok(Self {
             ctx,
             kernels,
@@ -137,6 +143,7 @@ impl WgpuBackend {
             batches: 0,
             last_pass_paths: 0,
             photon_buffer_limit: u64::MAX,
+            crossed,
         })
     }
 
@@ -352,6 +359,42 @@ impl WgpuBackend {
         Ok(self.deposits.as_ref().expect("allocated above"))
     }
 
+    /// Grows the crossed-path mask, keeping its bits and setting the new ones, to hold those
+    /// a pass that records it writes; refused, with the limit named, past the binding limit
+    /// or 2^32 bits.
+    fn fit_crossed_mask(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
+        if params.flags & photon_flags::RECORD_CROSSED == 0 {
+            return Ok(());
+        }
+        let bits = u64::from(params.mask_offset)
+            + u64::from(params.first_path)
+            + u64::from(params.photon_count);
+        if bits > 1 << 32 {
+            return Err(BackendError::Limit(format!(
+                "crossed-path mask: bit {bits} is past 2^32 (mask_offset {} + paths {})",
+                params.mask_offset,
+                u64::from(params.first_path) + u64::from(params.photon_count)
+            )));
+        }
+        let bytes = bits.div_ceil(32) * 4;
+        if self.crossed.size() >= bytes {
+            return Ok(());
+        }
+        let grown = storage_zeroed(&self.ctx, "crossed", bytes)?;
+        // Bits no pass recorded are set: a pass that culls without its record traces all.
+        let fresh = vec![0xff_u8; (grown.size() - self.crossed.size()) as usize];
+        self.ctx
+            .queue
+            .write_buffer(&grown, self.crossed.size(), &fresh);
+        let old = &self.crossed;
+        self.run("crossed-path mask growth", |encoder| {
+            encoder.copy_buffer_to_buffer(old, 0, &grown, 0, old.size());
+            Ok(())
+        })?;
+        self.crossed = grown;
+        Ok(())
+    }
+
     /// Traces a pass whose photons start as `emitter` says, in as few batches as the device's
     /// binding limit allows (one, unless the deposits would not fit one buffer), and
     /// accumulates each batch into the hit points' accumulators, so the gather that follows
@@ -362,6 +405,7 @@ impl WgpuBackend {
         emitter: &Emitter,
         paths: &[RecordedPath],
     ) -> Result<PhotonStats, BackendError> {
+        self.fit_crossed_mask(params)?;
         let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
         let max_deposits = (limit / size_of::<Photon>() as u64).clamp(1, u64::from(u32::MAX));
         // A deposit's rank, (path - first_path) * max_depth + bounce, must fit 32 bits.
@@ -422,6 +466,7 @@ impl WgpuBackend {
                 emitter: &emitter,
                 recorded: &recorded,
                 weights: &deposits.weights,
+                crossed: &self.crossed,
             };
             let traced = if lit {
                 self.run("photon trace", |encoder| {
@@ -488,6 +533,7 @@ impl WgpuBackend {
             })?;
             stats.deposited += u64::from(deposited);
             stats.rays += u64::from(traced[COUNTER_RAYS]);
+            stats.culled += u64::from(traced[COUNTER_CULLED]);
             start += launch.photon_count;
             batches += 1;
         }

@@ -131,6 +131,8 @@ pub struct PhotonTargets<'a> {
     pub recorded: &'a wgpu::Buffer,
     /// Path weight of each deposit.
     pub weights: &'a wgpu::Buffer,
+    /// The crossed-path mask (local mode's difference passes).
+    pub crossed: &'a wgpu::Buffer,
 }
 
 impl PhotonPassKernel {
@@ -139,7 +141,7 @@ impl PhotonPassKernel {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
             Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
-            ReadWrite, Read,
+            ReadWrite, Read, ReadWrite,
         ];
         let kernel = |entry, kind: u32| {
             Kernel::specialised(
@@ -183,6 +185,7 @@ impl PhotonPassKernel {
                 targets.recorded,
                 targets.weights,
                 &scene.movers,
+                targets.crossed,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);

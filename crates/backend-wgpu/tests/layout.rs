@@ -151,7 +151,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         power_scale,
         first_path,
         flags,
-        _pad0,
+        mask_offset,
         _pad1,
         gather_r2_floor
     });
@@ -256,6 +256,9 @@ fn shared_constants_agree() {
         ("EYE_KEEP_STATISTICS", eye_flags::KEEP_STATISTICS),
         ("EYE_JITTER", eye_flags::JITTER),
         ("EYE_FOCUS", eye_flags::FOCUS),
+        ("PHOTON_CHANGED_ONLY", photon_flags::CHANGED_ONLY),
+        ("PHOTON_RECORD_CROSSED", photon_flags::RECORD_CROSSED),
+        ("PHOTON_CULL_UNCROSSED", photon_flags::CULL_UNCROSSED),
         ("NO_MATERIAL", NO_MATERIAL),
         ("FIRST_HIT_SKIP", first_hit::SKIP),
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),

@@ -371,8 +371,10 @@ pub struct PhotonPassParams {
     pub first_path: u32,
     /// [`photon_flags`] bits.
     pub flags: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// Bit of path `p` in the crossed-path mask is `mask_offset + p` (with
+    /// [`photon_flags::RECORD_CROSSED`] or [`photon_flags::CULL_UNCROSSED`]): each of a move's
+    /// difference passes has its own slot, read in pose B where pose A wrote it.
+    pub mask_offset: u32,
     /// Padding.
     pub _pad1: u32,
     /// Squared radius within which every slot gathers this pass's photons at least: a slot
@@ -389,6 +391,13 @@ pub mod photon_flags {
     /// pose, so its deposits would cancel between the two poses; dropping them in both is
     /// exact, and the gathers then cost in proportion to the light the move touches.
     pub const CHANGED_ONLY: u32 = 1;
+    /// Write into the crossed-path mask, per path traced, whether it crossed a mover's box
+    /// anywhere, its last segment included (local mode's pose-A difference passes).
+    pub const RECORD_CROSSED: u32 = 2;
+    /// Skip the paths whose bit in the crossed-path mask is clear (pose B, with the mask pose
+    /// A recorded): such a path meets the same surfaces in both poses, so with
+    /// [`CHANGED_ONLY`] it would store nothing. A bit no pass recorded counts as set.
+    pub const CULL_UNCROSSED: u32 = 4;
 }
 
 /// Which photons a gather folds in, who gathers them, and with which update

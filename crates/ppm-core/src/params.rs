@@ -259,6 +259,9 @@ pub struct MoveParams {
     /// Local mode gathers its correction within at least this many initial radii (0: each
     /// slot's own radius). Wider discs trade the correction's noise for a blur of the change.
     pub correction_radii: f32,
+    /// Local mode: skip in pose B the difference paths that crossed no mover's box in pose A,
+    /// which would store nothing; off only to check that culling changes no statistic.
+    pub cull_uncrossed: bool,
 }
 
 impl MoveParams {
@@ -306,6 +309,7 @@ impl Default for MoveParams {
             update_epsilon: 1e-4,
             difference_passes: 8,
             correction_radii: 2.0,
+            cull_uncrossed: true,
         }
     }
 }

@@ -88,6 +88,19 @@ pub struct PhotonStats {
     pub deposited: u64,
     /// Ray segments traced.
     pub rays: u64,
+    /// Paths not traced because they would store nothing
+    /// ([`crate::layout::photon_flags::CULL_UNCROSSED`]); counted in `emitted` all the same.
+    pub culled: u64,
+}
+
+impl PhotonStats {
+    /// Adds another pass's counters.
+    pub fn add(&mut self, other: &PhotonStats) {
+        self.emitted += other.emitted;
+        self.deposited += other.deposited;
+        self.rays += other.rays;
+        self.culled += other.culled;
+    }
 }
 
 /// Counters of a gather pass.

@@ -8,6 +8,10 @@
 // and not written: the host sees the count, grows the buffer (or splits the pass into batches
 // of paths `first_path + i`, i < photon_count) and traces again. The `EMISSION` override picks
 // where photons start: ordinary, through the emitting region, or guided around recorded paths.
+//
+// Local mode's difference passes keep one bit per path in `crossed`: pose A records whether
+// each path crossed a mover's box (atomicOr/atomicAnd, so each path writes only its own bit
+// whatever the order), and pose B skips the paths that did not, which would store nothing.
 
 struct Emitter {
     kind: u32,
@@ -30,6 +34,7 @@ struct Emitter {
 @group(0) @binding(9) var<storage, read> recorded: array<RecordedPath>;
 @group(0) @binding(10) var<storage, read_write> weights: array<f32>;
 @group(0) @binding(11) var<storage, read> movers: array<GpuBounds>;
+@group(0) @binding(12) var<storage, read_write> crossed: array<atomic<u32>>;
 
 // The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
 // carry no region or guided code.
@@ -67,24 +72,55 @@ fn pass_kind() -> u32 {
     }
 }
 
-// Traces path `path`, appending its deposits. Returns the rays traced.
-fn trace_photon(path: u32) -> u32 {
+// What a path did: rays traced, and whether it crossed a mover's box (always true when no
+// flag asks).
+struct Traced {
+    rays: u32,
+    crossed: bool,
+}
+
+// Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),
+// so a missing bit never culls.
+fn mask_bit(bit: u32) -> bool {
+    let word = bit / 32u;
+    return word >= arrayLength(&crossed) || (atomicLoad(&crossed[word]) & (1u << (bit % 32u))) != 0u;
+}
+
+// Sets or clears bit `bit` of the crossed-path mask (the host sized it for the pass).
+fn set_mask_bit(bit: u32, value: bool) {
+    let word = bit / 32u;
+    let m = 1u << (bit % 32u);
+    if word >= arrayLength(&crossed) {
+        return;
+    }
+    if value {
+        atomicOr(&crossed[word], m);
+    } else {
+        atomicAnd(&crossed[word], ~m);
+    }
+}
+
+// Traces path `path`, appending its deposits.
+fn trace_photon(path: u32) -> Traced {
     let key = StreamKey(params.seed, pass_kind(), params.pass_index, path);
     let emission = emit(key);
     if emission.weight <= 0.0 {
-        return 0u;
+        return Traced(0u, false);
     }
     var dir = emission.direction;
     var origin = emission.origin + emission.normal * params.ray_epsilon;
     var power = emission.power * params.power_scale;
     var rays = 0u;
     let rank_base = (path - params.first_path) * params.max_depth;
-    // Whether the path has crossed a mover's box, when only such deposits are stored.
-    var changed = (params.flags & PHOTON_CHANGED_ONLY) == 0u;
+    // Whether the path has crossed a mover's box so far; the boxes are tested only when a
+    // flag needs the answer (ordinary passes start it true and skip the test).
+    let tests_movers = (params.flags & (PHOTON_CHANGED_ONLY | PHOTON_RECORD_CROSSED)) != 0u;
+    var crossed_box = !tests_movers;
+    let stores_all = (params.flags & PHOTON_CHANGED_ONLY) == 0u;
     for (var bounce = 0u; bounce < params.max_depth; bounce++) {
         rays++;
         let hit = closest_hit(origin, dir, T_MISS);
-        changed = changed || near_mover(origin, dir, hit.t);
+        crossed_box = crossed_box || near_mover(origin, dir, hit.t);
         if hit.triangle == 0xffffffffu {
             break;
         }
@@ -95,7 +131,7 @@ fn trace_photon(path: u32) -> u32 {
         let facing = select(-tri.normal, tri.normal, front);
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         if material.kind == MATERIAL_DIFFUSE {
-            if changed && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
+            if (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
                 let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
                 if slot < arrayLength(&photons) {
                     photons[slot] = Photon(position, path, power, oct_encode(facing));
@@ -120,7 +156,7 @@ fn trace_photon(path: u32) -> u32 {
             origin = position + side * params.ray_epsilon;
         }
     }
-    return rays;
+    return Traced(rays, crossed_box);
 }
 
 @compute @workgroup_size(64)
@@ -129,5 +165,14 @@ fn photon_trace_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if local >= params.photon_count {
         return;
     }
-    atomicAdd(&counters[COUNTER_RAYS], trace_photon(params.first_path + local));
+    let path = params.first_path + local;
+    if (params.flags & PHOTON_CULL_UNCROSSED) != 0u && !mask_bit(params.mask_offset + path) {
+        atomicAdd(&counters[COUNTER_CULLED], 1u);
+        return;
+    }
+    let traced = trace_photon(path);
+    if (params.flags & PHOTON_RECORD_CROSSED) != 0u {
+        set_mask_bit(params.mask_offset + path, traced.crossed);
+    }
+    atomicAdd(&counters[COUNTER_RAYS], traced.rays);
 }

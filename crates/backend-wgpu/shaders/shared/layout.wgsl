@@ -23,6 +23,8 @@ const COUNTER_RAYS: u32 = 0u;
 const COUNTER_ITEMS: u32 = 1u;
 const COUNTER_GATHERED: u32 = 2u;
 const COUNTER_FIRST_BAD: u32 = 3u;
+// Photon passes count the paths they cull in the gathers' slot.
+const COUNTER_CULLED: u32 = 2u;
 
 struct HitPoint {
     position: vec3<f32>,
@@ -136,13 +138,15 @@ struct PhotonPassParams {
     power_scale: f32,
     first_path: u32,
     flags: u32,
-    _pad0: u32,
+    mask_offset: u32,
     _pad1: u32,
     gather_r2_floor: f32,
 }
 
 // PhotonPassParams::flags (ppm_core::layout::photon_flags).
 const PHOTON_CHANGED_ONLY: u32 = 1u;
+const PHOTON_RECORD_CROSSED: u32 = 2u;
+const PHOTON_CULL_UNCROSSED: u32 = 4u;
 
 struct GatherParams {
     alpha: f32,

@@ -16,14 +16,17 @@
 //!   of every photon path the move changed. A path is the same in both poses until it
 //!   crosses a box, so only deposits made after that are stored (in both poses): the
 //!   gathers cost in proportion to the light the object touches, and what would cancel
-//!   leaves no rounding behind. Every path is still traced in both poses. The correction is
-//!   gathered within a disc wider than a converged slot's ([`MoveParams::correction_radii`]),
-//!   and added to the flux alone: it brings no new photons to shrink the radius with.
+//!   leaves no rounding behind. Pose A records, one bit per path, whether the path crossed a
+//!   box at all; pose B traces only those that did, since the others would store nothing
+//!   there (`culled_share` in the report). The correction is gathered within a disc wider
+//!   than a converged slot's ([`MoveParams::correction_radii`]), and added to the flux
+//!   alone: it brings no new photons to shrink the radius with.
 //!
-//! Then iterations serve the slots with the fewest iterations first: a slot whose direct sum
-//! holds more iterations than the slots the move reset rests (`hit_flags::RESTING`) until
-//! they catch up. Kept slots are already converged; an iteration of the reset slots alone
-//! costs its photon pass and a fraction of the eye, direct-light and gather work.
+//! Then every second iteration ([`FOCUS_PERIOD`](super::FOCUS_PERIOD)) serves only the slots
+//! with the fewest iterations: a slot whose direct sum holds more iterations than the slots
+//! the move reset rests (`hit_flags::RESTING`), until they catch up. Kept slots are nearly
+//! converged; an iteration of the reset slots alone costs its photon pass and a fraction of
+//! the eye, direct-light and gather work.
 //!
 //! A move to the same pose resets nothing, and its difference passes cancel.
 //!
@@ -126,7 +129,10 @@ impl Renderer<'_> {
         if changed {
             self.correct_direct(1.0)?;
         }
-        self.compensate(&correction, gather_kind::REGION_POSITIVE)?;
+        let positive = self.compensate(&correction, gather_kind::REGION_POSITIVE)?;
+        if positive.emitted > 0 {
+            report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
+        }
         self.difference_pass += self.moves.difference_passes;
         if self.moves.difference_passes > 0 {
             self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;

@@ -72,6 +72,9 @@ pub struct MoveReport {
     /// Local mode: the share of the difference passes' deposits stored (their paths crossed
     /// a mover's box), against what ordinary passes deposit per photon; the rest were culled.
     pub changed_share: Option<f64>,
+    /// Local mode: the share of pose B's difference paths not traced, since they crossed no
+    /// mover's box in pose A and would store nothing.
+    pub culled_share: Option<f64>,
     /// Testing-photon paths recorded for guiding.
     pub recorded_paths: usize,
     /// Why the move restarted instead of compensating, if it did.
@@ -108,6 +111,7 @@ impl Renderer<'_> {
             kept: 0,
             direct_corrected: 0,
             changed_share: None,
+            culled_share: None,
             recorded_paths: 0,
             restarted: None,
             seconds: 0.0,
@@ -252,12 +256,13 @@ impl Renderer<'_> {
 
     /// All negative (pose A) or all positive (pose B) passes of a move, gathered as `kind`.
     /// Together the passes of one sign remove (or re-add) their share once: each gathers with
-    /// the photons of all of them as its `N_c`.
+    /// the photons of all of them as its `N_c`. Returns the passes' summed counters.
     pub(super) fn compensate(
         &mut self,
         plan: &Compensation,
         kind: u32,
-    ) -> Result<(), BackendError> {
+    ) -> Result<PhotonStats, BackendError> {
+        let mut total_stats = PhotonStats::default();
         let sign = if kind == gather_kind::REGION_NEGATIVE {
             -1.0
         } else {
@@ -279,6 +284,7 @@ impl Renderer<'_> {
                     let t = Instant::now();
                     let stats = self.backend.region_photon_pass(&params, region)?;
                     self.count_photons(&stats, t);
+                    total_stats.add(&stats);
                     self.count_compensation(kind, &stats);
                     self.gather(kind | flag, 0.0, total)?;
                 }
@@ -291,26 +297,44 @@ impl Renderer<'_> {
                 // weight 1); deferred, so only the paths the move changed leave a net change.
                 let n = self.params.photons_per_pass;
                 let total = (n * self.moves.difference_passes) as f32;
+                // Storing only what follows a box crossing, pose A also records which paths
+                // crossed one, each pass in its own slot of the mask, and pose B traces only
+                // those: the others would store nothing.
+                let mut flags = 0;
+                if *changed_only {
+                    flags |= photon_flags::CHANGED_ONLY;
+                    if self.moves.cull_uncrossed {
+                        flags |= if kind == gather_kind::REGION_NEGATIVE {
+                            photon_flags::RECORD_CROSSED
+                        } else {
+                            photon_flags::CULL_UNCROSSED
+                        };
+                    }
+                }
                 for k in 0..self.moves.difference_passes {
                     let index = DIFFERENCE_PASS_BASE + self.difference_pass + k;
+                    let mask_offset = k.checked_mul(n).ok_or_else(|| {
+                        BackendError::Limit(format!(
+                            "crossed-path mask: {} difference passes of {n} photons exceed 2^32 bits",
+                            self.moves.difference_passes
+                        ))
+                    })?;
                     let params = PhotonPassParams {
-                        flags: if *changed_only {
-                            photon_flags::CHANGED_ONLY
-                        } else {
-                            0
-                        },
+                        flags,
+                        mask_offset,
                         gather_r2_floor: *r2_floor,
                         ..self.photon_params(index, n, sign)
                     };
                     let t = Instant::now();
                     let stats = self.backend.photon_pass(&params)?;
                     self.count_photons(&stats, t);
+                    total_stats.add(&stats);
                     self.count_compensation(kind, &stats);
                     self.gather(kind | gather_kind::DEFERRED, 0.0, total)?;
                 }
             }
         }
-        Ok(())
+        Ok(total_stats)
     }
 
     fn count_compensation(&mut self, kind: u32, stats: &PhotonStats) {
