@@ -23,15 +23,13 @@ pub struct PhotonMap<'a> {
 }
 
 /// Whether a slot belongs to the set a pass of `kind` serves (ALGORITHM.md 3, "Who gathers
-/// what"), visible point or not: such a slot counts the pass's photons in `emitted`. A
-/// resting slot sits out its iteration's photons.
+/// what"), visible point or not: such a slot counts the pass's photons in `emitted`.
 pub fn serves(hp: &HitPoint, kind: u32) -> bool {
     let updated = hp.flags & hit_flags::UPDATED != 0;
-    let resting = hp.flags & hit_flags::RESTING != 0;
     match kind & gather_kind::KIND_MASK {
         gather_kind::REGION_NEGATIVE | gather_kind::REGION_POSITIVE => !updated,
-        gather_kind::GUIDED => updated && !resting,
-        _ => !resting,
+        gather_kind::GUIDED => updated,
+        _ => true,
     }
 }
 

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use ppm_core::grid::{RADIUS_BINS, bucket_count, cell_key, cell_of, cell_size, radius_bin};
-use ppm_core::layout::{GridParams, GridPhoton, HitPoint, Photon, hit_flags};
+use ppm_core::layout::{GridParams, GridPhoton, HitPoint, Photon};
 use rayon::prelude::*;
 
 /// Photons filed by bucket.
@@ -20,12 +20,12 @@ pub struct PhotonGrid {
     pub order: Vec<u32>,
 }
 
-/// Builds the grid over `photons` for the gather radii of `hit_points`' visible points (not
-/// resting, at least `sqrt(r2_floor)`).
+/// Builds the grid over `photons` for the gather radii of `hit_points`' visible points (at
+/// least `sqrt(r2_floor)`).
 pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint], r2_floor: f32) -> PhotonGrid {
     let histogram = hit_points
         .par_iter()
-        .filter(|h| h.is_valid() && h.flags & hit_flags::RESTING == 0)
+        .filter(|h| h.is_valid())
         .fold(
             || vec![0u32; RADIUS_BINS as usize],
             |mut h, hp| {

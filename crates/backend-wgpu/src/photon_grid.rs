@@ -66,7 +66,7 @@ impl PhotonGridKernels {
 
     /// Records the grid build over `photons` (`count` deposits, ranked in path order by
     /// `ranks`) into `buffers`, its cells sized to the gather radii of the hit points' visible
-    /// points (at least `sqrt(r2_floor)`, resting slots left out); returns the map whose buffers the commands fill.
+    /// points (at least `sqrt(r2_floor)`); returns the map whose buffers the commands fill.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,

@@ -32,9 +32,10 @@ pub mod hit_flags {
     /// Some shadow or cosine ray of the slot's direct sum crossed those bounds: a move may
     /// change its direct light (local mode restarts the sum).
     pub const SHADOW_NEAR_MOVER: u32 = 16;
-    /// The slot sits out this iteration (an eye pass with [`eye_flags::FOCUS`](super::eye_flags::FOCUS)
-    /// found it ahead of the slots a move reset): it keeps its last visible point and every
-    /// statistic, and no direct light, photon count or gather reaches it.
+    /// The slot sits out this iteration's eye pass and direct light (an eye pass with
+    /// [`eye_flags::FOCUS`](super::eye_flags::FOCUS) found it ahead of the slots a move reset):
+    /// its last visible point stays and gathers the iteration's photons, which cost nothing
+    /// more to trace.
     pub const RESTING: u32 = 32;
     /// The flags a slot keeps from iteration to iteration (`sppm`).
     pub const KEPT: u32 = UPDATED | EYE_NEAR_MOVER | SHADOW_NEAR_MOVER;

@@ -115,20 +115,18 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);
 }
 
-// Whether a slot belongs to the set the pass kind serves, visible point or not; a resting
-// slot sits out its iteration's photons.
+// Whether a slot belongs to the set the pass kind serves, visible point or not.
 fn serves(hp: HitPoint, kind: u32) -> bool {
     let updated = (hp.flags & HIT_UPDATED) != 0u;
-    let resting = (hp.flags & HIT_RESTING) != 0u;
     switch kind & GATHER_KIND_MASK {
         case GATHER_REGION_NEGATIVE, GATHER_REGION_POSITIVE: {
             return !updated;
         }
         case GATHER_GUIDED: {
-            return updated && !resting;
+            return updated;
         }
         default: {
-            return !resting;
+            return true;
         }
     }
 }

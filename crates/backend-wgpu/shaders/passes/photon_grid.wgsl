@@ -38,7 +38,7 @@ fn grid_histogram_main(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(wo
     }
     workgroupBarrier();
     for (var i = wid.x * 64u + lid.x; i < params.hit_point_count; i += HISTOGRAM_GROUPS * 64u) {
-        if (hit_points[i].flags & (HIT_VALID | HIT_RESTING)) == HIT_VALID {
+        if (hit_points[i].flags & HIT_VALID) != 0u {
             atomicAdd(&local_histogram[radius_bin(max(hit_points[i].r2, params.r2_floor))], 1u);
         }
     }

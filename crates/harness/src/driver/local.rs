@@ -22,11 +22,10 @@
 //!   than a converged slot's ([`MoveParams::correction_radii`]), and added to the flux
 //!   alone: it brings no new photons to shrink the radius with.
 //!
-//! Then every second iteration ([`FOCUS_PERIOD`](super::FOCUS_PERIOD)) serves only the slots
-//! with the fewest iterations: a slot whose direct sum holds more iterations than the slots
-//! the move reset rests (`hit_flags::RESTING`), until they catch up. Kept slots are nearly
-//! converged; an iteration of the reset slots alone costs its photon pass and a fraction of
-//! the eye, direct-light and gather work.
+//! Then every second iteration ([`FOCUS_PERIOD`](super::FOCUS_PERIOD)) traces eye paths and
+//! direct light only for the slots with the fewest iterations: a slot whose direct sum holds
+//! more iterations than the slots the move reset rests (`hit_flags::RESTING`), until they
+//! catch up. Its last visible point still gathers the iteration's photons, traced anyway.
 //!
 //! A move to the same pose resets nothing, and its difference passes cancel.
 //!
