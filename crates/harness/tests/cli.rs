@@ -30,6 +30,28 @@ fn scenes_lists_the_canonical_scene() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("cornell-box"));
 }
 
+/// A reader that closes stdout early (`ppm ... | head -0`) costs the render nothing: it
+/// finishes, writes its files and exits cleanly, without a panic.
+#[test]
+fn a_closed_stdout_does_not_stop_a_render() {
+    let dir = scratch("closed-stdout");
+    let exr = dir.join("cb.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ppm"))
+        .args(["render", "cornell-box", "--width", "16", "--height", "16"])
+        .args(["--passes", "2", "--photons-per-pass", "2000", "-o"])
+        .arg(&exr)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("ppm runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+    assert!(exr.is_file() && dir.join("cb.json").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn render_writes_exr_png_and_a_report() {
     let dir = scratch("render");

@@ -1,6 +1,23 @@
 //! `ppm`: render the canonical scenes, measure them against the truth, move them, and compare
 //! backends.
 
+/// Report lines on stdout. A reader that stops early (`ppm ... | head`) closes it; a render
+/// must not panic there, before or after writing its files: what it cannot show is dropped.
+macro_rules! println {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// [`println!`] without the newline.
+macro_rules! print {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod diff;
 mod export;
 mod interrupt;
