@@ -276,8 +276,9 @@ pub mod eye_flags {
     /// without it one sample per pixel goes through the pixel's centre.
     pub const JITTER: u32 = 2;
     /// With `KEEP_STATISTICS`: slots whose direct sum already holds
-    /// [`EyePassParams::rest_at`] iterations rest (local mode, after a move: the work of an
-    /// iteration goes to the slots the move reset until they catch up with the kept ones).
+    /// [`EyePassParams::rest_at`] iterations rest, skipping the eye path and direct light
+    /// (local mode, after a move: that work goes to the slots the move reset until they catch
+    /// up with the kept ones).
     pub const FOCUS: u32 = 4;
 }
 
