@@ -44,6 +44,18 @@ fn warmed<'a>(
     render
 }
 
+/// The error against `truth` now, then after each of `rounds` rounds of `iterations`.
+fn errors_every(render: &mut Renderer, truth: &Image, rounds: u32, iterations: u32) -> Vec<f64> {
+    let mut errors = vec![relative_rmse(&render.resolve().unwrap(), truth)];
+    for _ in 0..rounds {
+        for _ in 0..iterations {
+            render.iteration().unwrap();
+        }
+        errors.push(relative_rmse(&render.resolve().unwrap(), truth));
+    }
+    errors
+}
+
 fn mean_luminance(image: &Image) -> f64 {
     image
         .pixels
@@ -241,13 +253,7 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
                 moved.updated > 0 && guided && moved.restarted.is_none(),
                 "{moved:?}"
             );
-            let mut errors = vec![relative_rmse(&render.resolve().unwrap(), &truth)];
-            for _ in 0..3 {
-                for _ in 0..8 {
-                    render.iteration().unwrap();
-                }
-                errors.push(relative_rmse(&render.resolve().unwrap(), &truth));
-            }
+            let errors = errors_every(&mut render, &truth, 3, 8);
             println!(
                 "{estimator:?} {mode:?}: stale frame 0: {stale:.4}; after the move, every 8 iterations: {errors:?}"
             );
@@ -511,13 +517,7 @@ fn local_mode_moves_several_objects_at_once() {
                 "{name}: pixel {i} is newly covered but was kept"
             );
         }
-        let mut errors = vec![relative_rmse(&render.resolve().unwrap(), &truth)];
-        for _ in 0..2 {
-            for _ in 0..12 {
-                render.iteration().unwrap();
-            }
-            errors.push(relative_rmse(&render.resolve().unwrap(), &truth));
-        }
+        let errors = errors_every(&mut render, &truth, 2, 12);
         println!("{name}: {moved:?}; error every 12 iterations {errors:?}");
         assert!(
             errors[2] < errors[1] && errors[1] < errors[0],

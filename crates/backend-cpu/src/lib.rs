@@ -34,6 +34,7 @@ use ppm_core::passes::{
 };
 use ppm_core::passes::{
     GuidedPhotonPass, HitPointUpdate, LandingPaths, RegionPhotonPass, SceneUpdate, UpdateStats,
+    crossed_mask_words,
 };
 use ppm_core::rng::PassKind;
 use rayon::prelude::*;
@@ -116,22 +117,6 @@ fn check_slots(pass: &'static str, hit_points: &[HitPoint]) -> Result<(), Backen
     }
 }
 
-/// Words of the crossed-path mask that `params`'s paths reach; refused when a bit index
-/// would not fit 32 bits (the GPU backend indexes the same bits).
-fn mask_words(params: &PhotonPassParams) -> Result<usize, BackendError> {
-    let bits = u64::from(params.mask_offset)
-        + u64::from(params.first_path)
-        + u64::from(params.photon_count);
-    if bits > 1 << 32 {
-        return Err(BackendError::Limit(format!(
-            "crossed-path mask: bit {bits} is past 2^32 (mask_offset {} + paths {})",
-            params.mask_offset,
-            u64::from(params.first_path) + u64::from(params.photon_count)
-        )));
-    }
-    Ok(bits.div_ceil(32) as usize)
-}
-
 /// The loaded scene, or the error for a pass called before `load_scene`.
 fn loaded<'a>(
     scene: &'a Option<(SceneData, GpuCamera)>,
@@ -171,7 +156,7 @@ impl CpuBackend {
         if params.flags & photon_flags::RECORD_CROSSED == 0 {
             return Ok(());
         }
-        let words = mask_words(params)?;
+        let words = crossed_mask_words(params)? as usize;
         if self.crossed.len() < words {
             self.crossed.resize_with(words, || AtomicU32::new(u32::MAX));
         }

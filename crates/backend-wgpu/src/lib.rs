@@ -40,7 +40,7 @@ use ppm_core::layout::{
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     GuidedPhotonPass, HitPointUpdate, LandingPaths, PhotonPass, PhotonStats, RandomSource,
-    ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats,
+    ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats, crossed_mask_words,
 };
 use scan::Scan;
 
@@ -366,17 +366,7 @@ impl WgpuBackend {
         if params.flags & photon_flags::RECORD_CROSSED == 0 {
             return Ok(());
         }
-        let bits = u64::from(params.mask_offset)
-            + u64::from(params.first_path)
-            + u64::from(params.photon_count);
-        if bits > 1 << 32 {
-            return Err(BackendError::Limit(format!(
-                "crossed-path mask: bit {bits} is past 2^32 (mask_offset {} + paths {})",
-                params.mask_offset,
-                u64::from(params.first_path) + u64::from(params.photon_count)
-            )));
-        }
-        let bytes = bits.div_ceil(32) * 4;
+        let bytes = crossed_mask_words(params)? * 4;
         if self.crossed.size() >= bytes {
             return Ok(());
         }

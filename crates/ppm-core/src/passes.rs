@@ -79,6 +79,21 @@ pub struct DirectStats {
     pub rays: u64,
 }
 
+/// 32-bit words of the crossed-path mask that `params`'s paths reach (bit `mask_offset +
+/// path`, [`crate::layout::photon_flags::RECORD_CROSSED`]); refused when a bit index would not
+/// fit 32 bits, as the GPU indexes them.
+pub fn crossed_mask_words(params: &PhotonPassParams) -> Result<u64, BackendError> {
+    let paths = u64::from(params.first_path) + u64::from(params.photon_count);
+    let bits = u64::from(params.mask_offset) + paths;
+    if bits > 1 << 32 {
+        return Err(BackendError::Limit(format!(
+            "crossed-path mask: bit {bits} is past 2^32 (mask_offset {} + paths {paths})",
+            params.mask_offset
+        )));
+    }
+    Ok(bits.div_ceil(32))
+}
+
 /// Counters of a photon pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct PhotonStats {
