@@ -216,10 +216,11 @@ pub fn run_mode(
 
 /// The error a perfect compensation that costs nothing would reach, over time: its kept
 /// pixels as good as a from-scratch render of frame 1 for the warm-up time (every change
-/// removed, nothing stale, no compensation noise), its reset pixels as restart's. Unless
-/// guiding makes the reset pixels converge faster than restart's, no compensating mode gets
-/// below this curve: it says what the method can win on the scene at all. `None` when `stop`
-/// ended the render early (its kept pixels would be judged on less than the warm-up).
+/// removed, nothing stale, no compensation noise), its reset pixels as restart's. A mode
+/// gets below it only where its reset pixels converge faster than restart's (guiding, or
+/// local mode's iterations spent on them) or its kept pixels keep converging past the
+/// warm-up: it says what keeping the converged light can win on the scene. `None` when
+/// `stop` ended the render early (its kept pixels would be judged on less than the warm-up).
 pub fn perfect_compensation(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
