@@ -572,3 +572,42 @@ fn culling_leaves_a_local_move_bit_for_bit() {
         "culling changed a statistic"
     );
 }
+
+/// With independent seeds, the CPU and wgpu backends' locally compensated frames are samples
+/// of the same estimator: no tile's radiance, radius, count or direct light differs
+/// significantly (Welch's t over runs, Holm-corrected at 1%).
+#[test]
+fn both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds() {
+    use harness::diff::independent;
+    const RUNS: u32 = 6;
+    let Some(mut gpu) = backend_wgpu::backend_or_skip(
+        "both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds",
+    ) else {
+        return;
+    };
+    let (scene, p) = cornell(32, 10_000);
+    let runs = |backend: &mut dyn ppm_core::passes::DynamicBackend, first_seed: u32| {
+        (first_seed..first_seed + RUNS)
+            .map(|seed| {
+                let p = RenderParams { seed, ..p.clone() };
+                let moves = MoveParams::default();
+                let mut render = Renderer::start(backend, scene.at_frame(0), &p, &moves).unwrap();
+                for _ in 0..4 {
+                    render.iteration().unwrap();
+                }
+                render.move_to(scene.at_frame(1), MoveMode::Local).unwrap();
+                for _ in 0..4 {
+                    render.iteration().unwrap();
+                }
+                let image = render.resolve().unwrap();
+                let slots = render.backend().read_hit_points().unwrap();
+                independent::tile_means(&image, &slots, &p)
+            })
+            .collect::<Vec<_>>()
+    };
+    let cpu = runs(&mut CpuBackend::new(), 0);
+    let wgpu = runs(&mut gpu, 1000);
+    let report = independent::compare(("cpu", &cpu), ("wgpu", &wgpu), &p, 3);
+    println!("{}", independent::format(&report));
+    assert!(report.agree, "{}", independent::format(&report));
+}
