@@ -127,8 +127,9 @@ fn estimate_irradiance(
     let origin = x + n * params.ray_epsilon;
     let mut sum = Vec3::ZERO;
     let mut near = false;
+    let start = sequence_start(params, hp) * params.samples;
     for s in 0..params.samples {
-        let index = sequence_start(params, hp) * params.samples + s;
+        let index = start + s;
         let pair = |p| stratified_pair(params.seed, PassKind::DirectLight, slot, p, index);
         let (choice, _) = pair(PAIR_LIGHT_CHOICE);
         let li = sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice);

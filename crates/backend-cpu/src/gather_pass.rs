@@ -75,8 +75,12 @@ pub fn gather_pass_main(
             }
             let (found, weight_sum, flux) = photons_in_disc(hp, map);
             // Photons found in a floor disc wider than the slot's stand for their density
-            // over the slot's own disc.
-            let shrink = hp.r2 / gather_r2(hp, map);
+            // over the slot's own disc (a slot's own disc, even of radius 0, scales nothing).
+            let shrink = if map.r2_floor > hp.r2 {
+                hp.r2 / map.r2_floor
+            } else {
+                1.0
+            };
             let (weight_sum, flux) = (weight_sum * shrink, flux * shrink);
             // Region photons stand for `emitted / N_c` ordinary photons each, times their
             // path weight (ALGORITHM.md 3, "Power of region photons").
@@ -218,15 +222,15 @@ fn apply_pending(
             if !hp.is_valid() || (m == 0.0 && t0 == 0.0 && t1 == 0.0 && t2 == 0.0) {
                 return;
             }
+            if add {
+                hp.tau = [hp.tau[0] + t0, hp.tau[1] + t1, hp.tau[2] + t2].map(|t| t.max(0.0));
+                return;
+            }
             let s = Statistics {
                 n: hp.n,
                 r2: hp.r2,
                 tau: hp.tau,
             };
-            if add {
-                hp.tau = [hp.tau[0] + t0, hp.tau[1] + t1, hp.tau[2] + t2].map(|t| t.max(0.0));
-                return;
-            }
             let s = if m >= 0.0 {
                 let s = ppm_update(s, m, [t0, t1, t2], alpha);
                 Statistics {

@@ -62,6 +62,12 @@ const COUNTER_FIRST_BAD: usize = 3;
 const COUNTER_CULLED: usize = 2;
 const COUNTERS_RESET: [u32; 4] = [0, 0, 0, u32::MAX];
 
+/// gather_pass.wgsl's `radii` uniform: the initial squared radius, and the photon pass's
+/// `gather_r2_floor` (read by the accumulation only).
+fn radii(ctx: &GpuContext, r2_initial: f32, r2_floor: f32) -> wgpu::Buffer {
+    buffers::uniform(ctx, "radii", &[r2_initial, r2_floor, 0.0, 0.0])
+}
+
 /// Every pass's pipelines, compiled once per device.
 struct Kernels {
     eye: EyePassKernel,
@@ -88,8 +94,8 @@ pub struct WgpuBackend {
     accumulated: Option<wgpu::Buffer>,
     /// Per hit point: deferred region photons (area mode).
     pending: Option<wgpu::Buffer>,
-    /// Uniform vec4 whose x is the initial squared radius of the last eye pass.
-    r2_initial: Option<(wgpu::Buffer, f32)>,
+    /// The initial squared radius of the last eye pass.
+    r2_initial: Option<f32>,
     /// Where photon passes append their deposits, kept from pass to pass.
     deposits: Option<DepositBuffers>,
     /// Deposits per path of the last photon pass: sizes the next pass's buffers.
@@ -177,9 +183,9 @@ impl WgpuBackend {
     fn gather_state(
         &self,
         pass: &'static str,
-    ) -> Result<(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer), BackendError> {
-        match (&self.accumulated, &self.pending, &self.r2_initial) {
-            (Some(a), Some(p), Some((r, _))) => Ok((a, p, r)),
+    ) -> Result<(&wgpu::Buffer, &wgpu::Buffer, f32), BackendError> {
+        match (&self.accumulated, &self.pending, self.r2_initial) {
+            (Some(a), Some(p), Some(r)) => Ok((a, p, r)),
             _ => Err(BackendError::OutOfOrder {
                 pass,
                 needs: "an eye pass",
@@ -307,10 +313,7 @@ impl EyePass for WgpuBackend {
         if !keep {
             self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
             self.pending = Some(storage_zeroed(&self.ctx, "pending", slots64 * 16)?);
-            self.r2_initial = Some((
-                buffers::uniform(&self.ctx, "radii", &[params.r2_initial, 0.0, 0.0, 0.0]),
-                params.r2_initial,
-            ));
+            self.r2_initial = Some(params.r2_initial);
         }
         self.map = None;
         self.check("eye", &counters)?;
@@ -421,13 +424,8 @@ impl WgpuBackend {
         let mut map = None;
         let mut batches = 0;
         let mut start = 0;
-        let (accumulated, _, _) = self.gather_state("photon")?;
-        let r2_initial = self.r2_initial.as_ref().map_or(0.0, |(_, r2)| *r2);
-        let radii = buffers::uniform(
-            &self.ctx,
-            "radii",
-            &[r2_initial, params.gather_r2_floor, 0.0, 0.0],
-        );
+        let (accumulated, _, r2_initial) = self.gather_state("photon")?;
+        let radii = radii(&self.ctx, r2_initial, params.gather_r2_floor);
         self.run("photon accumulator reset", |encoder| {
             encoder.clear_buffer(accumulated, 0, None);
             Ok(())
@@ -624,10 +622,7 @@ impl HitPointUpdate for WgpuBackend {
             Ok(())
         })?;
         let slots = *slots;
-        self.r2_initial = Some((
-            buffers::uniform(&self.ctx, "radii", &[params.r2_initial, 0.0, 0.0, 0.0]),
-            params.r2_initial,
-        ));
+        self.r2_initial = Some(params.r2_initial);
         self.check("hit-point update", &counters)?;
         let updated = u64::from(counters[COUNTER_ITEMS]);
         Ok(UpdateStats {
@@ -678,7 +673,8 @@ impl GatherPass for WgpuBackend {
             needs: "a photon pass",
         };
         let map = self.map.as_ref().ok_or(needs_photons)?;
-        let (accumulated, pending, radii) = self.gather_state("gather")?;
+        let (accumulated, pending, r2_initial) = self.gather_state("gather")?;
+        let radii = radii(&self.ctx, r2_initial, 0.0);
         let targets = Slots {
             hit_points,
             counters: &self.counters,
@@ -689,7 +685,7 @@ impl GatherPass for WgpuBackend {
             materials: &scene.materials,
             accumulated,
             pending,
-            radii,
+            radii: &radii,
         };
         let counters = self.run("gather", |encoder| {
             self.kernels

@@ -28,8 +28,9 @@ fn sequence_start(hp: HitPoint) -> u32 {
 fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
     let origin = hp.position + hp.normal * params.ray_epsilon;
     var sum = vec3<f32>(0.0);
+    let start = sequence_start(hp) * params.samples;
     for (var s = 0u; s < params.samples; s++) {
-        let index = sequence_start(hp) * params.samples + s;
+        let index = start + s;
         let choice = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_CHOICE, index);
         let light = lights[sample_light(choice.x)];
         let u = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_POINT, index);

@@ -108,8 +108,9 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         weight = f32(found.m);
     }
     // Photons found in a floor disc wider than the slot's stand for their density over the
-    // slot's own disc (as the CPU, weight and flux scaled, the count kept).
-    let shrink = hp.r2 / r2;
+    // slot's own disc (as the CPU, weight and flux scaled, the count kept; a slot's own disc,
+    // even of radius 0, scales nothing).
+    let shrink = select(1.0, hp.r2 / radii.y, radii.y > hp.r2);
     weight *= shrink;
     accumulated[2u * slot] += vec4<f32>(found.flux * shrink, f32(found.m));
     accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);

@@ -87,8 +87,7 @@ impl Renderer<'_> {
     /// fraction of the initial one: the few hundred thousand photons of a correction would
     /// reach it too sparsely, and their noise would stay in statistics built from millions
     /// (on cornell-box the kept pixels' error is 0.047 within one initial radius, 0.035
-    /// within two).
-    /// The wider disc trades that noise for a blur of the change.
+    /// within two). The wider disc trades that noise for a blur of the change.
     fn local_correction(&self) -> Compensation {
         Compensation::Difference {
             changed_only: true,

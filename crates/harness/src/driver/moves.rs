@@ -94,8 +94,8 @@ pub(super) enum Compensation {
     Difference {
         /// Store only deposits of paths that crossed a mover's box (local mode).
         changed_only: bool,
-        /// Squared radius the passes are gathered within at least (local mode: the initial
-        /// radius; 0: each slot's own).
+        /// Squared radius the passes are gathered within at least (local mode:
+        /// `correction_radii` initial radii; 0: each slot's own).
         r2_floor: f32,
     },
 }
