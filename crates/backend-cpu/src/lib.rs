@@ -11,12 +11,13 @@ mod gather_pass;
 mod hit_point_update;
 mod photon_grid;
 mod photon_pass;
+mod photon_search;
 mod resolve;
 pub mod trace;
 
-use gather_pass::{PhotonMap, for_photons_in_disc};
 use photon_grid::{PhotonGrid, build_photon_grid};
 use photon_pass::{Deposits, photon_pass_main};
+use photon_search::{PhotonMap, for_photons_in_disc};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::emission::{guided_emission, ordinary_emission, region_emission};

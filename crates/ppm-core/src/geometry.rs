@@ -155,9 +155,10 @@ pub fn oct_faces(bits: u32, n: Vec3) -> bool {
     oct_unfold(bits).dot(n) > 0.0
 }
 
-/// The octahedral map unfolded back to a direction of L1 length 1 (not yet unit length).
+/// The octahedral map unfolded back to a direction of L1 length 1 (not yet unit length): what
+/// [`oct_faces`] dots with the normal, for a backend that decodes each photon once.
 #[inline]
-fn oct_unfold(bits: u32) -> Vec3 {
+pub fn oct_unfold(bits: u32) -> Vec3 {
     let d = |v: u32| (v as f32 / 65535.0) * 2.0 - 1.0;
     let (x, y) = (d(bits & 0xffff), d(bits >> 16));
     let z = 1.0 - x.abs() - y.abs();

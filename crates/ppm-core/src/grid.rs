@@ -14,7 +14,8 @@
 //! bucket order (ascending index within a bucket), each with its cell's key, so a gather reads
 //! them contiguously and skips those of another cell that shares the bucket. Visiting cells in
 //! z, y, x order and photons in bucket order fixes the order of every sum, whatever the
-//! threads, and makes it the same on every backend.
+//! threads. A backend may scale the cells to suit its search (the CPU backend's are twice as
+//! wide): that changes the order of additions between backends, not what a disc holds.
 //!
 //! Why this and not pbrt's grid over the visible points (each photon splatting into the
 //! points around it): splatting adds into a point's sums from many photons at once, which
