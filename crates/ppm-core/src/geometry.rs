@@ -179,31 +179,25 @@ fn sign_nonzero(v: f32) -> f32 {
 }
 
 /// Whether the segment `origin + t dir`, `0 <= t <= t_max` (`t_max` may be infinite), meets
-/// the closed box `[lo, hi]`: the slab test, written so that a direction parallel to a slab
-/// never forms `0 * inf`. An empty box (`lo > hi`) is never met.
+/// the closed box `[lo, hi]`: the slab test on all three axes at once, without branches (it runs
+/// for every eye, shadow and cosine ray of a scene with movers), an axis parallel to the
+/// direction set apart so that it never forms `0 * inf`. An empty box (`lo > hi`) is never met.
+#[inline]
 pub fn segment_meets_box(origin: Vec3, dir: Vec3, t_max: f32, lo: Vec3, hi: Vec3) -> bool {
-    if !lo.cmple(hi).all() {
-        return false;
-    }
-    let mut t0 = 0.0f32;
-    let mut t1 = t_max;
-    for axis in 0..3 {
-        let (o, d) = (origin[axis], dir[axis]);
-        if d == 0.0 {
-            if o < lo[axis] || o > hi[axis] {
-                return false;
-            }
-            continue;
-        }
-        let a = (lo[axis] - o) / d;
-        let b = (hi[axis] - o) / d;
-        t0 = t0.max(a.min(b));
-        t1 = t1.min(a.max(b));
-        if t0 > t1 {
-            return false;
-        }
-    }
-    true
+    let a = (lo - origin) / dir;
+    let b = (hi - origin) / dir;
+    // A parallel axis admits every t when the origin lies within its slab, none otherwise.
+    let parallel = dir.cmpeq(Vec3::ZERO);
+    let within = origin.cmpge(lo) & origin.cmple(hi);
+    let (all, none) = (
+        Vec3::select(within, Vec3::NEG_INFINITY, Vec3::INFINITY),
+        Vec3::select(within, Vec3::INFINITY, Vec3::NEG_INFINITY),
+    );
+    let enter = Vec3::select(parallel, all, a.min(b));
+    let leave = Vec3::select(parallel, none, a.max(b));
+    let t0 = enter.max_element().max(0.0);
+    let t1 = leave.min_element().min(t_max);
+    lo.cmple(hi).all() && t0 <= t1
 }
 
 #[cfg(test)]
