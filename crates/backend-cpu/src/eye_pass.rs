@@ -25,15 +25,18 @@ pub fn eye_pass_main(
     scene: &SceneData,
     hit_points: &mut [HitPoint],
 ) -> EyeStats {
-    let rays: u64 = hit_points
+    let (rays, visible) = hit_points
         .par_iter_mut()
         .enumerate()
         .with_min_len(256)
-        .map(|(slot, hp)| trace_eye_path(params, camera, scene, slot as u32, hp))
-        .sum();
+        .map(|(slot, hp)| {
+            let rays = trace_eye_path(params, camera, scene, slot as u32, hp);
+            (rays, u64::from(hp.is_valid()))
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     EyeStats {
         rays,
-        hit_points: hit_points.iter().filter(|h| h.is_valid()).count() as u64,
+        hit_points: visible,
     }
 }
 
