@@ -10,7 +10,7 @@ use ppm_core::geometry::to_world;
 use ppm_core::layout::NO_MATERIAL;
 use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate, hit_flags};
 use ppm_core::passes::DirectStats;
-use ppm_core::rng::{PassKind, stratified_pair};
+use ppm_core::rng::{PassKind, StratifiedStream};
 use ppm_core::sampling::{
     cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle,
 };
@@ -35,6 +35,12 @@ pub fn sequence_start(params: &DirectLightParams, hp: &HitPoint) -> u32 {
         params.iteration
     }
 }
+
+/// Emitting triangles up to which a cosine ray that crosses no mover's box tests them one by
+/// one, then casts one shadow ray to the nearest, instead of finding its nearest hit in the BVH:
+/// most cosine rays meet no emitter and skip the BVH (cornell-box's direct light at 768x768, two
+/// runs side by side: 97 and 99 ms before, 88 and 89 after).
+const FEW_EMITTERS: usize = 16;
 
 /// Rays per sample: the shadow ray and the cosine ray.
 pub const RAYS_PER_SAMPLE: u32 = 2;
@@ -128,9 +134,10 @@ fn estimate_irradiance(
     let mut sum = Vec3::ZERO;
     let mut near = false;
     let start = sequence_start(params, hp) * params.samples;
+    let stream = StratifiedStream::new(params.seed, PassKind::DirectLight, slot);
     for s in 0..params.samples {
         let index = start + s;
-        let pair = |p| stratified_pair(params.seed, PassKind::DirectLight, slot, p, index);
+        let pair = |p| stream.pair(p, index);
         let (choice, _) = pair(PAIR_LIGHT_CHOICE);
         let li = sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice);
         let light = &scene.lights[li];
@@ -157,7 +164,14 @@ fn estimate_irradiance(
         let (v1, v2) = pair(PAIR_DIRECTION);
         let local = cosine_hemisphere(v1, v2);
         let w = to_world(local, n);
-        let hit = scene.closest_hit(origin, w, f32::INFINITY);
+        let hit = if scene.emitters.len() <= FEW_EMITTERS
+            && !scene.near_mover(origin, w, f32::INFINITY)
+        {
+            // Only an emitter met first adds light, and no move changes what this ray meets.
+            scene.closest_hit_if_emitter(origin, w)
+        } else {
+            scene.closest_hit(origin, w, f32::INFINITY)
+        };
         // A cosine ray changes with a move only if it reached a light across a mover's box
         // (it may be blocked in another pose) or met a mover (it may reach a light in
         // another pose): one blocked in every pose adds nothing either way.

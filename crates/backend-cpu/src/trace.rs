@@ -7,7 +7,7 @@ use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use ppm_core::compile::CompiledScene;
 use ppm_core::geometry::{intersect_triangle, segment_meets_box};
-use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle};
+use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL};
 
 /// The scene as the CPU passes read it: the same flat buffers a GPU backend binds.
 #[derive(Clone)]
@@ -20,6 +20,8 @@ pub struct SceneData {
     pub materials: Vec<GpuMaterial>,
     /// Emitting triangles.
     pub lights: Vec<GpuLight>,
+    /// Index in `triangles` of each emitting triangle.
+    pub emitters: Vec<u32>,
     /// Boxes the moving objects stay inside ([`CompiledScene::movers`]).
     pub movers: Vec<GpuBounds>,
 }
@@ -41,6 +43,9 @@ impl SceneData {
             bvh: scene.bvh.clone(),
             materials: scene.materials.clone(),
             lights: scene.lights.clone(),
+            emitters: (0..scene.triangles.len() as u32)
+                .filter(|&i| scene.triangles[i as usize].light != NO_MATERIAL)
+                .collect(),
             movers: scene.movers.clone(),
         }
     }
@@ -74,6 +79,22 @@ impl SceneData {
             t: hit.t,
             triangle: hit.primitive_id,
         })
+    }
+
+    /// The nearest hit with `0 < t` when it is on an emitting triangle, `None` otherwise: the
+    /// emitters tested one by one, then one shadow query up to the nearest. Cheaper than
+    /// [`Self::closest_hit`] when emitters are few and most rays meet none.
+    #[inline]
+    pub fn closest_hit_if_emitter(&self, origin: Vec3, dir: Vec3) -> Option<Hit> {
+        let nearest = self
+            .emitters
+            .iter()
+            .map(|&i| Hit {
+                t: intersect_triangle(origin, dir, &self.triangles[i as usize], 0.0, f32::INFINITY),
+                triangle: i,
+            })
+            .reduce(|a, b| if b.t < a.t { b } else { a })?;
+        (nearest.t < f32::INFINITY && !self.occluded(origin, dir, nearest.t)).then_some(nearest)
     }
 
     /// Whether anything lies between `origin` and `origin + dir * tmax`.

@@ -35,10 +35,31 @@ pub const STRATIFIED_PASS: u32 = u32::MAX;
 /// samples a path takes over successive iterations cover their square evenly.
 #[inline]
 pub fn stratified_pair(seed: u32, kind: PassKind, path: u32, pair: u32, index: u32) -> (f32, f32) {
-    crate::qmc::sobol_pair(
-        random_bits(seed, kind as u32, STRATIFIED_PASS, path, pair),
-        index,
-    )
+    StratifiedStream::new(seed, kind, path).pair(pair, index)
+}
+
+/// The stratified pair sequences of one stream `(seed, kind, path)`, its key hashed once for
+/// all of them: a path that takes several pairs at one index (direct light takes three) pays
+/// for the key once.
+#[derive(Clone, Copy, Debug)]
+pub struct StratifiedStream {
+    key: [u32; 4],
+}
+
+impl StratifiedStream {
+    /// The stream's sequences.
+    #[inline]
+    pub fn new(seed: u32, kind: PassKind, path: u32) -> Self {
+        Self {
+            key: pcg4d([seed, kind as u32, STRATIFIED_PASS, path]),
+        }
+    }
+
+    /// Point `index` of sequence `pair`: [`stratified_pair`].
+    #[inline]
+    pub fn pair(&self, pair: u32, index: u32) -> (f32, f32) {
+        crate::qmc::sobol_pair(key_bits(self.key, pair), index)
+    }
 }
 
 /// The key of one random stream: everything but the dimension.
@@ -102,7 +123,12 @@ fn mix(v: &mut [u32; 4]) {
 /// dimensions of one path are as unrelated as different paths.
 #[inline]
 pub fn random_bits(seed: u32, kind: u32, pass_index: u32, path: u32, dimension: u32) -> u32 {
-    let key = pcg4d([seed, kind, pass_index, path]);
+    key_bits(pcg4d([seed, kind, pass_index, path]), dimension)
+}
+
+/// The second round of [`random_bits`]: a hashed stream key and a dimension.
+#[inline]
+fn key_bits(key: [u32; 4], dimension: u32) -> u32 {
     pcg4d([key[0], key[1] ^ dimension, key[2], key[3]])[0]
 }
 
