@@ -39,21 +39,16 @@ pub fn check_hit_points(pass: &'static str, hit_points: &[HitPoint]) -> Result<(
     Ok(())
 }
 
-/// Whether every checked field of every slot is finite: `v * 0` is zero for a finite `v` and
-/// NaN otherwise, so one sum without branches screens the slots (the field-by-field search that
-/// names the culprit took a twentieth of a CPU iteration, run after every pass).
+/// Whether every checked field of every slot is finite, screened without a branch per field
+/// or slot (the field-by-field search that names the culprit took a twentieth of a CPU
+/// iteration, run after every pass).
 fn all_finite(hit_points: &[HitPoint]) -> bool {
-    let residue = |values: &[f32]| values.iter().fold(0.0, |sum, v| sum + v * 0.0);
-    let sum: f32 = hit_points
-        .iter()
-        .map(|hp| {
-            let statistics =
-                residue(&hp.direct) + residue(&hp.tau) + residue(&[hp.r2, hp.n, hp.emitted]);
-            let visible = residue(&hp.position) + residue(&hp.throughput);
-            statistics + if hp.is_valid() { visible } else { 0.0 }
-        })
-        .sum();
-    sum == 0.0
+    let finite = |values: &[f32]| values.iter().fold(true, |ok, v| ok & v.is_finite());
+    hit_points.iter().fold(true, |ok, hp| {
+        let statistics = finite(&hp.direct) & finite(&hp.tau) & finite(&[hp.r2, hp.n, hp.emitted]);
+        let visible = finite(&hp.position) & finite(&hp.throughput);
+        ok & statistics & (visible | !hp.is_valid())
+    })
 }
 
 #[cfg(test)]
