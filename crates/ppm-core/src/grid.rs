@@ -80,16 +80,21 @@ pub fn bucket_count(photon_count: u32) -> u32 {
 /// Integer cell coordinates of a point: `floor(p / cell)`, clamped into i32.
 #[inline]
 pub fn cell_of(p: Vec3, cell: f32) -> [i32; 3] {
-    let c = (p / cell).floor();
-    [clamp_i32(c.x), clamp_i32(c.y), clamp_i32(c.z)]
+    let c = p / cell;
+    [floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)]
 }
 
 /// The largest f32 below 2^31.
 const I32_MAX_F32: f32 = 2_147_483_520.0;
 
+/// `floor(v)` clamped into i32 (NaN gives 0). By truncation and a correction rather than a
+/// call to `floor`, which x86-64's baseline has no instruction for: the grid floors three
+/// coordinates per photon and six per gather disc.
 #[inline]
-fn clamp_i32(v: f32) -> i32 {
-    v.clamp(-2_147_483_648.0, I32_MAX_F32) as i32
+fn floor_i32(v: f32) -> i32 {
+    let v = v.clamp(-2_147_483_648.0, I32_MAX_F32);
+    let t = v as i32;
+    t - i32::from(t as f32 > v)
 }
 
 /// The 32-bit key of a cell: a sum of its coordinates times large odd constants (two cells
@@ -127,6 +132,38 @@ pub fn scan_instead(range: ([i32; 3], [i32; 3]), photon_count: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The truncating floor agrees with `floor` then a clamp, across signs, integers, halves,
+    /// values beyond i32 and NaN.
+    #[test]
+    fn floor_i32_is_floor_clamped() {
+        let values = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999,
+            -2.999,
+            1e-30,
+            -1e-30,
+            8388607.5,
+            -8388607.5,
+            1.6777217e7,
+            3e9,
+            -3e9,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MAX,
+            f32::MIN,
+        ];
+        for v in values {
+            let expected = v.floor().clamp(-2_147_483_648.0, I32_MAX_F32) as i32;
+            assert_eq!(floor_i32(v), expected, "{v}");
+        }
+        assert_eq!(floor_i32(f32::NAN), 0);
+    }
 
     fn histogram_of(r2: &[f32]) -> Vec<u32> {
         let mut h = vec![0u32; RADIUS_BINS as usize];
