@@ -14,35 +14,39 @@ fn qmc_hash(v: u32) -> u32 {
 }
 
 fn owen_scramble(x: u32, seed: u32) -> u32 {
-    var v = reverseBits(x);
-    v += seed;
+    return reverseBits(laine_karras(reverseBits(x), seed));
+}
+
+// The multiply-xor steps of owen_scramble, on bits already reversed.
+fn laine_karras(x: u32, seed: u32) -> u32 {
+    var v = x + seed;
     v ^= v * 0x6c50b47cu;
     v ^= v * 0xb82f1e52u;
     v ^= v * 0xc7afe638u;
     v ^= v * 0x8d22f6e6u;
-    return reverseBits(v);
+    return v;
 }
 
-fn sobol_second(i: u32) -> u32 {
-    var index = i;
-    var v = 0x80000000u;
-    var out = 0u;
-    while index != 0u {
-        if (index & 1u) != 0u {
-            out ^= v;
-        }
-        index >>= 1u;
-        v ^= v >> 1u;
-    }
-    return out;
+// The second Sobol dimension, bit-reversed: reversed bit i is the xor of the index's bits over
+// the supersets of i (its direction numbers are Pascal's triangle mod 2), five steps where a
+// loop over the bits of a scrambled index took thirty-two.
+fn sobol_second_reversed(index: u32) -> u32 {
+    var y = index;
+    y ^= (y >> 1u) & 0x55555555u;
+    y ^= (y >> 2u) & 0x33333333u;
+    y ^= (y >> 4u) & 0x0f0f0f0fu;
+    y ^= (y >> 8u) & 0x00ff00ffu;
+    y ^= (y >> 16u) & 0x0000ffffu;
+    return y;
 }
 
 fn sobol_pair_bits(scramble: u32, i: u32) -> vec2<u32> {
     let seed = qmc_hash(scramble);
     let index = owen_scramble(i, seed);
+    // Both dimensions come bit-reversed, which scrambling reverses again.
     return vec2<u32>(
-        owen_scramble(reverseBits(index), qmc_hash(seed ^ 1u)),
-        owen_scramble(sobol_second(index), qmc_hash(seed ^ 2u)),
+        reverseBits(laine_karras(index, qmc_hash(seed ^ 1u))),
+        reverseBits(laine_karras(sobol_second_reversed(index), qmc_hash(seed ^ 2u))),
     );
 }
 
