@@ -10,7 +10,10 @@
 //! time: at 768x768 on cornell-box the gather took 202 ms one slot at a time, 92 in runs of 8
 //! (104 in runs of 4, 99 in runs of 16), 70 with cells twice as wide, 49 with AVX2. A run whose
 //! discs lie far apart (an edge between a near and a far surface) spans more cells than its
-//! slots do one by one; its halves are searched apart, down to single slots.
+//! slots do one by one; its halves are searched apart, down to single slots. Region passes,
+//! whose photons carry path weights, and discs that scan every photon are searched one slot at
+//! a time: both are rare, and the lanes stay free of a weight lookup per photon (which cost the
+//! ordinary gather 4 ms in 49).
 //!
 //! A slot sums its photons cell by cell in z, y, x order and in bucket order within a cell,
 //! the order of [`for_photons_in_disc`], whatever the threads or the run; a run adds zero for
@@ -21,7 +24,7 @@
 
 use crate::photon_grid::{CellPhoton, PhotonGrid};
 use glam::Vec3;
-use ppm_core::grid::{cell_key, cell_range, scan_instead};
+use ppm_core::grid::{cell_key, cell_range, cells_in, scan_instead};
 use ppm_core::layout::HitPoint;
 
 /// Slots searched together: consecutive pixels of a row.
@@ -46,12 +49,6 @@ pub struct Found {
     pub weight: f32,
     /// Their summed power.
     pub flux: Vec3,
-}
-
-/// The squared radius a slot gathers the map's photons within: its own, or the pass's floor.
-#[inline]
-pub fn gather_r2(hp: &HitPoint, map: &PhotonMap) -> f32 {
-    hp.r2.max(map.r2_floor)
 }
 
 /// What each slot of a run of at most [`RUN`] neighbouring slots found in its disc; zero for
@@ -224,13 +221,6 @@ impl Lanes {
     }
 }
 
-/// Cells in a range, as f32 (as [`scan_instead`] counts them).
-fn cells_in(range: ([i32; 3], [i32; 3])) -> f32 {
-    (0..3)
-        .map(|a| range.1[a] as f32 - range.0[a] as f32 + 1.0)
-        .product()
-}
-
 /// What one slot finds in its disc.
 fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
     let mut found = Found::default();
@@ -242,13 +232,14 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
     found
 }
 
-/// Centre, normal and squared radius of the disc a slot gathers the map's photons within.
+/// Centre, normal and squared radius of the disc a slot gathers the map's photons within (its
+/// own radius, or the pass's floor).
 #[inline]
 fn disc(hp: &HitPoint, map: &PhotonMap) -> (Vec3, Vec3, f32) {
     (
         Vec3::from(hp.position),
         Vec3::from(hp.normal),
-        gather_r2(hp, map),
+        hp.r2.max(map.r2_floor),
     )
 }
 

@@ -125,8 +125,15 @@ pub fn cell_range(p: Vec3, r: f32, cell: f32) -> ([i32; 3], [i32; 3]) {
 /// photons; the gather then scans them all. (f32 arithmetic, as the WGSL twin's.)
 #[inline]
 pub fn scan_instead(range: ([i32; 3], [i32; 3]), photon_count: u32) -> bool {
+    cells_in(range) > photon_count as f32
+}
+
+/// Cells in a range (lowest and highest coordinates per axis, inclusive), in f32 so that no
+/// range overflows.
+#[inline]
+pub fn cells_in(range: ([i32; 3], [i32; 3])) -> f32 {
     let extent = |a: usize| range.1[a] as f32 - range.0[a] as f32 + 1.0;
-    extent(0) * extent(1) * extent(2) > photon_count as f32
+    extent(0) * extent(1) * extent(2)
 }
 
 #[cfg(test)]
