@@ -95,12 +95,19 @@ fn trace_eye_path(
     for depth in 0..=params.max_depth {
         let hit = scene.closest_hit(origin, dir, f32::INFINITY);
         if scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t)) {
-            out.flags |= hit_flags::EYE_NEAR_MOVER;
+            out.flags |= if depth == 0 {
+                hit_flags::EYE_NEAR_MOVER
+            } else {
+                hit_flags::EYE_CHAIN_NEAR_MOVER
+            };
         }
         let Some(hit) = hit else {
             return u64::from(depth) + 1;
         };
         let tri = &scene.triangles[hit.triangle as usize];
+        if tri.moving != 0 {
+            out.flags |= hit_flags::EYE_MET_MOVER;
+        }
         let material = &scene.materials[tri.material as usize];
         let position = origin + dir * hit.t;
         let normal = Vec3::from(tri.normal);

@@ -77,7 +77,7 @@ fn buffer_elements_match_their_wgsl_twins() {
         e2,
         light,
         normal,
-        _pad0
+        moving
     });
     same_layout!(BvhNode {
         min,
@@ -252,6 +252,8 @@ fn shared_constants_agree() {
         ("HIT_EYE_NEAR_MOVER", hit_flags::EYE_NEAR_MOVER),
         ("HIT_SHADOW_NEAR_MOVER", hit_flags::SHADOW_NEAR_MOVER),
         ("HIT_RESTING", hit_flags::RESTING),
+        ("HIT_EYE_MET_MOVER", hit_flags::EYE_MET_MOVER),
+        ("HIT_EYE_CHAIN_NEAR_MOVER", hit_flags::EYE_CHAIN_NEAR_MOVER),
         ("HIT_OBJECT_SHIFT", hit_flags::OBJECT_SHIFT),
         ("EYE_KEEP_STATISTICS", eye_flags::KEEP_STATISTICS),
         ("EYE_JITTER", eye_flags::JITTER),

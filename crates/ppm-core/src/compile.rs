@@ -3,7 +3,7 @@
 use crate::layout::{
     BvhNode, GpuBounds, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
 };
-use crate::scene::{MaterialKind, Scene};
+use crate::scene::{Camera, MaterialKind, Scene};
 use glam::{Vec3, Vec3A};
 use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
@@ -86,6 +86,9 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             tris.push((t, object.material as u32, object_index as u32));
         }
     }
+    let moving: Vec<bool> = (0..scene.objects.len())
+        .map(|o| scene.moves.iter().any(|m| m.object == o))
+        .collect();
     let obvhs_tris: Vec<Triangle> = tris
         .iter()
         .map(|(t, _, _)| Triangle {
@@ -104,6 +107,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     for &p in &bvh.primitive_indices {
         let (t, material, object) = tris[p as usize];
         let mut gpu = gpu_triangle(t, material, object);
+        gpu.moving = u32::from(moving[object as usize]);
         if let MaterialKind::Light { .. } = scene.materials[material as usize].kind {
             let area = light_area(Vec3::from(gpu.e1), Vec3::from(gpu.e2));
             if area > 0.0 {
@@ -136,7 +140,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let (lo, hi) = bounds(&triangles);
     let extent = (hi - lo).length();
     CompiledScene {
-        camera: gpu_camera(scene, width, height),
+        camera: gpu_camera(&scene.camera, width, height),
         triangles,
         nodes,
         bvh,
@@ -237,7 +241,7 @@ fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
         e2: e2.into(),
         light: NO_MATERIAL,
         normal: unit_normal(e1, e2).into(),
-        _pad0: 0,
+        moving: 0,
     }
 }
 
@@ -263,8 +267,8 @@ fn light_area(e1: Vec3, e2: Vec3) -> f32 {
     }
 }
 
-fn gpu_camera(scene: &Scene, width: u32, height: u32) -> GpuCamera {
-    let c = &scene.camera;
+/// The camera of `c` for an image of `width` x `height`, as [`camera_ray`] reads it.
+pub fn gpu_camera(c: &Camera, width: u32, height: u32) -> GpuCamera {
     let forward = (c.look_at - c.eye).normalize();
     let right = forward.cross(c.up).normalize();
     let up = right.cross(forward);

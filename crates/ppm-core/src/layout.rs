@@ -26,8 +26,9 @@ pub mod hit_flags {
     pub const FRONT: u32 = 2;
     /// The slot was reset by the last hit-point update (ALGORITHM.md 2.4).
     pub const UPDATED: u32 = 4;
-    /// Some eye path of the slot since its statistics started crossed the bounds a moving
-    /// object sweeps: a move may change what the slot saw (local mode resets it).
+    /// Some eye ray of the slot from the camera, since its statistics started, crossed the
+    /// bounds a moving object sweeps before its hit: a move may change what the slot sees if
+    /// the object's new pose covers the pixel (local mode tests that on the screen).
     pub const EYE_NEAR_MOVER: u32 = 8;
     /// Some shadow or cosine ray of the slot's direct sum crossed those bounds: a move may
     /// change its direct light (local mode restarts the sum).
@@ -37,8 +38,16 @@ pub mod hit_flags {
     /// its last visible point stays and gathers the iteration's photons, which cost nothing
     /// more to trace.
     pub const RESTING: u32 = 32;
+    /// Some eye path of the slot since its statistics started met a moving object: a move
+    /// changes what the slot saw (local mode resets it).
+    pub const EYE_MET_MOVER: u32 = 64;
+    /// Some eye path of the slot since its statistics started crossed a moving object's
+    /// bounds after a mirror or glass bounce, where the screen cannot tell whether the new
+    /// pose meets it (local mode resets it).
+    pub const EYE_CHAIN_NEAR_MOVER: u32 = 128;
     /// The flags a slot keeps from iteration to iteration (`sppm`).
-    pub const KEPT: u32 = UPDATED | EYE_NEAR_MOVER | SHADOW_NEAR_MOVER;
+    pub const KEPT: u32 =
+        UPDATED | EYE_NEAR_MOVER | SHADOW_NEAR_MOVER | EYE_MET_MOVER | EYE_CHAIN_NEAR_MOVER;
     /// The index of the object hit sits in the bits from here up (24 bits).
     pub const OBJECT_SHIFT: u32 = 8;
 }
@@ -154,8 +163,9 @@ pub struct GpuTriangle {
     pub light: u32,
     /// Unit geometric normal, `normalize(e1 x e2)`; zero for a degenerate triangle.
     pub normal: [f32; 3],
-    /// Padding to 16 bytes.
-    pub _pad0: u32,
+    /// 1 where the triangle's object moves between frames, else 0: an eye path that meets
+    /// it flags its slot ([`hit_flags::EYE_MET_MOVER`]).
+    pub moving: u32,
 }
 
 /// A node of the binary BVH built by obvhs, flattened for traversal on any backend.

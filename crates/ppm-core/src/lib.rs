@@ -6,7 +6,8 @@
 //! - [`update`]: the progressive update formulas in their stable forms.
 //! - [`rng`], [`sampling`], [`geometry`]: math that exists once here and once in WGSL.
 //! - [`scene`], [`compile`]: the scene model, its file format, and its flattening into buffers.
-//! - [`grid`]: the photon hash grid's cell and bucket mapping.
+//! - [`grid`]: the photon hash grid's cell and bucket mapping; [`screen_cover`]: the pixels a
+//!   mesh may cover, for local mode's resets.
 //! - [`params`], [`image`], [`metrics`]: render settings, images and their EXR/PNG files, and
 //!   the distances error reports measure; [`output`]: every file written whole or not at all;
 //!   [`limits`]: the sizes and magnitudes refused before anything is allocated or traced.
@@ -28,4 +29,5 @@ pub mod region;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+pub mod screen_cover;
 pub mod update;

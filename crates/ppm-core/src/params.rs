@@ -257,7 +257,8 @@ pub struct MoveParams {
     /// Difference passes per move (each one negative and one positive ordinary pass).
     pub difference_passes: u32,
     /// Local mode gathers its correction within at least this many initial radii (0: each
-    /// slot's own radius). Wider discs trade the correction's noise for a blur of the change.
+    /// slot's own radius). Wider discs trade the correction's noise for a blur of the change
+    /// (measured in `harness::driver::local`).
     pub correction_radii: f32,
     /// Local mode: skip in pose B the difference paths that crossed no mover's box in pose A,
     /// which would store nothing; off only to check that culling changes no statistic.
@@ -308,7 +309,7 @@ impl Default for MoveParams {
             max_recorded: 1024,
             update_epsilon: 1e-4,
             difference_passes: 8,
-            correction_radii: 2.0,
+            correction_radii: 3.0,
             cull_uncrossed: true,
         }
     }

@@ -67,13 +67,16 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     for (var depth = 0u; depth <= params.max_depth; depth++) {
         let hit = closest_hit(origin, dir, T_MISS);
         if near_mover(origin, dir, hit.t) {
-            out.flags |= HIT_EYE_NEAR_MOVER;
+            out.flags |= select(HIT_EYE_CHAIN_NEAR_MOVER, HIT_EYE_NEAR_MOVER, depth == 0u);
         }
         if hit.triangle == 0xffffffffu {
             rays = depth + 1u;
             break;
         }
         let tri = triangles[hit.triangle];
+        if tri.moving != 0u {
+            out.flags |= HIT_EYE_MET_MOVER;
+        }
         let material = materials[tri.material];
         let position = origin + dir * hit.t;
         let front = dot(dir, tri.normal) < 0.0;

@@ -11,7 +11,9 @@ const HIT_UPDATED: u32 = 4u;
 const HIT_EYE_NEAR_MOVER: u32 = 8u;
 const HIT_SHADOW_NEAR_MOVER: u32 = 16u;
 const HIT_RESTING: u32 = 32u;
-const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_NEAR_MOVER | HIT_SHADOW_NEAR_MOVER;
+const HIT_EYE_MET_MOVER: u32 = 64u;
+const HIT_EYE_CHAIN_NEAR_MOVER: u32 = 128u;
+const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_NEAR_MOVER | HIT_SHADOW_NEAR_MOVER | HIT_EYE_MET_MOVER | HIT_EYE_CHAIN_NEAR_MOVER;
 const HIT_OBJECT_SHIFT: u32 = 8u;
 const NO_MATERIAL: u32 = 0xffffffffu;
 
@@ -58,7 +60,7 @@ struct GpuTriangle {
     e2: vec3<f32>,
     light: u32,
     normal: vec3<f32>,
-    _pad0: u32,
+    moving: u32,
 }
 
 struct BvhNode {

@@ -1,0 +1,179 @@
+//! Which pixels a mesh may cover, seen from the camera: local mode's test for the pose a
+//! moving object moves to (ALGORITHM.md 3b), where no eye path has been traced yet.
+//!
+//! Conservative: a pixel is marked when an eye ray through some point of its square (the
+//! eye pass jitters over the whole square) may meet a triangle, at any distance. Marking a
+//! pixel no such ray meets costs a needless reset; missing one would keep a pixel the object
+//! now covers, so every doubt marks.
+
+use crate::layout::GpuCamera;
+use glam::{Mat3, Vec2, Vec3};
+
+/// Widens each pixel's square, in pixels, beyond the rounding of projection and eye rays.
+const MARGIN: f32 = 0.05;
+
+/// Image coordinates of `p` in pixels, the inverse of [`camera_ray`](crate::compile::camera_ray): `None` unless `p`
+/// lies in front of the eye (a positive distance along the view direction).
+pub fn project(camera: &GpuCamera, p: Vec3) -> Option<Vec2> {
+    // p - eye = z (forward + sx right + sy up): solve for (z, z sx, z sy).
+    let basis = Mat3::from_cols(camera.forward.into(), camera.right.into(), camera.up.into());
+    let v = basis.inverse() * (p - Vec3::from(camera.eye));
+    if v.x.is_nan() || v.x <= 0.0 {
+        return None;
+    }
+    let (sx, sy) = (v.y / v.x, v.z / v.x);
+    let size = Vec2::new(camera.width as f32, camera.height as f32);
+    let image = Vec2::new((sx + 1.0) * 0.5, (1.0 - sy) * 0.5) * size;
+    image.is_finite().then_some(image)
+}
+
+/// One flag per pixel (row-major), set where some eye ray of the pixel may meet one of
+/// `triangles`. A triangle reaching behind the eye marks every pixel.
+pub fn covered_pixels(camera: &GpuCamera, triangles: &[[Vec3; 3]]) -> Vec<bool> {
+    let (width, height) = (camera.width as usize, camera.height as usize);
+    let mut covered = vec![false; width * height];
+    for t in triangles {
+        let projected: Option<Vec<Vec2>> = t.iter().map(|&v| project(camera, v)).collect();
+        let Some(p) = projected else {
+            covered.fill(true);
+            return covered;
+        };
+        mark_triangle(&mut covered, width, height, [p[0], p[1], p[2]]);
+    }
+    covered
+}
+
+/// Marks the pixels whose widened square the image-space triangle `p` may overlap: those
+/// in its bounding box that lie on the inner side of all three edges (the whole box for a
+/// triangle seen edge-on).
+fn mark_triangle(covered: &mut [bool], width: usize, height: usize, p: [Vec2; 3]) {
+    let lo = p[0].min(p[1]).min(p[2]) - MARGIN;
+    let hi = p[0].max(p[1]).max(p[2]) + MARGIN;
+    if hi.x < 0.0 || hi.y < 0.0 || lo.x >= width as f32 || lo.y >= height as f32 {
+        return;
+    }
+    let first = lo.max(Vec2::ZERO).floor();
+    let last = hi
+        .min(Vec2::new(width as f32 - 1.0, height as f32 - 1.0))
+        .floor();
+    let twice_area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+    let half = 0.5 + MARGIN;
+    for y in first.y as usize..=last.y as usize {
+        for x in first.x as usize..=last.x as usize {
+            let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let inside = (0..3).all(|i| {
+                let (a, b) = (p[i], p[(i + 1) % 3]);
+                let edge = (b - a) * twice_area.signum();
+                // The edge function's largest value over the square: at its centre plus the
+                // half-size times the gradient's 1-norm.
+                edge.perp_dot(centre - a) + half * (edge.x.abs() + edge.y.abs()) >= 0.0
+            });
+            if inside || twice_area.abs() <= f32::EPSILON * (hi - lo).length_squared() {
+                covered[y * width + x] = true;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::compile::{camera_ray, gpu_camera};
+    use crate::geometry::intersect_triangle;
+    use crate::layout::GpuTriangle;
+    use crate::rng::{PassKind, StreamKey};
+    use crate::scene::Camera;
+
+    fn camera(width: u32, height: u32) -> GpuCamera {
+        let camera = Camera {
+            eye: Vec3::new(1.0, 2.0, 9.0),
+            look_at: Vec3::new(0.0, 0.5, 0.0),
+            up: Vec3::Y,
+            fov_deg: 50.0,
+            width,
+            height,
+        };
+        gpu_camera(&camera, width, height)
+    }
+
+    /// Whether the eye ray through image point `(px, py)` meets triangle `t` at any distance:
+    /// the exact question [`covered_pixels`] answers conservatively.
+    fn ray_meets(camera: &GpuCamera, px: f32, py: f32, t: &[Vec3; 3]) -> bool {
+        let tri = GpuTriangle {
+            v0: t[0].into(),
+            e1: (t[1] - t[0]).into(),
+            e2: (t[2] - t[0]).into(),
+            ..Default::default()
+        };
+        let dir = camera_ray(camera, px, py);
+        intersect_triangle(camera.eye.into(), dir, &tri, 0.0, f32::INFINITY).is_finite()
+    }
+
+    #[test]
+    fn projection_inverts_camera_rays() {
+        let cam = camera(64, 48);
+        for (px, py) in [(0.0, 0.0), (31.5, 20.25), (63.9, 47.9), (10.0, 40.0)] {
+            for distance in [0.5, 3.0, 40.0] {
+                let p = Vec3::from(cam.eye) + camera_ray(&cam, px, py) * distance;
+                let image = project(&cam, p).unwrap();
+                approx::assert_abs_diff_eq!(image.x, px, epsilon = 1e-3);
+                approx::assert_abs_diff_eq!(image.y, py, epsilon = 1e-3);
+            }
+        }
+        let behind = Vec3::from(cam.eye) - Vec3::from(cam.forward);
+        assert_eq!(project(&cam, behind), None);
+    }
+
+    /// Every jittered eye ray that meets a triangle lands in a marked pixel, and the marks
+    /// stay close to what the rays meet (a few pixels' rim, not the bounding box).
+    #[test]
+    fn marks_every_pixel_a_ray_meets() {
+        let cam = camera(64, 48);
+        let triangles = [
+            [
+                Vec3::new(-2.0, 0.0, 0.0),
+                Vec3::new(2.5, 0.2, -1.0),
+                Vec3::new(0.3, 3.0, 0.5),
+            ],
+            // Small, and seen almost edge-on.
+            [
+                Vec3::new(2.0, 1.0, 1.0),
+                Vec3::new(2.2, 1.0, 1.0),
+                Vec3::new(2.1, 1.0, 0.2),
+            ],
+        ];
+        let covered = covered_pixels(&cam, &triangles);
+        let mut met = vec![false; covered.len()];
+        for pixel in 0..covered.len() as u32 {
+            let key = StreamKey {
+                seed: 1,
+                kind: PassKind::Eye,
+                pass_index: 0,
+                path: pixel,
+            };
+            for sample in 0..64 {
+                let px = (pixel % cam.width) as f32 + key.uniform(2 * sample);
+                let py = (pixel / cam.width) as f32 + key.uniform(2 * sample + 1);
+                if triangles.iter().any(|t| ray_meets(&cam, px, py, t)) {
+                    met[pixel as usize] = true;
+                    assert!(covered[pixel as usize], "pixel {pixel} met but not marked");
+                }
+            }
+        }
+        let (marked, hit) = (
+            covered.iter().filter(|&&c| c).count(),
+            met.iter().filter(|&&m| m).count(),
+        );
+        assert!(hit > 100, "the test triangles cover {hit} pixels");
+        assert!(marked <= hit + hit / 4, "{marked} marked for {hit} met");
+    }
+
+    #[test]
+    fn a_triangle_behind_the_eye_marks_everything() {
+        let cam = camera(16, 16);
+        let eye = Vec3::from(cam.eye);
+        let t = [eye + Vec3::X, eye - Vec3::Z, eye + Vec3::Z];
+        assert!(covered_pixels(&cam, &[t]).iter().all(|&c| c));
+        assert!(covered_pixels(&cam, &[]).iter().all(|&c| !c));
+    }
+}
