@@ -6,10 +6,10 @@
 use backend_cpu::CpuBackend;
 use harness::driver::Renderer;
 use harness::reference::{ReferenceBudget, render_reference};
-use ppm_core::compile::{camera_ray, compile_scene};
+use ppm_core::compile::{CompiledScene, camera_ray, compile_scene};
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    GatherParams, PhotonPassParams, first_hit, gather_kind, hit_flags, region_mode,
+    GatherParams, PhotonPassParams, first_hit, gather_kind, hit_flags, material_kind, region_mode,
 };
 use ppm_core::metrics::relative_rmse;
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
@@ -610,4 +610,183 @@ fn both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds() {
     let report = independent::compare(("cpu", &cpu), ("wgpu", &wgpu), &p, 3);
     println!("{}", independent::format(&report));
     assert!(report.agree, "{}", independent::format(&report));
+}
+
+/// Whether pixel `i`'s 3x3 neighbourhood (clipped to the image) all satisfies `f`: a pixel
+/// whose neighbours' centre rays agree has jittered rays that agree too.
+fn around(i: usize, size: u32, f: impl Fn(usize) -> bool) -> bool {
+    let (x, y, size) = (
+        (i as u32 % size) as i64,
+        (i as u32 / size) as i64,
+        size as i64,
+    );
+    (-1..=1).all(|dy| {
+        (-1..=1).all(|dx| {
+            let (nx, ny) = (x + dx, y + dy);
+            !(0..size).contains(&nx) || !(0..size).contains(&ny) || f((ny * size + nx) as usize)
+        })
+    })
+}
+
+/// Local mode keeps the pixels whose eye rays crossed the box the tall block sweeps but met
+/// the block in neither pose (the floor and wall seen past it), which a test against the box
+/// alone would reset, and resets every pixel that saw the block before the move.
+#[test]
+fn a_local_move_keeps_the_pixels_that_only_saw_past_the_object() {
+    const SIZE: u32 = 64;
+    let (scene, p) = cornell(SIZE, 20_000);
+    let block = scene.object_index("tall-block").unwrap() as u32;
+    let (a, b) = (scene.at_frame(0), scene.at_frame(1));
+    let (seen_a, seen_b) = (objects_seen(&a, SIZE), objects_seen(&b, SIZE));
+    let compiled = compile_scene(&a, SIZE, SIZE);
+    let data = backend_cpu::trace::SceneData::new(&compiled);
+    let crosses_box = |i: usize| {
+        let (x, y) = (
+            (i as u32 % SIZE) as f32 + 0.5,
+            (i as u32 / SIZE) as f32 + 0.5,
+        );
+        let dir = camera_ray(&compiled.camera, x, y);
+        let eye = compiled.camera.eye.into();
+        let t = data
+            .closest_hit(eye, dir, f32::INFINITY)
+            .map_or(f32::INFINITY, |h| h.t);
+        data.near_mover(eye, dir, t)
+    };
+    let pixels = 0..(SIZE * SIZE) as usize;
+    let past: Vec<usize> = pixels
+        .clone()
+        .filter(|&i| {
+            crosses_box(i)
+                && around(i, SIZE, |j| {
+                    seen_a[j] != Some(block) && seen_b[j] != Some(block)
+                })
+        })
+        .collect();
+    let saw: Vec<usize> = pixels
+        .filter(|&i| around(i, SIZE, |j| seen_a[j] == Some(block)))
+        .collect();
+    assert!(
+        past.len() > 20 && saw.len() > 20,
+        "{} pixels see past the box, {} see the block",
+        past.len(),
+        saw.len()
+    );
+    let mut backend = CpuBackend::new();
+    let mut render = warmed(&mut backend, a, &p, 8);
+    let moved = render.move_to(b, MoveMode::Local).unwrap();
+    println!(
+        "{moved:?}; {} past the block, {} on it",
+        past.len(),
+        saw.len()
+    );
+    let slots = render.backend().read_hit_points().unwrap();
+    let reset = |i: usize| slots[i].flags & hit_flags::UPDATED != 0;
+    assert!(
+        past.iter().all(|&i| !reset(i)),
+        "reset past the block: {:?}",
+        past.iter().filter(|&&i| reset(i)).collect::<Vec<_>>()
+    );
+    assert!(
+        saw.iter().all(|&i| reset(i)),
+        "kept on the block: {:?}",
+        saw.iter().filter(|&&i| !reset(i)).collect::<Vec<_>>()
+    );
+}
+
+/// Of 16 eye rays through a 4x4 grid of points in pixel `i`, how many meet a moving object
+/// in the scene of `compiled` (`data`), following mirrors (wedding-band has no glass).
+fn mirrored_paths_meeting_movers(
+    compiled: &CompiledScene,
+    data: &backend_cpu::trace::SceneData,
+    i: u32,
+    depth: u32,
+) -> u32 {
+    let size = compiled.camera.width;
+    let mut met = 0;
+    for k in 0..16 {
+        let x = (i % size) as f32 + (k % 4) as f32 * 0.25 + 0.125;
+        let y = (i / size) as f32 + (k / 4) as f32 * 0.25 + 0.125;
+        let mut dir = camera_ray(&compiled.camera, x, y);
+        let mut origin: glam::Vec3 = compiled.camera.eye.into();
+        for _ in 0..=depth {
+            let Some(hit) = data.closest_hit(origin, dir, f32::INFINITY) else {
+                break;
+            };
+            let tri = &data.triangles[hit.triangle as usize];
+            if tri.moving != 0 {
+                met += 1;
+                break;
+            }
+            if data.materials[tri.material as usize].kind != material_kind::MIRROR {
+                break;
+            }
+            let n = glam::Vec3::from(tri.normal);
+            let n = if dir.dot(n) < 0.0 { n } else { -n };
+            origin += dir * hit.t + n * 1e-3;
+            dir = ppm_core::geometry::reflect(dir, n);
+        }
+    }
+    met
+}
+
+/// Through mirrors: after the middle ring of wedding-band moves, local mode resets every
+/// pixel a quarter of whose eye paths meet the ring in its new pose (directly, or mirrored
+/// by the other rings: at 128x128 two pixels are found only by its probe), and keeps slots
+/// whose mirrored paths only crossed the ring's box. Both backends reset the same slots.
+#[test]
+fn a_local_move_probes_mirrored_paths_in_the_new_pose() {
+    const SIZE: u32 = 128;
+    let scene = scenes::builtin("wedding-band").unwrap().load().unwrap();
+    let mut p = RenderParams::for_scene(&scene);
+    (p.width, p.height, p.photons_per_pass) = (SIZE, SIZE, 20_000);
+    let (a, b) = (scene.at_frame(0), scene.at_frame(1));
+    let compiled_b = compile_scene(&b, SIZE, SIZE);
+    let data_b = backend_cpu::trace::SceneData::new(&compiled_b);
+    let meets_b: Vec<u32> = (0..SIZE * SIZE)
+        .map(|i| mirrored_paths_meeting_movers(&compiled_b, &data_b, i, p.max_eye_depth))
+        .collect();
+    let run = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+        let mut render = Renderer::start(backend, a.clone(), &p, &MoveParams::default()).unwrap();
+        for _ in 0..8 {
+            render.iteration().unwrap();
+        }
+        let before = render.backend().read_hit_points().unwrap();
+        let moved = render.move_to(b.clone(), MoveMode::Local).unwrap();
+        let after = render.backend().read_hit_points().unwrap();
+        let reset: Vec<bool> = after
+            .iter()
+            .map(|hp| hp.flags & hit_flags::UPDATED != 0)
+            .collect();
+        let chained_kept = before
+            .iter()
+            .zip(&reset)
+            .filter(|(hp, r)| hp.flags & hit_flags::EYE_CHAIN_NEAR_MOVER != 0 && !**r)
+            .count();
+        println!(
+            "{}: {moved:?}; {chained_kept} mirrored slots kept",
+            render.backend().name()
+        );
+        (reset, chained_kept)
+    };
+    let (cpu, chained_kept) = run(&mut CpuBackend::new());
+    let missed: Vec<usize> = (0..meets_b.len())
+        .filter(|&i| meets_b[i] >= 4 && !cpu[i])
+        .collect();
+    let meeting = meets_b.iter().filter(|&&m| m >= 8).count();
+    assert!(meeting > 50, "{meeting} pixels meet the ring in pose B");
+    assert!(
+        missed.is_empty(),
+        "kept, yet meet the ring in pose B: {missed:?}"
+    );
+    assert!(chained_kept > 0, "the probe kept no mirrored slot");
+    if let Some(mut gpu) =
+        backend_wgpu::backend_or_skip("a_local_move_probes_mirrored_paths_in_the_new_pose")
+    {
+        let (wgpu, _) = run(&mut gpu);
+        let differ = cpu.iter().zip(&wgpu).filter(|(c, w)| c != w).count();
+        assert!(
+            differ * 1000 <= cpu.len(),
+            "{differ} slots reset on one backend only"
+        );
+    }
 }
