@@ -139,7 +139,7 @@ pub struct MoveOptions {
     pub difference_passes: u32,
     /// Local mode gathers its correction within at least this many initial radii (0: each
     /// slot's own radius).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 3.0)]
     pub correction_radii: f32,
 }
 
