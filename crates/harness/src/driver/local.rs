@@ -58,7 +58,7 @@ pub const CORRECTION_SAMPLES: u32 = 8;
 /// Keys the correction's random numbers apart from every iteration's.
 const CORRECTION_SEED: u32 = 0x5eed_c0de;
 
-/// Eye paths per pixel that [`Renderer::probe`] traces in the new pose, through independent
+/// Eye paths per pixel that `Renderer::probe` traces in the new pose, through independent
 /// random points of it: an object that covers an eighth of what a pixel sees through a
 /// mirror is missed with probability (7/8)^32 = 1.4%, a sixteenth with 13%. A pixel kept
 /// that way holds a sliver of stale light, which its later iterations dilute.
