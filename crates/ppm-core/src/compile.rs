@@ -106,8 +106,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let mut lights = Vec::new();
     for &p in &bvh.primitive_indices {
         let (t, material, object) = tris[p as usize];
-        let mut gpu = gpu_triangle(t, material, object);
-        gpu.moving = u32::from(moving[object as usize]);
+        let mut gpu = gpu_triangle(t, material, object, moving[object as usize]);
         if let MaterialKind::Light { .. } = scene.materials[material as usize].kind {
             let area = light_area(Vec3::from(gpu.e1), Vec3::from(gpu.e2));
             if area > 0.0 {
@@ -230,7 +229,7 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
     }
 }
 
-fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
+fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32, moving: bool) -> GpuTriangle {
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];
     GpuTriangle {
@@ -241,7 +240,7 @@ fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
         e2: e2.into(),
         light: NO_MATERIAL,
         normal: unit_normal(e1, e2).into(),
-        moving: 0,
+        moving: u32::from(moving),
     }
 }
 
