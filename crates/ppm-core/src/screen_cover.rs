@@ -57,18 +57,20 @@ fn mark_triangle(covered: &mut [bool], width: usize, height: usize, p: [Vec2; 3]
         .min(Vec2::new(width as f32 - 1.0, height as f32 - 1.0))
         .floor();
     let twice_area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+    let edge_on = twice_area.abs() <= f32::EPSILON * (hi - lo).length_squared();
+    // Edges oriented so that the inside is on their left; the edge function's largest value
+    // over a square is its value at the centre plus the half-size times the gradient's 1-norm.
+    let edges = [0, 1, 2].map(|i| (p[i], (p[(i + 1) % 3] - p[i]) * twice_area.signum()));
     let half = 0.5 + MARGIN;
     for y in first.y as usize..=last.y as usize {
         for x in first.x as usize..=last.x as usize {
             let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            let inside = (0..3).all(|i| {
-                let (a, b) = (p[i], p[(i + 1) % 3]);
-                let edge = (b - a) * twice_area.signum();
-                // The edge function's largest value over the square: at its centre plus the
-                // half-size times the gradient's 1-norm.
-                edge.perp_dot(centre - a) + half * (edge.x.abs() + edge.y.abs()) >= 0.0
-            });
-            if inside || twice_area.abs() <= f32::EPSILON * (hi - lo).length_squared() {
+            let inside = || {
+                edges.iter().all(|&(a, edge)| {
+                    edge.perp_dot(centre - a) + half * (edge.x.abs() + edge.y.abs()) >= 0.0
+                })
+            };
+            if edge_on || inside() {
                 covered[y * width + x] = true;
             }
         }
