@@ -41,7 +41,7 @@
 use super::Renderer;
 use super::moves::{Compensation, MoveReport};
 use glam::Vec3;
-use ppm_core::compile::gpu_camera;
+use ppm_core::compile::CompiledScene;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, HitPoint, direct_accumulate, eye_flags, gather_kind,
     hit_flags,
@@ -132,7 +132,8 @@ impl Renderer<'_> {
         // The resets depend only on the flags and on pose B's outline, so they come first:
         // the passes below then skip the reset slots in both poses alike.
         let changed = self.scene.moving_vertices() != next.moving_vertices();
-        let resets = self.reset_near_movers(changed, &next)?;
+        let compiled = self.compile(&next);
+        let resets = self.reset_near_movers(changed, &next, &compiled)?;
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
@@ -146,7 +147,6 @@ impl Renderer<'_> {
         if changed {
             self.correct_direct(-1.0)?;
         }
-        let compiled = self.compile(&next);
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, &compiled);
@@ -190,18 +190,23 @@ impl Renderer<'_> {
         self.run_direct_light(&params)
     }
 
-    /// Starts over the slots whose view the move to `next` may change (only when the
-    /// geometry `changed`; see the module doc) and marks them `UPDATED`, so the compensation
-    /// skips them; counts the kept slots whose direct sums the paired correction reaches.
-    fn reset_near_movers(&mut self, changed: bool, next: &Scene) -> Result<Resets, BackendError> {
+    /// Starts over the slots whose view the move to `next` (`compiled`) may change (only when
+    /// the geometry `changed`; see the module doc) and marks them `UPDATED`, so the
+    /// compensation skips them; counts the kept slots whose direct sums the paired correction
+    /// reaches.
+    fn reset_near_movers(
+        &mut self,
+        changed: bool,
+        next: &Scene,
+        compiled: &CompiledScene,
+    ) -> Result<Resets, BackendError> {
         let mut slots = self.backend.read_hit_points()?;
-        let camera = gpu_camera(&next.camera, self.params.width, self.params.height);
         let posed: Vec<[Vec3; 3]> = next
             .moves
             .iter()
             .flat_map(|m| next.objects[m.object].triangles.iter().copied())
             .collect();
-        let covered = covered_pixels(&camera, &posed);
+        let covered = covered_pixels(&compiled.camera, &posed);
         let decided = |hp: &HitPoint| {
             hp.flags & hit_flags::EYE_MET_MOVER != 0
                 || hp.flags & hit_flags::EYE_NEAR_MOVER != 0 && covered[hp.pixel as usize]
@@ -209,7 +214,7 @@ impl Renderer<'_> {
         let chained = |hp: &HitPoint| hp.flags & hit_flags::EYE_CHAIN_NEAR_MOVER != 0;
         let undecided = |hp: &HitPoint| chained(hp) && !decided(hp);
         let met_in_b = if changed && slots.iter().any(undecided) {
-            self.probe(next, &slots, undecided)?
+            self.probe(compiled, &slots, undecided)?
         } else {
             Vec::new()
         };
@@ -241,13 +246,13 @@ impl Renderer<'_> {
     }
 
     /// Per pixel, whether one of [`PROBE_PATHS`] eye paths through random points of it
-    /// meets a moving object in pose `next`, for the `probed` slots: the test for paths that
+    /// meets a moving object in the pose `next` holds, for the `probed` slots: the test for paths that
     /// crossed a mover's box after a mirror or glass bounce, which the screen cannot judge.
     /// Every other slot rests, so the probe costs in proportion to the slots it decides.
     /// Leaves scratch in the slots (the caller writes them back) and the current pose loaded.
     fn probe(
         &mut self,
-        next: &Scene,
+        next: &CompiledScene,
         slots: &[HitPoint],
         probed: impl Fn(&HitPoint) -> bool,
     ) -> Result<Vec<bool>, BackendError> {
@@ -263,7 +268,7 @@ impl Renderer<'_> {
             })
             .collect();
         self.backend.write_hit_points(&scratch)?;
-        self.backend.update_scene(&self.compile(next))?;
+        self.backend.update_scene(next)?;
         for path in 0..PROBE_PATHS {
             let params = EyePassParams {
                 seed: self.params.seed ^ PROBE_SEED ^ path,
