@@ -1,9 +1,11 @@
 //! The GPU buffers, named as the WGSL bindings name them, and their creation and read-back.
 
 use crate::context::GpuContext;
+use crate::table::{Table, Texel};
 use bytemuck::Pod;
+use bytemuck::Zeroable;
 use ppm_core::compile::CompiledScene;
-use ppm_core::layout::GpuBounds;
+use ppm_core::layout::{BvhNode, GpuBounds, GpuTriangle};
 use ppm_core::passes::BackendError;
 use wgpu::util::DeviceExt;
 
@@ -46,6 +48,11 @@ pub fn storage_zeroed(
         usage: STORAGE,
         mapped_at_creation: false,
     }))
+}
+
+/// A table (four-word texels) holding `records`.
+fn table_of<T: Pod>(ctx: &GpuContext, label: &str, records: &[T]) -> Result<Table, BackendError> {
+    Table::with_data(ctx, label, Texel::Words4, bytemuck::cast_slice(records))
 }
 
 /// A uniform buffer holding `value`.
@@ -98,10 +105,10 @@ pub fn read_back<T: Pod>(
 pub struct SceneBuffers {
     /// Camera uniform.
     pub camera: wgpu::Buffer,
-    /// Triangles in BVH leaf order.
-    pub triangles: wgpu::Buffer,
-    /// Flattened BVH nodes.
-    pub nodes: wgpu::Buffer,
+    /// Triangles in BVH leaf order, four texels each.
+    pub triangles: Table,
+    /// Flattened BVH nodes, two texels each.
+    pub nodes: Table,
     /// Materials.
     pub materials: wgpu::Buffer,
     /// Emitting triangles.
@@ -126,10 +133,21 @@ impl SceneBuffers {
                 scene.bvh_depth
             )));
         }
+        // No triangle: one leaf holding one degenerate triangle, which no ray hits (bvh.wgsl).
+        let empty_leaf = [BvhNode {
+            count: 1,
+            ..Default::default()
+        }];
+        let degenerate = [GpuTriangle::zeroed()];
+        let (nodes, triangles) = if scene.nodes.is_empty() {
+            (&empty_leaf[..], &degenerate[..])
+        } else {
+            (&scene.nodes[..], &scene.triangles[..])
+        };
         Ok(Self {
             camera: uniform(ctx, "camera", &scene.camera),
-            triangles: storage_init(ctx, "triangles", &scene.triangles),
-            nodes: storage_init(ctx, "nodes", &scene.nodes),
+            triangles: table_of(ctx, "triangles", triangles)?,
+            nodes: table_of(ctx, "nodes", nodes)?,
             materials: storage_init(ctx, "materials", &scene.materials),
             lights: storage_init(ctx, "lights", &scene.lights),
             movers: if scene.movers.is_empty() {

@@ -12,6 +12,26 @@ pub enum Slot {
     Read,
     /// A storage buffer the shader writes.
     ReadWrite,
+    /// A read-only table (`texture_2d<u32>`, see [`crate::table`]).
+    Table,
+}
+
+/// Something a bind group can hold at a slot: a buffer or a table.
+pub trait Bindable {
+    /// The resource as a binding.
+    fn resource(&self) -> wgpu::BindingResource<'_>;
+}
+
+impl Bindable for wgpu::Buffer {
+    fn resource(&self) -> wgpu::BindingResource<'_> {
+        self.as_entire_binding()
+    }
+}
+
+impl Bindable for crate::table::Table {
+    fn resource(&self) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::TextureView(self.view())
+    }
 }
 
 /// Workgroup size of every pass shader but the scan (`WORKGROUP_SIZE` in layout.wgsl).
@@ -53,15 +73,7 @@ impl Kernel {
             .map(|(i, slot)| wgpu::BindGroupLayoutEntry {
                 binding: i as u32,
                 visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: match slot {
-                        Slot::Uniform => wgpu::BufferBindingType::Uniform,
-                        Slot::Read => wgpu::BufferBindingType::Storage { read_only: true },
-                        Slot::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
-                    },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
+                ty: binding_type(*slot),
                 count: None,
             })
             .collect();
@@ -93,14 +105,14 @@ impl Kernel {
         }
     }
 
-    /// A bind group with `buffers[i]` at binding `i`.
-    pub fn bind(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
+    /// A bind group with `resources[i]` at binding `i`.
+    pub fn bind(&self, device: &wgpu::Device, resources: &[&dyn Bindable]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = resources
             .iter()
             .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
+            .map(|(i, r)| wgpu::BindGroupEntry {
                 binding: i as u32,
-                resource: b.as_entire_binding(),
+                resource: r.resource(),
             })
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -128,6 +140,25 @@ impl Kernel {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(x, y, 1);
+    }
+}
+
+/// The layout entry type of a slot.
+fn binding_type(slot: Slot) -> wgpu::BindingType {
+    let buffer = |ty| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    match slot {
+        Slot::Uniform => buffer(wgpu::BufferBindingType::Uniform),
+        Slot::Read => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+        Slot::ReadWrite => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+        Slot::Table => wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
     }
 }
 

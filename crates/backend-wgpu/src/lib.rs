@@ -15,6 +15,7 @@ pub mod layout;
 mod passes;
 mod photon_grid;
 mod scan;
+mod table;
 
 /// The assembled WGSL of every pass.
 pub mod shaders {
@@ -112,6 +113,8 @@ pub struct WgpuBackend {
     /// The crossed-path mask (`crossed` in photon_pass.wgsl): one bit per path of the passes
     /// that record it, kept across scene updates so that pose B reads what pose A wrote.
     crossed: wgpu::Buffer,
+    /// Whether each submission's wall time goes to stderr (`PPM_WGPU_TIMING=1`).
+    timing: bool,
 }
 
 impl WgpuBackend {
@@ -150,6 +153,7 @@ impl WgpuBackend {
             last_pass_paths: 0,
             photon_buffer_limit: u64::MAX,
             crossed,
+            timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
         })
     }
 
@@ -201,12 +205,13 @@ impl WgpuBackend {
     }
 
     /// Submits the commands `record` writes, with the counters reset first, then reads the
-    /// counters back.
+    /// counters back; with `PPM_WGPU_TIMING=1`, prints the submission's wall time.
     fn run(
         &self,
         pass: &'static str,
         record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), BackendError>,
     ) -> Result<[u32; 4], BackendError> {
+        let start = std::time::Instant::now();
         self.ctx
             .queue
             .write_buffer(&self.counters, 0, bytemuck::cast_slice(&COUNTERS_RESET));
@@ -220,6 +225,9 @@ impl WgpuBackend {
             Ok(())
         })??;
         let counters = read_back::<u32>(&self.ctx, &self.counters, 4)?;
+        if self.timing {
+            eprintln!("wgpu {pass}: {:.2} ms", start.elapsed().as_secs_f64() * 1e3);
+        }
         Ok([counters[0], counters[1], counters[2], counters[3]])
     }
 
@@ -513,10 +521,18 @@ impl WgpuBackend {
                     (hit_points, slots.count),
                     params.gather_r2_floor,
                 )?;
-                self.kernels
-                    .gather
-                    .record(&self.ctx, encoder, &gather, &built, &slots, false);
                 map = Some(built);
+                Ok(())
+            })?;
+            self.run("photon accumulate", |encoder| {
+                self.kernels.gather.record(
+                    &self.ctx,
+                    encoder,
+                    &gather,
+                    map.as_ref().unwrap(),
+                    &slots,
+                    false,
+                );
                 Ok(())
             })?;
             stats.deposited += u64::from(deposited);

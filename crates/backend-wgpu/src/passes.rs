@@ -9,7 +9,7 @@ use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
 };
 
-use Slot::{Read, ReadWrite, Uniform};
+use Slot::{Read, ReadWrite, Table, Uniform};
 
 /// The hit-point buffer and the pass counters that per-slot passes bind.
 pub struct Slots<'a> {
@@ -29,7 +29,7 @@ impl EyePassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
         let slots = [
-            Uniform, Uniform, Read, Read, Read, ReadWrite, ReadWrite, Read,
+            Uniform, Uniform, Table, Table, Read, ReadWrite, ReadWrite, Read,
         ];
         Self(Kernel::new(
             &ctx.device,
@@ -74,7 +74,9 @@ impl DirectLightKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
-        let slots = [Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, Read];
+        let slots = [
+            Uniform, Table, Table, Read, Read, ReadWrite, ReadWrite, Read,
+        ];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -140,7 +142,7 @@ impl PhotonPassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
-            Uniform, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
+            Uniform, Table, Table, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
             ReadWrite, Read, ReadWrite,
         ];
         let kernel = |entry, kind: u32| {
@@ -219,7 +221,7 @@ impl GatherKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
         let slots = [
-            Uniform, Read, Read, Read, Read, Read, ReadWrite, ReadWrite, ReadWrite, Read,
+            Uniform, Read, Table, Read, Table, Read, ReadWrite, ReadWrite, ReadWrite, Read,
             ReadWrite, Uniform,
         ];
         Self {
@@ -261,9 +263,9 @@ impl GatherKernel {
             &[
                 &params,
                 inputs.materials,
-                &map.sorted,
+                &map.sorted_table,
                 &map.grid,
-                &map.bucket_start,
+                &map.bucket_table,
                 &map.order,
                 slots.hit_points,
                 inputs.accumulated,

@@ -3,10 +3,11 @@
 
 use crate::buffers::{storage_zeroed, uniform};
 use crate::context::GpuContext;
-use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
+use crate::kernel::{Bindable, Kernel, Slot, WORKGROUP, shader_module};
 use crate::layout::GridBuildParams;
 use crate::scan::Scan;
 use crate::shaders;
+use crate::table::{Table, Texel};
 use ppm_core::grid::{RADIUS_BINS, bucket_count};
 use ppm_core::layout::{GridParams, GridPhoton, Photon};
 use ppm_core::passes::BackendError;
@@ -25,11 +26,18 @@ pub struct PhotonMap {
     pub order: wgpu::Buffer,
     /// The photons in bucket order (ascending rank within a bucket), with their cell keys.
     pub sorted: wgpu::Buffer,
+    /// `sorted` as a table (two texels a photon), for the gather.
+    pub sorted_table: Table,
+    /// `bucket_start` as a table, for the gather.
+    pub bucket_table: Table,
     /// Each deposit's rank in path order.
     pub ranks: wgpu::Buffer,
     /// Path weight of each deposit.
     pub weights: wgpu::Buffer,
 }
+
+/// Texels of one [`GridPhoton`] in a table.
+const PHOTON_TEXELS: u32 = (size_of::<GridPhoton>() / 16) as u32;
 
 /// Workgroups of the radius histogram (`HISTOGRAM_GROUPS` in photon_grid.wgsl).
 const HISTOGRAM_GROUPS: u32 = 64;
@@ -92,7 +100,7 @@ impl PhotonGridKernels {
                 r2_floor,
             },
         );
-        let bindings = [
+        let bindings: [&dyn Bindable; 11] = [
             &params,
             &photons,
             hit_points,
@@ -122,6 +130,12 @@ impl PhotonGridKernels {
         self.scatter.dispatch(encoder, &group, count);
         self.sort.dispatch(encoder, &group, count);
         self.copy.dispatch(encoder, &group, count);
+        buffers
+            .sorted_table
+            .record_copy(encoder, &buffers.sorted, count * PHOTON_TEXELS);
+        buffers
+            .bucket_table
+            .record_copy(encoder, &buffers.bucket_start, bucket_count + 1);
         Ok(PhotonMap {
             photons,
             weights,
@@ -130,6 +144,8 @@ impl PhotonGridKernels {
             bucket_start: buffers.bucket_start.clone(),
             order: buffers.order.clone(),
             sorted: buffers.sorted.clone(),
+            sorted_table: buffers.sorted_table.clone(),
+            bucket_table: buffers.bucket_table.clone(),
             ranks: ranks.clone(),
         })
     }
@@ -145,6 +161,8 @@ pub struct GridBuffers {
     order: wgpu::Buffer,
     keys: wgpu::Buffer,
     sorted: wgpu::Buffer,
+    sorted_table: Table,
+    bucket_table: Table,
     /// Photons they hold at most.
     capacity: u32,
 }
@@ -172,6 +190,18 @@ impl GridBuffers {
                 ctx,
                 "sorted photons",
                 per_photon * size_of::<GridPhoton>() as u64,
+            )?,
+            sorted_table: Table::new(
+                ctx,
+                "sorted photon table",
+                Texel::Words4,
+                count.max(1) * PHOTON_TEXELS,
+            )?,
+            bucket_table: Table::new(
+                ctx,
+                "bucket start table",
+                Texel::Word,
+                bucket_count(count) + 1,
             )?,
             capacity: count.max(1),
         })

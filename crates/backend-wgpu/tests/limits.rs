@@ -39,3 +39,26 @@ fn an_image_beyond_the_binding_limit_is_refused_naming_the_limit() {
         .expect("a request that fits still runs");
     assert_eq!(stats.hit_points, 64);
 }
+
+/// A scene without triangles uploads (its BVH stands in as one leaf of one degenerate
+/// triangle) and every eye ray misses, as on the CPU.
+#[test]
+fn a_scene_without_triangles_traces_to_nothing() {
+    let Some(mut gpu) =
+        backend_wgpu::backend_or_skip("a_scene_without_triangles_traces_to_nothing")
+    else {
+        return;
+    };
+    let mut scene = scenes::analytic::furnace(glam::Vec3::splat(0.5), 1.0);
+    scene.objects.clear();
+    gpu.load_scene(&compile_scene(&scene, 8, 8)).unwrap();
+    let params = EyePassParams {
+        spp: 1,
+        max_depth: 4,
+        r2_initial: 0.01,
+        ray_epsilon: 1e-5,
+        ..Default::default()
+    };
+    let stats = gpu.eye_pass(&params).expect("an empty scene traces");
+    assert_eq!((stats.rays, stats.hit_points), (64, 0));
+}

@@ -1,10 +1,10 @@
-// #import layout rng qmc sampling geometry bvh lights movers
+// #import layout rng qmc sampling geometry bvh lights movers tables
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
 @group(0) @binding(0) var<uniform> params: DirectLightParams;
-@group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
-@group(0) @binding(2) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(1) var triangle_table: texture_2d<u32>;
+@group(0) @binding(2) var node_table: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> materials: array<GpuMaterial>;
 @group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
@@ -57,11 +57,11 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
         // Changes with a move only if it reached a light across a mover's box or met a mover
         // (backend-cpu's direct_light.rs says why).
         if hit.triangle != 0xffffffffu {
-            let reached_light = triangles[hit.triangle].light != NO_MATERIAL;
+            let reached_light = scene_triangle(hit.triangle).light != NO_MATERIAL;
             near = near || ((reached_light || in_mover(origin + w * hit.t)) && near_mover(origin, w, hit.t));
         }
         if hit.triangle != 0xffffffffu {
-            let tri = triangles[hit.triangle];
+            let tri = scene_triangle(hit.triangle);
             let cos_l = -dot(tri.normal, w);
             if tri.light != NO_MATERIAL && cos_l > 0.0 {
                 let hit_light = lights[tri.light];

@@ -1,11 +1,11 @@
-// #import layout rng qmc sampling geometry bvh movers
+// #import layout rng qmc sampling geometry bvh movers tables
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
-@group(0) @binding(2) var<storage, read> triangles: array<GpuTriangle>;
-@group(0) @binding(3) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var triangle_table: texture_2d<u32>;
+@group(0) @binding(3) var node_table: texture_2d<u32>;
 @group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
@@ -73,7 +73,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             rays = depth + 1u;
             break;
         }
-        let tri = triangles[hit.triangle];
+        let tri = scene_triangle(hit.triangle);
         if tri.moving != 0u {
             out.flags |= HIT_EYE_MET_MOVER;
         }

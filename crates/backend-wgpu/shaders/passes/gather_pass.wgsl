@@ -1,4 +1,4 @@
-// #import layout rng qmc geometry sampling update grid
+// #import layout rng qmc geometry sampling update grid tables
 // Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
@@ -9,9 +9,10 @@
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> materials: array<GpuMaterial>;
-@group(0) @binding(2) var<storage, read> sorted: array<GridPhoton>;
+// The photons in bucket order, two texels each, and the bucket starts (table.rs).
+@group(0) @binding(2) var sorted_table: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> grid: GridParams;
-@group(0) @binding(4) var<storage, read> bucket_start: array<u32>;
+@group(0) @binding(4) var bucket_table: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read> order: array<u32>;
 @group(0) @binding(6) var<storage, read_write> hit_points: array<HitPoint>;
 // Per hit point, two rows: (power, count) and (weight sum, 0, 0, 0).
@@ -26,6 +27,16 @@
 // Whether deposits carry path weights (region passes): one accumulate pipeline each way, so
 // other passes skip the extra reads.
 override WEIGHTED: bool = false;
+
+fn sorted_photon(k: u32) -> GridPhoton {
+    let a = textureLoad(sorted_table, table_texel(2u * k), 0);
+    let b = textureLoad(sorted_table, table_texel(2u * k + 1u), 0);
+    return GridPhoton(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
+
+fn bucket_start(b: u32) -> u32 {
+    return textureLoad(bucket_table, table_texel(b), 0).x;
+}
 
 // Running sums of the photons a slot found: count, path weight, power.
 struct Found {
@@ -65,7 +76,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     var found = Found(0u, 0.0, vec3<f32>(0.0));
     if scan_instead(lo, hi, g.photon_count) {
         for (var k = 0u; k < g.photon_count; k++) {
-            visit(&found, hp, r2, sorted[k], k);
+            visit(&found, hp, r2, sorted_photon(k), k);
         }
     } else {
         // One flat loop, one photon or one cell a step (z, y, x order, as the CPU's nested
@@ -77,7 +88,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         var cells_done = false;
         loop {
             if k < end {
-                let p = sorted[k];
+                let p = sorted_photon(k);
                 if p.cell == key {
                     visit(&found, hp, r2, p, k);
                 }
@@ -89,8 +100,8 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
             }
             key = cell_key(cell);
             let b = key & (g.bucket_count - 1u);
-            k = bucket_start[b];
-            end = bucket_start[b + 1u];
+            k = bucket_start(b);
+            end = bucket_start(b + 1u);
             cell.x++;
             if cell.x > hi.x {
                 cell.x = lo.x;

@@ -1,12 +1,42 @@
-// BVH traversal over the flattened obvhs nodes, with a fixed-size stack. Needs the bindings
-// `nodes` and `triangles` in the importing pass. The CPU backend traverses the same tree with
-// obvhs itself; only ties between equal distances can resolve differently.
+// BVH traversal over the flattened obvhs nodes, with a fixed-size stack. Needs the tables
+// `node_table` (two texels a node) and `triangle_table` (four texels a triangle) bound in the
+// importing pass, and tables.wgsl imported. The CPU backend traverses the same tree with
+// obvhs itself; only ties between equal distances can resolve differently. A scene without
+// triangles is uploaded as one leaf holding one degenerate triangle, which no ray hits.
 
 const STACK_SIZE: u32 = 64u;
 
 struct Hit {
     t: f32,
     triangle: u32,
+}
+
+fn bvh_node(i: u32) -> BvhNode {
+    let a = textureLoad(node_table, table_texel(2u * i), 0);
+    let b = textureLoad(node_table, table_texel(2u * i + 1u), 0);
+    return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
+
+fn scene_triangle(i: u32) -> GpuTriangle {
+    let a = textureLoad(triangle_table, table_texel(4u * i), 0);
+    let b = textureLoad(triangle_table, table_texel(4u * i + 1u), 0);
+    let c = textureLoad(triangle_table, table_texel(4u * i + 2u), 0);
+    let d = textureLoad(triangle_table, table_texel(4u * i + 3u), 0);
+    return GpuTriangle(
+        bitcast<vec3<f32>>(a.xyz), a.w,
+        bitcast<vec3<f32>>(b.xyz), b.w,
+        bitcast<vec3<f32>>(c.xyz), c.w,
+        bitcast<vec3<f32>>(d.xyz), d.w,
+    );
+}
+
+// Distance along the ray to triangle `i` if within (0, tmax), else T_MISS; reads only the
+// texels the test needs (the vertex and the two edges).
+fn hit_distance(origin: vec3<f32>, dir: vec3<f32>, i: u32, tmax: f32) -> f32 {
+    let v0 = bitcast<vec3<f32>>(textureLoad(triangle_table, table_texel(4u * i), 0).xyz);
+    let e1 = bitcast<vec3<f32>>(textureLoad(triangle_table, table_texel(4u * i + 1u), 0).xyz);
+    let e2 = bitcast<vec3<f32>>(textureLoad(triangle_table, table_texel(4u * i + 2u), 0).xyz);
+    return intersect_triangle(origin, dir, v0, e1, e2, 0.0, tmax);
 }
 
 fn safe_inverse(x: f32) -> f32 {
@@ -29,25 +59,38 @@ fn ray_box(origin: vec3<f32>, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) 
     return T_MISS;
 }
 
-// Nearest triangle with 0 < t < tmax; `triangle` is 0xffffffff on a miss.
+// Nearest triangle with 0 < t < tmax; `triangle` is 0xffffffff on a miss. Children are
+// visited nearer first: the nearer one straight away (its node already read), the farther
+// one from the stack.
 fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, any_hit: bool) -> Hit {
     var hit = Hit(tmax, 0xffffffffu);
-    if arrayLength(&nodes) == 0u {
-        return hit;
-    }
     let inv_dir = vec3<f32>(safe_inverse(dir.x), safe_inverse(dir.y), safe_inverse(dir.z));
     var stack: array<u32, STACK_SIZE>;
-    var sp = 1u;
-    stack[0] = 0u;
-    while sp > 0u {
-        sp--;
-        let node = nodes[stack[sp]];
-        if ray_box(origin, inv_dir, node.min, node.max) >= hit.t {
-            continue;
-        }
-        if node.count > 0u {
+    var sp = 0u;
+    var node = bvh_node(0u);
+    var enter = ray_box(origin, inv_dir, node.min, node.max);
+    loop {
+        if enter < hit.t {
+            if node.count == 0u {
+                let left = bvh_node(node.first);
+                let right = bvh_node(node.first + 1u);
+                let t_left = ray_box(origin, inv_dir, left.min, left.max);
+                let t_right = ray_box(origin, inv_dir, right.min, right.max);
+                let left_first = t_left <= t_right;
+                if max(t_left, t_right) < hit.t && sp < STACK_SIZE {
+                    stack[sp] = select(node.first, node.first + 1u, left_first);
+                    sp++;
+                }
+                if left_first {
+                    node = left;
+                } else {
+                    node = right;
+                }
+                enter = min(t_left, t_right);
+                continue;
+            }
             for (var i = node.first; i < node.first + node.count; i++) {
-                let t = intersect_triangle(origin, dir, triangles[i], 0.0, hit.t);
+                let t = hit_distance(origin, dir, i, hit.t);
                 if t < hit.t {
                     hit = Hit(t, i);
                     if any_hit {
@@ -55,25 +98,13 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, any_hit: bool) ->
                     }
                 }
             }
-            continue;
         }
-        let left = nodes[node.first];
-        let right = nodes[node.first + 1u];
-        let t_left = ray_box(origin, inv_dir, left.min, left.max);
-        let t_right = ray_box(origin, inv_dir, right.min, right.max);
-        // Push the far child first so the near one is visited first.
-        let near = select(node.first + 1u, node.first, t_left <= t_right);
-        let far = select(node.first, node.first + 1u, t_left <= t_right);
-        let t_near = min(t_left, t_right);
-        let t_far = max(t_left, t_right);
-        if t_far < hit.t && sp < STACK_SIZE {
-            stack[sp] = far;
-            sp++;
+        if sp == 0u {
+            break;
         }
-        if t_near < hit.t && sp < STACK_SIZE {
-            stack[sp] = near;
-            sp++;
-        }
+        sp--;
+        node = bvh_node(stack[sp]);
+        enter = ray_box(origin, inv_dir, node.min, node.max);
     }
     return hit;
 }

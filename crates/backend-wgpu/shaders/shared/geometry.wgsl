@@ -3,24 +3,24 @@
 // Distance reported for a miss: larger than any real hit.
 const T_MISS: f32 = 3.4028235e38;
 
-fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, tri: GpuTriangle, tmin: f32, tmax: f32) -> f32 {
-    let p = cross(dir, tri.e2);
-    let det = dot(tri.e1, p);
+fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
+    let p = cross(dir, e2);
+    let det = dot(e1, p);
     if abs(det) < 1e-20 || !is_finite_f32(det) {
         return T_MISS;
     }
     let inv_det = 1.0 / det;
-    let s = origin - tri.v0;
+    let s = origin - v0;
     let b1 = dot(s, p) * inv_det;
     if b1 < 0.0 || b1 > 1.0 {
         return T_MISS;
     }
-    let q = cross(s, tri.e1);
+    let q = cross(s, e1);
     let b2 = dot(dir, q) * inv_det;
     if b2 < 0.0 || b1 + b2 > 1.0 {
         return T_MISS;
     }
-    let t = dot(tri.e2, q) * inv_det;
+    let t = dot(e2, q) * inv_det;
     if t > tmin && t < tmax {
         return t;
     }

@@ -1,0 +1,277 @@
+//! Read-only tables: records that kernels read at scattered indices (photons, BVH nodes,
+//! triangles, bucket starts), held as texels of a 2D `rgba32uint` or `r32uint` texture
+//! rather than in a storage buffer.
+//!
+//! Why: a texel fetch is a gather the driver vectorises, while a storage-buffer read at an
+//! index that differs between invocations may be split into one bounds-checked load per
+//! invocation and per 32-bit word (lavapipe, which runs the WGSL on the CPU as CI does,
+//! splits them so). `examples/table_reads.rs` reads 16-byte records at random: on lavapipe
+//! 221 ms from a storage buffer against 25 ms from a table over 64 KiB, and 280 against
+//! 118 ms over 16 MiB. GPUs fetch texels through the same caches as buffer loads. The records keep their `#[repr(C)]` layout: a record of `n`
+//! 16-byte texels is texels `n*i .. n*i + n`, row-major in rows of [`ROW_TEXELS`]
+//! (`table_texel` in tables.wgsl), and floats travel as their bits.
+
+use crate::context::GpuContext;
+use ppm_core::passes::BackendError;
+
+/// Texels per row (`TABLE_ROW_SHIFT` in tables.wgsl is its log2).
+pub const ROW_TEXELS: u32 = 4096;
+
+/// What one texel holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Texel {
+    /// Four 32-bit words (`rgba32uint`).
+    Words4,
+    /// One 32-bit word (`r32uint`).
+    Word,
+}
+
+impl Texel {
+    fn bytes(self) -> u32 {
+        match self {
+            Texel::Words4 => 16,
+            Texel::Word => 4,
+        }
+    }
+
+    fn format(self) -> wgpu::TextureFormat {
+        match self {
+            Texel::Words4 => wgpu::TextureFormat::Rgba32Uint,
+            Texel::Word => wgpu::TextureFormat::R32Uint,
+        }
+    }
+}
+
+/// A texture holding up to `capacity` texels of one kind (clones share the texture).
+#[derive(Clone)]
+pub struct Table {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    texel: Texel,
+    capacity: u32,
+}
+
+impl Table {
+    /// An empty table for at least `texels` texels (a whole number of rows, at least one),
+    /// refused with the limit named when the adapter's textures cannot hold it.
+    pub fn new(
+        ctx: &GpuContext,
+        label: &str,
+        texel: Texel,
+        texels: u32,
+    ) -> Result<Self, BackendError> {
+        let rows = texels.div_ceil(ROW_TEXELS).max(1);
+        let max_rows = ctx.limits().max_texture_dimension_2d;
+        if rows > max_rows {
+            return Err(BackendError::Limit(format!(
+                "table '{label}' needs {texels} texels ({rows} rows of {ROW_TEXELS}); this adapter's textures hold at most {max_rows} rows (max_texture_dimension_2d)"
+            )));
+        }
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: ROW_TEXELS,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: texel.format(),
+            // COPY_SRC: tests read tables back.
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        Ok(Self {
+            texture,
+            view,
+            texel,
+            capacity: rows * ROW_TEXELS,
+        })
+    }
+
+    /// A table holding `bytes` (a whole number of texels).
+    pub fn with_data(
+        ctx: &GpuContext,
+        label: &str,
+        texel: Texel,
+        bytes: &[u8],
+    ) -> Result<Self, BackendError> {
+        let texels = (bytes.len() as u32).div_ceil(texel.bytes());
+        let table = Self::new(ctx, label, texel, texels)?;
+        let mut padded = bytes.to_vec();
+        padded.resize((table.capacity * texel.bytes()) as usize, 0);
+        ctx.queue.write_texture(
+            table.texture.as_image_copy(),
+            &padded,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(ROW_TEXELS * texel.bytes()),
+                rows_per_image: None,
+            },
+            table.texture.size(),
+        );
+        Ok(table)
+    }
+
+    /// Records the copy of the first `texels` texels of `buffer` into the table.
+    pub fn record_copy(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        buffer: &wgpu::Buffer,
+        texels: u32,
+    ) {
+        let texels = texels.min(self.capacity);
+        let row_bytes = u64::from(ROW_TEXELS * self.texel.bytes());
+        let full_rows = texels / ROW_TEXELS;
+        let rest = texels % ROW_TEXELS;
+        let copy = |encoder: &mut wgpu::CommandEncoder, row: u32, width: u32, rows: u32| {
+            encoder.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo {
+                    buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: u64::from(row) * row_bytes,
+                        bytes_per_row: Some(row_bytes as u32),
+                        rows_per_image: None,
+                    },
+                },
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x: 0, y: row, z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::Extent3d {
+                    width,
+                    height: rows,
+                    depth_or_array_layers: 1,
+                },
+            );
+        };
+        if full_rows > 0 {
+            copy(encoder, 0, ROW_TEXELS, full_rows);
+        }
+        if rest > 0 {
+            copy(encoder, full_rows, rest, 1);
+        }
+    }
+
+    /// The view kernels bind.
+    pub fn view(&self) -> &wgpu::TextureView {
+        &self.view
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::buffers::{read_back, storage_init, storage_zeroed};
+
+    /// Copies the texels of `table` back into a buffer, row by row.
+    fn table_contents(ctx: &GpuContext, table: &Table, texels: u32) -> Vec<u32> {
+        let words = table.texel.bytes() / 4;
+        let out = storage_zeroed(
+            ctx,
+            "table contents",
+            u64::from(table.capacity * table.texel.bytes()),
+        )
+        .expect("small");
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            table.texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &out,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(ROW_TEXELS * table.texel.bytes()),
+                    rows_per_image: None,
+                },
+            },
+            table.texture.size(),
+        );
+        ctx.queue.submit([encoder.finish()]);
+        read_back::<u32>(ctx, &out, (texels * words) as usize).expect("read back")
+    }
+
+    /// A buffer of whole rows and a part is copied whole, the partial row included, for both
+    /// texel kinds.
+    #[test]
+    fn a_copy_fills_whole_rows_and_the_partial_last_row() {
+        let Some(backend) =
+            crate::backend_or_skip("a_copy_fills_whole_rows_and_the_partial_last_row")
+        else {
+            return;
+        };
+        let ctx = &backend.ctx;
+        for (texel, texels) in [
+            (Texel::Words4, ROW_TEXELS + 17),
+            (Texel::Word, 2 * ROW_TEXELS + 1),
+        ] {
+            let words = texels * texel.bytes() / 4;
+            let data: Vec<u32> = (0..words).map(|i| i.wrapping_mul(2_654_435_761)).collect();
+            let buffer = storage_init(ctx, "source", &data);
+            let table = Table::new(ctx, "table", texel, texels).expect("fits");
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            table.record_copy(&mut encoder, &buffer, texels);
+            ctx.queue.submit([encoder.finish()]);
+            let back = table_contents(ctx, &table, texels);
+            let first_wrong = back.iter().zip(&data).position(|(a, b)| a != b);
+            assert_eq!(first_wrong, None, "{texel:?}: first wrong word");
+            assert_eq!(back.len(), data.len());
+        }
+    }
+
+    /// Records written at creation read back as written, floats bit for bit.
+    #[test]
+    fn data_written_at_creation_reads_back_bit_for_bit() {
+        let Some(backend) =
+            crate::backend_or_skip("data_written_at_creation_reads_back_bit_for_bit")
+        else {
+            return;
+        };
+        let ctx = &backend.ctx;
+        let floats = [
+            f32::NAN,
+            -0.0,
+            f32::INFINITY,
+            1e-45,
+            -3.5,
+            f32::MAX,
+            0.1,
+            7.0,
+        ];
+        let words: Vec<u32> = floats.iter().map(|f| f.to_bits()).collect();
+        let table = Table::with_data(ctx, "floats", Texel::Words4, bytemuck::cast_slice(&words))
+            .expect("fits");
+        assert_eq!(table_contents(ctx, &table, 2), words);
+    }
+
+    #[test]
+    fn a_table_beyond_the_texture_limit_is_refused_naming_it() {
+        let Some(backend) =
+            crate::backend_or_skip("a_table_beyond_the_texture_limit_is_refused_naming_it")
+        else {
+            return;
+        };
+        let ctx = &backend.ctx;
+        let rows = ctx.limits().max_texture_dimension_2d;
+        match Table::new(
+            ctx,
+            "huge",
+            Texel::Word,
+            (rows + 1).saturating_mul(ROW_TEXELS),
+        ) {
+            Err(BackendError::Limit(m)) => {
+                assert!(
+                    m.contains("huge") && m.contains("max_texture_dimension_2d"),
+                    "{m}"
+                )
+            }
+            Err(e) => panic!("expected a limit error, got {e}"),
+            Ok(_) => panic!("expected a limit error, got a table"),
+        }
+    }
+}
