@@ -110,7 +110,7 @@ pub struct SceneBuffers {
     /// Flattened BVH nodes, two texels each.
     pub nodes: Table,
     /// Materials.
-    pub materials: wgpu::Buffer,
+    pub materials: Table,
     /// Emitting triangles.
     pub lights: wgpu::Buffer,
     /// Boxes of the moving objects (one empty box when nothing moves).
@@ -148,7 +148,7 @@ impl SceneBuffers {
             camera: uniform(ctx, "camera", &scene.camera),
             triangles: table_of(ctx, "triangles", triangles)?,
             nodes: table_of(ctx, "nodes", nodes)?,
-            materials: storage_init(ctx, "materials", &scene.materials),
+            materials: table_of(ctx, "materials", &scene.materials)?,
             lights: storage_init(ctx, "lights", &scene.lights),
             movers: if scene.movers.is_empty() {
                 storage_init(ctx, "movers", &[GpuBounds::EMPTY])

@@ -29,7 +29,7 @@ impl EyePassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
         let slots = [
-            Uniform, Uniform, Table, Table, Read, ReadWrite, ReadWrite, Read,
+            Uniform, Uniform, Table, Table, Table, ReadWrite, ReadWrite, Read,
         ];
         Self(Kernel::new(
             &ctx.device,
@@ -75,7 +75,7 @@ impl DirectLightKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
         let slots = [
-            Uniform, Table, Table, Read, Read, ReadWrite, ReadWrite, Read,
+            Uniform, Table, Table, Table, Read, ReadWrite, ReadWrite, Read,
         ];
         Self(Kernel::new(
             &ctx.device,
@@ -142,7 +142,7 @@ impl PhotonPassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
-            Uniform, Table, Table, Read, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
+            Uniform, Table, Table, Table, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
             ReadWrite, Read, ReadWrite,
         ];
         let kernel = |entry, kind: u32| {
@@ -206,7 +206,7 @@ pub struct GatherInputs<'a> {
     /// Gather parameters (alpha, emitted increment, kind).
     pub params: &'a GatherParams,
     /// Materials, for the BRDF.
-    pub materials: &'a wgpu::Buffer,
+    pub materials: &'a crate::table::Table,
     /// Per hit point: running power, count and weight of the pass's photons so far.
     pub accumulated: &'a wgpu::Buffer,
     /// Per hit point: deferred region photons.
@@ -221,7 +221,7 @@ impl GatherKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
         let slots = [
-            Uniform, Read, Table, Read, Table, Read, ReadWrite, ReadWrite, ReadWrite, Read,
+            Uniform, Table, Table, Read, Table, Read, ReadWrite, ReadWrite, ReadWrite, Read,
             ReadWrite, Uniform,
         ];
         Self {

@@ -1,11 +1,11 @@
-// #import layout rng qmc sampling geometry bvh lights movers tables
+// #import layout rng qmc sampling geometry bvh lights movers tables materials
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
 @group(0) @binding(0) var<uniform> params: DirectLightParams;
 @group(0) @binding(1) var triangle_table: texture_2d<u32>;
 @group(0) @binding(2) var node_table: texture_2d<u32>;
-@group(0) @binding(3) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(3) var material_table: texture_2d<u32>;
 @group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
@@ -45,7 +45,7 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
             let cos_x = dot(hp.normal, w);
             let cos_l = -dot(light.normal, w);
             if cos_x > 0.0 && cos_l > 0.0 && !occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
-                let le = materials[light.material].emission;
+                let le = scene_material(light.material).emission;
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
                 sum += le * (cos_x / pl * power_heuristic(pl, cos_x * (1.0 / PI)));
             }
@@ -65,7 +65,7 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
             let cos_l = -dot(tri.normal, w);
             if tri.light != NO_MATERIAL && cos_l > 0.0 {
                 let hit_light = lights[tri.light];
-                let le = materials[hit_light.material].emission;
+                let le = scene_material(hit_light.material).emission;
                 let pl = light_pdf(hit_light.pdf, hit_light.area, hit.t * hit.t, cos_l);
                 sum += le * (PI * power_heuristic(local.z * (1.0 / PI), pl));
             }
@@ -80,7 +80,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if slot >= arrayLength(&hit_points) {
         return;
     }
-    var hp = hit_points[slot];
+    let hp = hit_points[slot];
     if (hp.flags & HIT_RESTING) != 0u {
         return;
     }
@@ -91,7 +91,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     var estimate = vec3<f32>(0.0);
     near = false;
     if (hp.flags & HIT_VALID) != 0u {
-        let material = materials[hp.material];
+        let material = scene_material(hp.material);
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
         if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && arrayLength(&lights) > 0u {
             direct += estimate_irradiance(hp, slot) * material.albedo * (1.0 / PI);
@@ -99,17 +99,22 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         }
         estimate = hp.throughput * direct;
     }
+    var flags = hp.flags;
     if near {
-        hp.flags |= HIT_SHADOW_NEAR_MOVER;
+        flags |= HIT_SHADOW_NEAR_MOVER;
     }
+    var direct = estimate;
+    var iterations = 1u;
     if correcting {
-        hp.direct += params.sign * f32(hp.iterations) * estimate;
+        direct = hp.direct + params.sign * f32(hp.iterations) * estimate;
+        iterations = hp.iterations;
     } else if params.accumulate == DIRECT_ADD {
-        hp.direct += estimate;
-        hp.iterations += 1u;
-    } else {
-        hp.direct = estimate;
-        hp.iterations = 1u;
+        direct = hp.direct + estimate;
+        iterations = hp.iterations + 1u;
     }
-    hit_points[slot] = hp;
+    // Only the fields this pass changes are written back (a whole slot is 24 word stores,
+    // which lavapipe makes one invocation at a time).
+    hit_points[slot].flags = flags;
+    hit_points[slot].direct = direct;
+    hit_points[slot].iterations = iterations;
 }

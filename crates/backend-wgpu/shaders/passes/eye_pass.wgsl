@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh movers tables
+// #import layout rng qmc sampling geometry bvh movers tables materials
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -6,7 +6,7 @@
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
 @group(0) @binding(2) var triangle_table: texture_2d<u32>;
 @group(0) @binding(3) var node_table: texture_2d<u32>;
-@group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(4) var material_table: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(7) var<storage, read> movers: array<GpuBounds>;
@@ -77,7 +77,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         if tri.moving != 0u {
             out.flags |= HIT_EYE_MET_MOVER;
         }
-        let material = materials[tri.material];
+        let material = scene_material(tri.material);
         let position = origin + dir * hit.t;
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);

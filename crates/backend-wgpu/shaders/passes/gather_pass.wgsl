@@ -1,4 +1,4 @@
-// #import layout rng qmc geometry sampling update grid tables
+// #import layout rng qmc geometry sampling update grid tables materials
 // Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
@@ -8,7 +8,7 @@
 // and clears it.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
-@group(0) @binding(1) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(1) var material_table: texture_2d<u32>;
 // The photons in bucket order, two texels each, and the bucket starts (table.rs).
 @group(0) @binding(2) var sorted_table: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> grid: GridParams;
@@ -148,13 +148,13 @@ fn gathers(hp: HitPoint, kind: u32) -> bool {
     return (hp.flags & HIT_VALID) != 0u && serves(hp, kind);
 }
 
-fn store(slot: u32, hp_in: HitPoint, s: Statistics, emitted: f32) {
-    var hp = hp_in;
-    hp.n = s.n;
-    hp.r2 = s.r2;
-    hp.tau = s.tau;
-    hp.emitted = emitted;
-    hit_points[slot] = hp;
+// Writes a slot's new statistics: only the fields an update changes (a whole slot is 24
+// word stores, which lavapipe makes one invocation at a time).
+fn store(slot: u32, s: Statistics, emitted: f32) {
+    hit_points[slot].n = s.n;
+    hit_points[slot].r2 = s.r2;
+    hit_points[slot].tau = s.tau;
+    hit_points[slot].emitted = emitted;
 }
 
 @compute @workgroup_size(64)
@@ -182,10 +182,10 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         }
         if p.w >= 0.0 {
             let s = ppm_update(s0, p.w, p.xyz, params.alpha);
-            store(slot, hp, Statistics(s.n, s.r2, max(s.tau, vec3<f32>(0.0))), hp.emitted);
+            store(slot, Statistics(s.n, s.r2, max(s.tau, vec3<f32>(0.0))), hp.emitted);
         } else {
             let s = compensation_update(s0, -p.w, p.xyz, params.alpha, radii.x);
-            store(slot, hp, s, select(hp.emitted, 0.0, s.n == 0.0));
+            store(slot, s, select(hp.emitted, 0.0, s.n == 0.0));
         }
         return;
     }
@@ -205,7 +205,7 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if region && (params.kind & GATHER_RAW_COUNT) == 0u {
         m = weight_sum * scale;
     }
-    let brdf = materials[hp.material].albedo * (1.0 / PI);
+    let brdf = scene_material(hp.material).albedo * (1.0 / PI);
     let dtau = acc.xyz * hp.throughput * brdf * scale;
     if found > 0.0 {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
@@ -222,8 +222,8 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         if m > 0.0 && s.n == 0.0 {
             emitted = 0.0;
         }
-        store(slot, hp, s, emitted);
+        store(slot, s, emitted);
     } else {
-        store(slot, hp, ppm_update(s0, m, dtau, params.alpha), emitted);
+        store(slot, ppm_update(s0, m, dtau, params.alpha), emitted);
     }
 }

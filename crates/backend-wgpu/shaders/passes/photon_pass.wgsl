@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bvh lights emission movers tables
+// #import layout rng sampling geometry bvh lights emission movers tables materials
 // Photon pass (ALGORITHM.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -25,7 +25,7 @@ struct Emitter {
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var triangle_table: texture_2d<u32>;
 @group(0) @binding(2) var node_table: texture_2d<u32>;
-@group(0) @binding(3) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(3) var material_table: texture_2d<u32>;
 @group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(5) var<storage, read_write> ranks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> photons: array<Photon>;
@@ -125,7 +125,7 @@ fn trace_photon(path: u32) -> Traced {
             break;
         }
         let tri = scene_triangle(hit.triangle);
-        let material = materials[tri.material];
+        let material = scene_material(tri.material);
         let position = origin + dir * hit.t;
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);

@@ -1,5 +1,5 @@
 // Where photons leave the lights: the twin of ppm_core::emission. Needs the bindings
-// `lights`, `materials`, `emitter` and `recorded` in the importing pass.
+// `lights`, `material_table`, `emitter` and `recorded` in the importing pass.
 
 const EMISSION_ORDINARY: u32 = 0u;
 const EMISSION_REGION: u32 = 1u;
@@ -15,7 +15,7 @@ struct Emission {
 }
 
 fn light_power(light: GpuLight) -> vec3<f32> {
-    return materials[light.material].emission * (PI * light.area / light.pdf);
+    return scene_material(light.material).emission * (PI * light.area / light.pdf);
 }
 
 fn point_on(light: GpuLight, u1: f32, u2: f32) -> vec3<f32> {
