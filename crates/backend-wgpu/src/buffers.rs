@@ -1,11 +1,12 @@
 //! The GPU buffers, named as the WGSL bindings name them, and their creation and read-back.
 
 use crate::context::GpuContext;
+use crate::layout::SceneCounts;
 use crate::table::{Table, Texel};
 use bytemuck::Pod;
 use bytemuck::Zeroable;
 use ppm_core::compile::CompiledScene;
-use ppm_core::layout::{BvhNode, GpuBounds, GpuTriangle};
+use ppm_core::layout::{BvhNode, GpuTriangle};
 use ppm_core::passes::BackendError;
 use wgpu::util::DeviceExt;
 
@@ -111,13 +112,15 @@ pub struct SceneBuffers {
     pub nodes: Table,
     /// Materials.
     pub materials: Table,
-    /// Emitting triangles.
-    pub lights: wgpu::Buffer,
-    /// Boxes of the moving objects (one empty box when nothing moves).
-    pub movers: wgpu::Buffer,
+    /// Emitting triangles, four texels each.
+    pub lights: Table,
+    /// Boxes of the moving objects, two texels each (none when nothing moves).
+    pub movers: Table,
+    /// How many records `lights` and `movers` hold (uniform [`SceneCounts`]).
+    pub counts: wgpu::Buffer,
     /// Camera as uploaded (resolution decides the hit-point count).
     pub camera_value: ppm_core::layout::GpuCamera,
-    /// Emitting triangles (the buffer holds a zeroed one when there are none).
+    /// Emitting triangles.
     pub light_count: usize,
 }
 
@@ -149,12 +152,17 @@ impl SceneBuffers {
             triangles: table_of(ctx, "triangles", triangles)?,
             nodes: table_of(ctx, "nodes", nodes)?,
             materials: table_of(ctx, "materials", &scene.materials)?,
-            lights: storage_init(ctx, "lights", &scene.lights),
-            movers: if scene.movers.is_empty() {
-                storage_init(ctx, "movers", &[GpuBounds::EMPTY])
-            } else {
-                storage_init(ctx, "movers", &scene.movers)
-            },
+            lights: table_of(ctx, "lights", &scene.lights)?,
+            movers: table_of(ctx, "movers", &scene.movers)?,
+            counts: uniform(
+                ctx,
+                "scene counts",
+                &SceneCounts {
+                    lights: scene.lights.len() as u32,
+                    movers: scene.movers.len() as u32,
+                    ..Default::default()
+                },
+            ),
             camera_value: scene.camera,
             light_count: scene.lights.len(),
         })

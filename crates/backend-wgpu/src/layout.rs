@@ -72,3 +72,18 @@ pub struct UpdateParams {
     /// Padding.
     pub _pad2: u32,
 }
+
+/// counts.wgsl's `SceneCounts`: how many records the scene's light and mover tables hold (a
+/// table has no length of its own). 16 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SceneCounts {
+    /// Emitting triangles.
+    pub lights: u32,
+    /// Boxes of moving objects.
+    pub movers: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+}

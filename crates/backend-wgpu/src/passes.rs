@@ -29,7 +29,7 @@ impl EyePassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
         let slots = [
-            Uniform, Uniform, Table, Table, Table, ReadWrite, ReadWrite, Read,
+            Uniform, Uniform, Table, Table, Table, ReadWrite, ReadWrite, Table, Uniform,
         ];
         Self(Kernel::new(
             &ctx.device,
@@ -61,6 +61,7 @@ impl EyePassKernel {
                 slots.hit_points,
                 slots.counters,
                 &scene.movers,
+                &scene.counts,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);
@@ -75,7 +76,7 @@ impl DirectLightKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
         let slots = [
-            Uniform, Table, Table, Table, Read, ReadWrite, ReadWrite, Read,
+            Uniform, Table, Table, Table, Table, ReadWrite, ReadWrite, Table, Uniform,
         ];
         Self(Kernel::new(
             &ctx.device,
@@ -107,6 +108,7 @@ impl DirectLightKernel {
                 slots.hit_points,
                 slots.counters,
                 &scene.movers,
+                &scene.counts,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);
@@ -142,8 +144,8 @@ impl PhotonPassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
-            Uniform, Table, Table, Table, Read, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
-            ReadWrite, Read, ReadWrite,
+            Uniform, Table, Table, Table, Table, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
+            ReadWrite, Table, ReadWrite, Uniform,
         ];
         let kernel = |entry, kind: u32| {
             Kernel::specialised(
@@ -188,6 +190,7 @@ impl PhotonPassKernel {
                 targets.weights,
                 &scene.movers,
                 targets.crossed,
+                &scene.counts,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);

@@ -224,7 +224,13 @@ fn dynamic_pass_structs_match_their_wgsl_twins() {
 
 #[test]
 fn backend_kernel_parameters_match_their_wgsl_twins() {
-    use backend_wgpu::layout::{GridBuildParams, ScanParams};
+    use backend_wgpu::layout::{GridBuildParams, ScanParams, SceneCounts};
+    same_layout!(SceneCounts {
+        lights,
+        movers,
+        _pad0,
+        _pad1
+    });
     same_layout!(ScanParams {
         count,
         _pad0,

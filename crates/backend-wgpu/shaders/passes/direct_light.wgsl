@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh lights movers tables materials
+// #import layout rng qmc sampling geometry bvh lights movers tables materials counts
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
@@ -6,10 +6,11 @@
 @group(0) @binding(1) var triangle_table: texture_2d<u32>;
 @group(0) @binding(2) var node_table: texture_2d<u32>;
 @group(0) @binding(3) var material_table: texture_2d<u32>;
-@group(0) @binding(4) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(4) var light_table: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
-@group(0) @binding(7) var<storage, read> movers: array<GpuBounds>;
+@group(0) @binding(7) var mover_table: texture_2d<u32>;
+@group(0) @binding(8) var<uniform> counts: SceneCounts;
 
 // Whether a ray of this invocation's estimate crossed a mover's box.
 var<private> near: bool;
@@ -32,7 +33,7 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
     for (var s = 0u; s < params.samples; s++) {
         let index = start + s;
         let choice = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_CHOICE, index);
-        let light = lights[sample_light(choice.x)];
+        let light = scene_light(sample_light(choice.x));
         let u = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_LIGHT_POINT, index);
         let b = uniform_triangle(u.x, u.y);
         let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
@@ -64,7 +65,7 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
             let tri = scene_triangle(hit.triangle);
             let cos_l = -dot(tri.normal, w);
             if tri.light != NO_MATERIAL && cos_l > 0.0 {
-                let hit_light = lights[tri.light];
+                let hit_light = scene_light(tri.light);
                 let le = scene_material(hit_light.material).emission;
                 let pl = light_pdf(hit_light.pdf, hit_light.area, hit.t * hit.t, cos_l);
                 sum += le * (PI * power_heuristic(local.z * (1.0 / PI), pl));
@@ -93,7 +94,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if (hp.flags & HIT_VALID) != 0u {
         let material = scene_material(hp.material);
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
-        if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && arrayLength(&lights) > 0u {
+        if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && counts.lights > 0u {
             direct += estimate_irradiance(hp, slot) * material.albedo * (1.0 / PI);
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }

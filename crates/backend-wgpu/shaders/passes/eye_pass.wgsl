@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh movers tables materials
+// #import layout rng qmc sampling geometry bvh movers tables materials counts
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -9,7 +9,8 @@
 @group(0) @binding(4) var material_table: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
-@group(0) @binding(7) var<storage, read> movers: array<GpuBounds>;
+@group(0) @binding(7) var mover_table: texture_2d<u32>;
+@group(0) @binding(8) var<uniform> counts: SceneCounts;
 
 const DIM_GLASS: u32 = 2u;
 

@@ -1,5 +1,5 @@
 // Where photons leave the lights: the twin of ppm_core::emission. Needs the bindings
-// `lights`, `material_table`, `emitter` and `recorded` in the importing pass.
+// `light_table`, `counts`, `material_table`, `emitter` and `recorded` in the importing pass.
 
 const EMISSION_ORDINARY: u32 = 0u;
 const EMISSION_REGION: u32 = 1u;
@@ -25,7 +25,7 @@ fn point_on(light: GpuLight, u1: f32, u2: f32) -> vec3<f32> {
 
 fn ordinary_emission(key: StreamKey) -> Emission {
     let index = sample_light(stream_uniform(key, 0u));
-    let light = lights[index];
+    let light = scene_light(index);
     return Emission(
         point_on(light, stream_uniform(key, 1u), stream_uniform(key, 2u)),
         to_world(cosine_hemisphere(stream_uniform(key, 3u), stream_uniform(key, 4u)), light.normal),
@@ -39,7 +39,7 @@ fn ordinary_emission(key: StreamKey) -> Emission {
 fn region_emission(key: StreamKey) -> Emission {
     let region = emitter.region;
     let index = sample_light(stream_uniform(key, 0u));
-    let light = lights[index];
+    let light = scene_light(index);
     var origin = region.light_point;
     if region.mode != REGION_POINT {
         origin = point_on(light, stream_uniform(key, 1u), stream_uniform(key, 2u));
@@ -78,7 +78,7 @@ fn guided_emission(key: StreamKey) -> Emission {
     let recorded_path = recorded[k];
     let cone = uniform_cone(stream_uniform(key, 3u), stream_uniform(key, 4u), guide.cos_cone);
     if guide.weighted == 0u {
-        let light = lights[recorded_path.light];
+        let light = scene_light(recorded_path.light);
         return Emission(
             recorded_path.origin,
             to_world(cone, recorded_path.direction),

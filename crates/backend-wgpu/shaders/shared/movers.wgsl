@@ -1,6 +1,13 @@
 // The boxes moving objects stay inside (ppm_core::compile::CompiledScene::movers), for the
-// passes that flag paths crossing them; the pass declares `movers: array<GpuBounds>` (one
-// empty box when nothing moves). The twin of backend-cpu's SceneData::near_mover.
+// passes that flag paths crossing them: a table of two texels a box, bound as `mover_table`
+// with `counts` (tables.wgsl and counts.wgsl imported). A still scene has none, and its
+// rays test nothing. The twin of backend-cpu's SceneData::near_mover.
+
+fn mover_bounds(i: u32) -> GpuBounds {
+    let a = textureLoad(mover_table, table_texel(2u * i), 0);
+    let b = textureLoad(mover_table, table_texel(2u * i + 1u), 0);
+    return GpuBounds(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
 
 // Whether the segment origin + t dir, 0 <= t <= t_max, meets the closed box [lo, hi]
 // (ppm_core::geometry::segment_meets_box); an empty box (lo > hi) is never met.
@@ -31,8 +38,9 @@ fn segment_meets_box(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, lo: vec3<f32
 }
 
 fn near_mover(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
-    for (var i = 0u; i < arrayLength(&movers); i++) {
-        if segment_meets_box(origin, dir, t_max, movers[i].min, movers[i].max) {
+    for (var i = 0u; i < counts.movers; i++) {
+        let b = mover_bounds(i);
+        if segment_meets_box(origin, dir, t_max, b.min, b.max) {
             return true;
         }
     }
@@ -40,8 +48,9 @@ fn near_mover(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
 }
 
 fn in_mover(p: vec3<f32>) -> bool {
-    for (var i = 0u; i < arrayLength(&movers); i++) {
-        if all(p >= movers[i].min) && all(p <= movers[i].max) {
+    for (var i = 0u; i < counts.movers; i++) {
+        let b = mover_bounds(i);
+        if all(p >= b.min) && all(p <= b.max) {
             return true;
         }
     }
