@@ -5,6 +5,17 @@ use ppm_core::compile::compile_scene;
 use ppm_core::layout::EyePassParams;
 use ppm_core::passes::{BackendError, EyePass, SceneUpload};
 
+/// One eye sample per pixel, four bounces.
+fn eye_params() -> EyePassParams {
+    EyePassParams {
+        spp: 1,
+        max_depth: 4,
+        r2_initial: 0.01,
+        ray_epsilon: 1e-5,
+        ..Default::default()
+    }
+}
+
 #[test]
 fn an_image_beyond_the_binding_limit_is_refused_naming_the_limit() {
     let Some(mut gpu) = backend_wgpu::backend_or_skip(
@@ -16,13 +27,7 @@ fn an_image_beyond_the_binding_limit_is_refused_naming_the_limit() {
     // 20,000 x 20,000 hit points are 38 GB: more than any adapter binds at once.
     gpu.load_scene(&compile_scene(&scene, 20_000, 20_000))
         .unwrap();
-    let params = EyePassParams {
-        spp: 1,
-        max_depth: 4,
-        r2_initial: 0.01,
-        ray_epsilon: 1e-5,
-        ..Default::default()
-    };
+    let params = eye_params();
     match gpu.eye_pass(&params) {
         Err(BackendError::Limit(message)) => {
             assert!(
@@ -52,13 +57,7 @@ fn a_scene_without_triangles_traces_to_nothing() {
     let mut scene = scenes::analytic::furnace(glam::Vec3::splat(0.5), 1.0);
     scene.objects.clear();
     gpu.load_scene(&compile_scene(&scene, 8, 8)).unwrap();
-    let params = EyePassParams {
-        spp: 1,
-        max_depth: 4,
-        r2_initial: 0.01,
-        ray_epsilon: 1e-5,
-        ..Default::default()
-    };
+    let params = eye_params();
     let stats = gpu.eye_pass(&params).expect("an empty scene traces");
     assert_eq!((stats.rays, stats.hit_points), (64, 0));
 }
