@@ -521,18 +521,10 @@ impl WgpuBackend {
                     (hit_points, slots.count),
                     params.gather_r2_floor,
                 )?;
+                self.kernels
+                    .gather
+                    .record(&self.ctx, encoder, &gather, &built, &slots, false);
                 map = Some(built);
-                Ok(())
-            })?;
-            self.run("photon accumulate", |encoder| {
-                self.kernels.gather.record(
-                    &self.ctx,
-                    encoder,
-                    &gather,
-                    map.as_ref().unwrap(),
-                    &slots,
-                    false,
-                );
                 Ok(())
             })?;
             stats.deposited += u64::from(deposited);
