@@ -3,6 +3,7 @@
 use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Outcome, Schedule, run};
 use ppm_core::params::{MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 
 /// Renders `scene` at `frame` for `params.passes` iterations on the CPU backend in a pool of
@@ -18,23 +19,32 @@ pub fn render_cpu(
         .build()
         .expect("thread pool");
     let mut backend = CpuBackend::new();
+    let outcome = pool.install(|| render_on(&mut backend, scene, frame, params));
+    (outcome, backend)
+}
+
+/// Renders `scene` at `frame` for `params.passes` iterations on `backend`; panics on a pass
+/// error, since a test render must not fail.
+pub fn render_on(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    frame: u32,
+    params: &RenderParams,
+) -> Outcome {
     let schedule = Schedule::frame(frame, Budget::iterations(params.passes));
-    let outcome = pool
-        .install(|| {
-            run(
-                &mut backend,
-                scene,
-                params,
-                &MoveParams::default(),
-                &schedule,
-                &mut (),
-            )
-        })
-        .expect("render");
+    let outcome = run(
+        backend,
+        scene,
+        params,
+        &MoveParams::default(),
+        &schedule,
+        &mut (),
+    )
+    .expect("render");
     if let Some(e) = &outcome.error {
         panic!("pass failed: {e}");
     }
-    (outcome, backend)
+    outcome
 }
 
 /// Luminance (Rec. 709 weights) of a linear RGB value.

@@ -2,7 +2,7 @@
 
 use ppm_core::params::RenderParams;
 use ppm_core::passes::ReadBack;
-use tests::render_cpu;
+use tests::{render_cpu, render_on};
 
 #[test]
 fn cpu_buffers_are_bit_identical_across_thread_counts() {
@@ -43,4 +43,38 @@ fn a_different_seed_gives_different_photons() {
     params.seed = 1;
     let (_, mut b) = render_cpu(&scene, 0, &params, 2);
     assert_ne!(a.read_photons().unwrap(), b.read_photons().unwrap());
+}
+
+/// The wgpu backend on a device held to WebGPU's baseline limits renders, bit for bit, what
+/// it renders with the adapter's own: no pass binds or needs more than any WebGPU device
+/// offers (four storage textures and eight storage buffers per stage, among others).
+#[test]
+fn wgpu_renders_the_same_buffers_within_baseline_limits() {
+    let test = "wgpu_renders_the_same_buffers_within_baseline_limits";
+    let Some(mut adapter_limits) = backend_wgpu::backend_or_skip(test) else {
+        return;
+    };
+    let mut baseline = backend_wgpu::GpuContext::baseline()
+        .and_then(backend_wgpu::WgpuBackend::on)
+        .expect("the passes fit baseline WebGPU limits");
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let mut params = RenderParams::for_scene(&scene);
+    params.width = 32;
+    params.height = 24;
+    params.passes = 2;
+    params.photons_per_pass = 20_000;
+    params.seed = 3;
+    let buffers = |backend: &mut backend_wgpu::WgpuBackend| {
+        let outcome = render_on(backend, &scene, 0, &params);
+        let hit_points = backend.read_hit_points().unwrap();
+        let photons = backend.read_photons().unwrap();
+        (
+            bytemuck::cast_slice::<_, u8>(&hit_points).to_vec(),
+            bytemuck::cast_slice::<_, u8>(&photons).to_vec(),
+            outcome.image.pixels,
+        )
+    };
+    let (a, b) = (buffers(&mut adapter_limits), buffers(&mut baseline));
+    assert!(!a.1.is_empty(), "the render deposited photons");
+    assert!(a == b, "baseline limits changed the buffers");
 }

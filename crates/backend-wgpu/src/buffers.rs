@@ -1,12 +1,12 @@
 //! The GPU buffers, named as the WGSL bindings name them, and their creation and read-back.
 
 use crate::context::GpuContext;
-use crate::layout::SceneCounts;
+use crate::layout::SceneIndex;
 use crate::table::{Table, Texel};
 use bytemuck::Pod;
 use bytemuck::Zeroable;
 use ppm_core::compile::CompiledScene;
-use ppm_core::layout::{BvhNode, GpuTriangle};
+use ppm_core::layout::{BvhNode, GpuBounds, GpuLight, GpuMaterial, GpuTriangle};
 use ppm_core::passes::BackendError;
 use wgpu::util::DeviceExt;
 
@@ -49,11 +49,6 @@ pub fn storage_zeroed(
         usage: STORAGE,
         mapped_at_creation: false,
     }))
-}
-
-/// A table (four-word texels) holding `records`.
-fn table_of<T: Pod>(ctx: &GpuContext, label: &str, records: &[T]) -> Result<Table, BackendError> {
-    Table::with_data(ctx, label, Texel::Words4, bytemuck::cast_slice(records))
 }
 
 /// A uniform buffer holding `value`.
@@ -106,23 +101,28 @@ pub fn read_back<T: Pod>(
 pub struct SceneBuffers {
     /// Camera uniform.
     pub camera: wgpu::Buffer,
-    /// Triangles in BVH leaf order, four texels each.
-    pub triangles: Table,
-    /// Flattened BVH nodes, two texels each.
-    pub nodes: Table,
-    /// Materials.
-    pub materials: Table,
-    /// Emitting triangles, four texels each.
-    pub lights: Table,
-    /// Boxes of the moving objects, two texels each (none when nothing moves).
-    pub movers: Table,
-    /// How many records `lights` and `movers` hold (uniform [`SceneCounts`]).
-    pub counts: wgpu::Buffer,
+    /// Every scene record in one table (scene.wgsl): materials (two texels each), triangles
+    /// in BVH leaf order (four), flattened BVH nodes (two), emitting triangles (four) and the
+    /// boxes of moving objects (two; none when nothing moves).
+    pub table: Table,
+    /// Where each kind starts in `table`, and how many lights and boxes it holds (uniform
+    /// [`SceneIndex`]).
+    pub index: wgpu::Buffer,
     /// Camera as uploaded (resolution decides the hit-point count).
     pub camera_value: ppm_core::layout::GpuCamera,
     /// Emitting triangles.
     pub light_count: usize,
 }
+
+/// Bytes of one scene-table texel: every record is a whole number of them.
+const TEXEL_BYTES: usize = 16;
+const _: () = assert!(
+    size_of::<GpuMaterial>().is_multiple_of(TEXEL_BYTES)
+        && size_of::<GpuTriangle>().is_multiple_of(TEXEL_BYTES)
+        && size_of::<BvhNode>().is_multiple_of(TEXEL_BYTES)
+        && size_of::<GpuLight>().is_multiple_of(TEXEL_BYTES)
+        && size_of::<GpuBounds>().is_multiple_of(TEXEL_BYTES)
+);
 
 /// Deepest BVH the shaders' fixed traversal stack (`STACK_SIZE` in bvh.wgsl) can walk.
 const MAX_BVH_DEPTH: usize = 62;
@@ -147,22 +147,26 @@ impl SceneBuffers {
         } else {
             (&scene.nodes[..], &scene.triangles[..])
         };
+        let mut bytes = Vec::new();
+        let mut append = |records: &[u8]| {
+            let start = (bytes.len() / TEXEL_BYTES) as u32;
+            bytes.extend_from_slice(records);
+            start
+        };
+        append(bytemuck::cast_slice(&scene.materials));
+        let index = SceneIndex {
+            triangles: append(bytemuck::cast_slice(triangles)),
+            nodes: append(bytemuck::cast_slice(nodes)),
+            lights: append(bytemuck::cast_slice(&scene.lights)),
+            movers: append(bytemuck::cast_slice(&scene.movers)),
+            light_count: scene.lights.len() as u32,
+            mover_count: scene.movers.len() as u32,
+            ..Default::default()
+        };
         Ok(Self {
             camera: uniform(ctx, "camera", &scene.camera),
-            triangles: table_of(ctx, "triangles", triangles)?,
-            nodes: table_of(ctx, "nodes", nodes)?,
-            materials: table_of(ctx, "materials", &scene.materials)?,
-            lights: table_of(ctx, "lights", &scene.lights)?,
-            movers: table_of(ctx, "movers", &scene.movers)?,
-            counts: uniform(
-                ctx,
-                "scene counts",
-                &SceneCounts {
-                    lights: scene.lights.len() as u32,
-                    movers: scene.movers.len() as u32,
-                    ..Default::default()
-                },
-            ),
+            table: Table::with_data(ctx, "scene", Texel::Words4, &bytes)?,
+            index: uniform(ctx, "scene index", &index),
             camera_value: scene.camera,
             light_count: scene.lights.len(),
         })

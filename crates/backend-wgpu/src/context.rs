@@ -24,6 +24,17 @@ impl GpuContext {
     /// large images and photon counts fit where the hardware allows; anything beyond them is
     /// refused up front by the buffer code with the limit named.
     pub fn new() -> Result<Self, BackendError> {
+        Self::open(false)
+    }
+
+    /// As [`GpuContext::new`], with WebGPU's baseline limits (`wgpu::Limits::default()`)
+    /// instead of the adapter's: on it, a render shows that the passes bind and dispatch no
+    /// more than any WebGPU device offers.
+    pub fn baseline() -> Result<Self, BackendError> {
+        Self::open(true)
+    }
+
+    fn open(baseline: bool) -> Result<Self, BackendError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
@@ -34,7 +45,11 @@ impl GpuContext {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("ppm"),
             required_features: wgpu::Features::empty(),
-            required_limits: adapter.limits(),
+            required_limits: if baseline {
+                wgpu::Limits::default()
+            } else {
+                adapter.limits()
+            },
             ..Default::default()
         }))
         .map_err(|e| BackendError::Device(format!("cannot open the device: {e}")))?;

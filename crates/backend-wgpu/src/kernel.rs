@@ -12,8 +12,15 @@ pub enum Slot {
     Read,
     /// A storage buffer the shader writes.
     ReadWrite,
-    /// A read-only table (`texture_2d<u32>`, see [`crate::table`]).
+    /// A read-only table of four-word texels (`texture_storage_2d<rgba32uint, read>`, see
+    /// [`crate::table`]).
     Table,
+    /// A read-only table of one-word texels (`texture_storage_2d<r32uint, read>`).
+    WordTable,
+    /// A binding of the shared list that this entry point does not read: left out of its
+    /// layout and bind group, so that each entry point stays within the per-stage binding
+    /// limits even when the list as a whole does not.
+    Unused,
 }
 
 /// Something a bind group can hold at a slot: a buffer or a table.
@@ -41,6 +48,8 @@ pub const WORKGROUP: u32 = 64;
 pub struct Kernel {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    /// Which bindings the layout holds (not [`Slot::Unused`]).
+    used: Vec<bool>,
     label: &'static str,
     workgroup: u32,
 }
@@ -70,11 +79,13 @@ impl Kernel {
         let entries: Vec<wgpu::BindGroupLayoutEntry> = slots
             .iter()
             .enumerate()
-            .map(|(i, slot)| wgpu::BindGroupLayoutEntry {
-                binding: i as u32,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: binding_type(*slot),
-                count: None,
+            .filter_map(|(i, slot)| {
+                Some(wgpu::BindGroupLayoutEntry {
+                    binding: i as u32,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: binding_type(*slot)?,
+                    count: None,
+                })
             })
             .collect();
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -100,16 +111,18 @@ impl Kernel {
         Self {
             pipeline,
             layout,
+            used: slots.iter().map(|s| !matches!(s, Slot::Unused)).collect(),
             label: entry,
             workgroup,
         }
     }
 
-    /// A bind group with `resources[i]` at binding `i`.
+    /// A bind group with `resources[i]` at binding `i` (those at unused slots left out).
     pub fn bind(&self, device: &wgpu::Device, resources: &[&dyn Bindable]) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry> = resources
             .iter()
             .enumerate()
+            .filter(|(i, _)| self.used[*i])
             .map(|(i, r)| wgpu::BindGroupEntry {
                 binding: i as u32,
                 resource: r.resource(),
@@ -143,23 +156,26 @@ impl Kernel {
     }
 }
 
-/// The layout entry type of a slot.
-fn binding_type(slot: Slot) -> wgpu::BindingType {
+/// The layout entry type of a slot (none for an unused one).
+fn binding_type(slot: Slot) -> Option<wgpu::BindingType> {
     let buffer = |ty| wgpu::BindingType::Buffer {
         ty,
         has_dynamic_offset: false,
         min_binding_size: None,
     };
-    match slot {
+    let table = |format| wgpu::BindingType::StorageTexture {
+        access: wgpu::StorageTextureAccess::ReadOnly,
+        format,
+        view_dimension: wgpu::TextureViewDimension::D2,
+    };
+    Some(match slot {
         Slot::Uniform => buffer(wgpu::BufferBindingType::Uniform),
         Slot::Read => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
         Slot::ReadWrite => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
-        Slot::Table => wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Uint,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-    }
+        Slot::Table => table(wgpu::TextureFormat::Rgba32Uint),
+        Slot::WordTable => table(wgpu::TextureFormat::R32Uint),
+        Slot::Unused => return None,
+    })
 }
 
 /// Compiles one assembled shader.

@@ -73,15 +73,24 @@ pub struct UpdateParams {
     pub _pad2: u32,
 }
 
-/// counts.wgsl's `SceneCounts`: how many records the scene's light and mover tables hold (a
-/// table has no length of its own). 16 bytes.
+/// scene.wgsl's `SceneIndex`: where each kind of record starts in the scene table (in
+/// texels; materials start at 0), and how many lights and mover boxes it holds (a table has
+/// no length of its own). 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct SceneCounts {
-    /// Emitting triangles.
+pub struct SceneIndex {
+    /// First texel of the triangles.
+    pub triangles: u32,
+    /// First texel of the BVH nodes.
+    pub nodes: u32,
+    /// First texel of the lights.
     pub lights: u32,
-    /// Boxes of moving objects.
+    /// First texel of the mover boxes.
     pub movers: u32,
+    /// Emitting triangles.
+    pub light_count: u32,
+    /// Boxes of moving objects.
+    pub mover_count: u32,
     /// Padding.
     pub _pad0: u32,
     /// Padding.

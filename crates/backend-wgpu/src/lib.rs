@@ -120,7 +120,11 @@ pub struct WgpuBackend {
 impl WgpuBackend {
     /// Opens the best available adapter and compiles every pass.
     pub fn new() -> Result<Self, BackendError> {
-        let ctx = GpuContext::new()?;
+        Self::on(GpuContext::new()?)
+    }
+
+    /// Compiles every pass on `ctx` (for instance a [`GpuContext::baseline`] device).
+    pub fn on(ctx: GpuContext) -> Result<Self, BackendError> {
         let kernels = ctx.scoped("shader compilation", || Kernels {
             eye: EyePassKernel::new(&ctx),
             direct: DirectLightKernel::new(&ctx),
@@ -501,7 +505,7 @@ impl WgpuBackend {
             };
             let gather = GatherInputs {
                 params: &accumulate,
-                materials: &scene.materials,
+                table: &scene.table,
                 accumulated,
                 pending,
                 radii: &radii,
@@ -690,7 +694,7 @@ impl GatherPass for WgpuBackend {
         };
         let inputs = GatherInputs {
             params,
-            materials: &scene.materials,
+            table: &scene.table,
             accumulated,
             pending,
             radii: &radii,

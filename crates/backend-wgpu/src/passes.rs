@@ -9,7 +9,7 @@ use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
 };
 
-use Slot::{Read, ReadWrite, Table, Uniform};
+use Slot::{Read, ReadWrite, Table, Uniform, WordTable};
 
 /// The hit-point buffer and the pass counters that per-slot passes bind.
 pub struct Slots<'a> {
@@ -28,9 +28,7 @@ impl EyePassKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
-        let slots = [
-            Uniform, Uniform, Table, Table, Table, ReadWrite, ReadWrite, Table, Uniform,
-        ];
+        let slots = [Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -55,13 +53,10 @@ impl EyePassKernel {
             &[
                 &params,
                 &scene.camera,
-                &scene.triangles,
-                &scene.nodes,
-                &scene.materials,
+                &scene.table,
+                &scene.index,
                 slots.hit_points,
                 slots.counters,
-                &scene.movers,
-                &scene.counts,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);
@@ -75,9 +70,7 @@ impl DirectLightKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
-        let slots = [
-            Uniform, Table, Table, Table, Table, ReadWrite, ReadWrite, Table, Uniform,
-        ];
+        let slots = [Uniform, Table, Uniform, ReadWrite, ReadWrite];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -101,14 +94,10 @@ impl DirectLightKernel {
             &ctx.device,
             &[
                 &params,
-                &scene.triangles,
-                &scene.nodes,
-                &scene.materials,
-                &scene.lights,
+                &scene.table,
+                &scene.index,
                 slots.hit_points,
                 slots.counters,
-                &scene.movers,
-                &scene.counts,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);
@@ -144,8 +133,8 @@ impl PhotonPassKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
         let slots = [
-            Uniform, Table, Table, Table, Table, ReadWrite, ReadWrite, ReadWrite, Uniform, Read,
-            ReadWrite, Table, ReadWrite, Uniform,
+            Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite,
+            ReadWrite,
         ];
         let kernel = |entry, kind: u32| {
             Kernel::specialised(
@@ -178,19 +167,15 @@ impl PhotonPassKernel {
             &ctx.device,
             &[
                 &uniform_params,
-                &scene.triangles,
-                &scene.nodes,
-                &scene.materials,
-                &scene.lights,
+                &scene.table,
+                &scene.index,
                 targets.ranks,
                 targets.photons,
                 targets.counters,
                 targets.emitter,
                 targets.recorded,
                 targets.weights,
-                &scene.movers,
                 targets.crossed,
-                &scene.counts,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);
@@ -208,8 +193,8 @@ pub struct GatherKernel {
 pub struct GatherInputs<'a> {
     /// Gather parameters (alpha, emitted increment, kind).
     pub params: &'a GatherParams,
-    /// Materials, for the BRDF.
-    pub materials: &'a crate::table::Table,
+    /// The scene table, whose materials give the BRDF.
+    pub table: &'a crate::table::Table,
     /// Per hit point: running power, count and weight of the pass's photons so far.
     pub accumulated: &'a wgpu::Buffer,
     /// Per hit point: deferred region photons.
@@ -224,7 +209,7 @@ impl GatherKernel {
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
         let slots = [
-            Uniform, Table, Table, Read, Table, Read, ReadWrite, ReadWrite, ReadWrite, Read,
+            Uniform, Table, Table, Read, WordTable, Read, ReadWrite, ReadWrite, ReadWrite, Read,
             ReadWrite, Uniform,
         ];
         Self {
@@ -265,7 +250,7 @@ impl GatherKernel {
             &ctx.device,
             &[
                 &params,
-                inputs.materials,
+                inputs.table,
                 &map.sorted_table,
                 &map.grid,
                 &map.bucket_table,

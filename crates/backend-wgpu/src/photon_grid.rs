@@ -57,18 +57,27 @@ impl PhotonGridKernels {
     pub fn new(ctx: &GpuContext) -> Self {
         use Slot::{Read, ReadWrite, Uniform};
         let module = shader_module(&ctx.device, "photon_grid", shaders::PHOTON_GRID);
+        // The shader's bindings: params, photons, hit_points, histogram, grid, bucket_counts,
+        // bucket_cursor, order, keys, sorted, ranks. Each step binds those it reads (eleven
+        // at once would pass baseline WebGPU's eight storage buffers per stage).
         let slots = [
             Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
             ReadWrite, Read,
         ];
-        let kernel = |entry, workgroup| Kernel::new(&ctx.device, &module, entry, &slots, workgroup);
+        let kernel = |entry, workgroup, used: &[usize]| {
+            let mut own = [Slot::Unused; 11];
+            for &i in used {
+                own[i] = slots[i];
+            }
+            Kernel::new(&ctx.device, &module, entry, &own, workgroup)
+        };
         Self {
-            histogram: kernel("grid_histogram_main", WORKGROUP),
-            params: kernel("grid_params_main", 1),
-            count: kernel("grid_count_main", WORKGROUP),
-            scatter: kernel("grid_scatter_main", WORKGROUP),
-            sort: kernel("grid_sort_main", WORKGROUP),
-            copy: kernel("grid_copy_main", WORKGROUP),
+            histogram: kernel("grid_histogram_main", WORKGROUP, &[0, 2, 3]),
+            params: kernel("grid_params_main", 1, &[0, 3, 4]),
+            count: kernel("grid_count_main", WORKGROUP, &[0, 1, 4, 5, 8]),
+            scatter: kernel("grid_scatter_main", WORKGROUP, &[0, 6, 7, 8]),
+            sort: kernel("grid_sort_main", WORKGROUP, &[0, 5, 7, 8, 10]),
+            copy: kernel("grid_copy_main", WORKGROUP, &[0, 1, 7, 8, 9]),
         }
     }
 
@@ -113,12 +122,13 @@ impl PhotonGridKernels {
             &buffers.sorted,
             ranks,
         ];
-        let group = self.histogram.bind(&ctx.device, &bindings);
+        let step = |kernel: &Kernel, encoder: &mut wgpu::CommandEncoder, items: u32| {
+            kernel.dispatch(encoder, &kernel.bind(&ctx.device, &bindings), items);
+        };
         // A fixed number of workgroups, each striding over the hit points (HISTOGRAM_GROUPS).
-        self.histogram
-            .dispatch(encoder, &group, HISTOGRAM_GROUPS * WORKGROUP);
-        self.params.dispatch(encoder, &group, 1);
-        self.count.dispatch(encoder, &group, count);
+        step(&self.histogram, encoder, HISTOGRAM_GROUPS * WORKGROUP);
+        step(&self.params, encoder, 1);
+        step(&self.count, encoder, count);
         scan.record(ctx, encoder, &buffers.bucket_start, bucket_count + 1)?;
         encoder.copy_buffer_to_buffer(
             &buffers.bucket_start,
@@ -127,9 +137,9 @@ impl PhotonGridKernels {
             0,
             bucket_bytes,
         );
-        self.scatter.dispatch(encoder, &group, count);
-        self.sort.dispatch(encoder, &group, count);
-        self.copy.dispatch(encoder, &group, count);
+        step(&self.scatter, encoder, count);
+        step(&self.sort, encoder, count);
+        step(&self.copy, encoder, count);
         buffers
             .sorted_table
             .record_copy(encoder, &buffers.sorted, count * PHOTON_TEXELS);

@@ -1,15 +1,19 @@
-//! Read-only tables: records that kernels read at scattered indices (photons, BVH nodes,
-//! triangles, bucket starts), held as texels of a 2D `rgba32uint` or `r32uint` texture
-//! rather than in a storage buffer.
+//! Read-only tables: records that kernels read at scattered indices (the scene's records,
+//! the photons in bucket order, the bucket starts), held as texels of a 2D `rgba32uint` or
+//! `r32uint` texture bound as a read-only storage texture, rather than in a storage buffer.
 //!
-//! Why: a texel fetch is a gather the driver vectorises, while a storage-buffer read at an
-//! index that differs between invocations may be split into one bounds-checked load per
-//! invocation and per 32-bit word (lavapipe, which runs the WGSL on the CPU as CI does,
-//! splits them so). `examples/table_reads.rs` reads 16-byte records at random: on lavapipe
-//! 221 ms from a storage buffer against 25 ms from a table over 64 KiB, and 280 against
-//! 118 ms over 16 MiB. GPUs fetch texels through the same caches as buffer loads. The records keep their `#[repr(C)]` layout: a record of `n`
-//! 16-byte texels is texels `n*i .. n*i + n`, row-major in rows of [`ROW_TEXELS`]
-//! (`table_texel` in tables.wgsl), and floats travel as their bits.
+//! Why: a storage-buffer read at an index that differs between invocations may be split into
+//! one bounds-checked load per invocation and per 32-bit word (lavapipe, which runs the WGSL
+//! on the CPU as CI does, splits them so), while a texel load is one vectorised gather; and a
+//! storage-texture load skips the mip-level arithmetic that lavapipe spends on every sampled
+//! texel fetch. `examples/table_reads.rs` reads 16-byte records at random on lavapipe: over
+//! 64 KiB, 257 ms from a storage buffer, 38 from a sampled texture and 20 from a table; over
+//! 16 MiB, 1070, 418 and 262 ms. GPUs load texels through the same caches as buffers.
+//!
+//! The records keep their `#[repr(C)]` layout: a record of `n` 16-byte texels is texels
+//! `n*i .. n*i + n`, row-major in rows of [`ROW_TEXELS`] (`table_texel` in tables.wgsl), and
+//! floats travel as their bits. Baseline WebGPU binds four storage textures per stage, so the
+//! scene's records share one table (scene.wgsl).
 
 use crate::context::GpuContext;
 use ppm_core::passes::BackendError;
@@ -79,7 +83,7 @@ impl Table {
             dimension: wgpu::TextureDimension::D2,
             format: texel.format(),
             // COPY_SRC: tests read tables back.
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
+            usage: wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_DST
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],

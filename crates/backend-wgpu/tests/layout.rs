@@ -224,10 +224,14 @@ fn dynamic_pass_structs_match_their_wgsl_twins() {
 
 #[test]
 fn backend_kernel_parameters_match_their_wgsl_twins() {
-    use backend_wgpu::layout::{GridBuildParams, ScanParams, SceneCounts};
-    same_layout!(SceneCounts {
+    use backend_wgpu::layout::{GridBuildParams, ScanParams, SceneIndex};
+    same_layout!(SceneIndex {
+        triangles,
+        nodes,
         lights,
         movers,
+        light_count,
+        mover_count,
         _pad0,
         _pad1
     });

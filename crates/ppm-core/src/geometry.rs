@@ -159,7 +159,7 @@ pub fn oct_faces(bits: u32, n: Vec3) -> bool {
 /// [`oct_faces`] dots with the normal, for a backend that decodes each photon once.
 #[inline]
 pub fn oct_unfold(bits: u32) -> Vec3 {
-    let d = |v: u32| (v as f32 / 65535.0) * 2.0 - 1.0;
+    let d = |v: u32| v as f32 * (2.0 / 65535.0) - 1.0;
     let (x, y) = (d(bits & 0xffff), d(bits >> 16));
     let z = 1.0 - x.abs() - y.abs();
     let (x, y) = if z < 0.0 {

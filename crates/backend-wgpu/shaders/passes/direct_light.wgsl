@@ -1,16 +1,12 @@
-// #import layout rng qmc sampling geometry bvh lights movers tables materials counts
+// #import layout rng qmc sampling geometry bvh lights movers tables scene materials
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
 @group(0) @binding(0) var<uniform> params: DirectLightParams;
-@group(0) @binding(1) var triangle_table: texture_2d<u32>;
-@group(0) @binding(2) var node_table: texture_2d<u32>;
-@group(0) @binding(3) var material_table: texture_2d<u32>;
-@group(0) @binding(4) var light_table: texture_2d<u32>;
-@group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
-@group(0) @binding(7) var mover_table: texture_2d<u32>;
-@group(0) @binding(8) var<uniform> counts: SceneCounts;
+@group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(2) var<uniform> scene: SceneIndex;
+@group(0) @binding(3) var<storage, read_write> hit_points: array<HitPoint>;
+@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
 // Whether a ray of this invocation's estimate crossed a mover's box.
 var<private> near: bool;
@@ -94,7 +90,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if (hp.flags & HIT_VALID) != 0u {
         let material = scene_material(hp.material);
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
-        if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && counts.lights > 0u {
+        if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && scene.light_count > 0u {
             direct += estimate_irradiance(hp, slot) * material.albedo * (1.0 / PI);
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }

@@ -1,16 +1,13 @@
-// #import layout rng qmc sampling geometry bvh movers tables materials counts
+// #import layout rng qmc sampling geometry bvh movers tables scene materials
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
-@group(0) @binding(2) var triangle_table: texture_2d<u32>;
-@group(0) @binding(3) var node_table: texture_2d<u32>;
-@group(0) @binding(4) var material_table: texture_2d<u32>;
-@group(0) @binding(5) var<storage, read_write> hit_points: array<HitPoint>;
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
-@group(0) @binding(7) var mover_table: texture_2d<u32>;
-@group(0) @binding(8) var<uniform> counts: SceneCounts;
+@group(0) @binding(2) var scene_table: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(3) var<uniform> scene: SceneIndex;
+@group(0) @binding(4) var<storage, read_write> hit_points: array<HitPoint>;
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 
 const DIM_GLASS: u32 = 2u;
 

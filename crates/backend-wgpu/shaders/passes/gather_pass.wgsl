@@ -1,4 +1,4 @@
-// #import layout rng qmc geometry sampling update grid tables materials
+// #import layout rng qmc geometry sampling update grid tables scene materials
 // Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
@@ -8,11 +8,12 @@
 // and clears it.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
-@group(0) @binding(1) var material_table: texture_2d<u32>;
+// The scene table, of which the gather reads only the materials (scene.wgsl).
+@group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
 // The photons in bucket order, two texels each, and the bucket starts (table.rs).
-@group(0) @binding(2) var sorted_table: texture_2d<u32>;
+@group(0) @binding(2) var sorted_table: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(3) var<storage, read> grid: GridParams;
-@group(0) @binding(4) var bucket_table: texture_2d<u32>;
+@group(0) @binding(4) var bucket_table: texture_storage_2d<r32uint, read>;
 @group(0) @binding(5) var<storage, read> order: array<u32>;
 @group(0) @binding(6) var<storage, read_write> hit_points: array<HitPoint>;
 // Per hit point, two rows: (power, count) and (weight sum, 0, 0, 0).
@@ -29,13 +30,13 @@
 override WEIGHTED: bool = false;
 
 fn sorted_photon(k: u32) -> GridPhoton {
-    let a = textureLoad(sorted_table, table_texel(2u * k), 0);
-    let b = textureLoad(sorted_table, table_texel(2u * k + 1u), 0);
+    let a = textureLoad(sorted_table, table_texel(2u * k));
+    let b = textureLoad(sorted_table, table_texel(2u * k + 1u));
     return GridPhoton(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
 }
 
 fn bucket_start(b: u32) -> u32 {
-    return textureLoad(bucket_table, table_texel(b), 0).x;
+    return textureLoad(bucket_table, table_texel(b)).x;
 }
 
 // Running sums of the photons a slot found: count, path weight, power.

@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bvh lights emission movers tables materials counts
+// #import layout rng sampling geometry bvh lights emission movers tables scene materials
 // Photon pass (ALGORITHM.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -23,19 +23,15 @@ struct Emitter {
 }
 
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
-@group(0) @binding(1) var triangle_table: texture_2d<u32>;
-@group(0) @binding(2) var node_table: texture_2d<u32>;
-@group(0) @binding(3) var material_table: texture_2d<u32>;
-@group(0) @binding(4) var light_table: texture_2d<u32>;
-@group(0) @binding(5) var<storage, read_write> ranks: array<u32>;
-@group(0) @binding(6) var<storage, read_write> photons: array<Photon>;
-@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 4>;
-@group(0) @binding(8) var<uniform> emitter: Emitter;
-@group(0) @binding(9) var<storage, read> recorded: array<RecordedPath>;
-@group(0) @binding(10) var<storage, read_write> weights: array<f32>;
-@group(0) @binding(11) var mover_table: texture_2d<u32>;
-@group(0) @binding(13) var<uniform> counts: SceneCounts;
-@group(0) @binding(12) var<storage, read_write> crossed: array<atomic<u32>>;
+@group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(2) var<uniform> scene: SceneIndex;
+@group(0) @binding(3) var<storage, read_write> ranks: array<u32>;
+@group(0) @binding(4) var<storage, read_write> photons: array<Photon>;
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(6) var<uniform> emitter: Emitter;
+@group(0) @binding(7) var<storage, read> recorded: array<RecordedPath>;
+@group(0) @binding(8) var<storage, read_write> weights: array<f32>;
+@group(0) @binding(9) var<storage, read_write> crossed: array<atomic<u32>>;
 
 // The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
 // carry no region or guided code.

@@ -1,6 +1,6 @@
-// BVH traversal over the flattened obvhs nodes, with a fixed-size stack. Needs the tables
-// `node_table` (two texels a node) and `triangle_table` (four texels a triangle) bound in the
-// importing pass, and tables.wgsl imported. The CPU backend traverses the same tree with
+// BVH traversal over the flattened obvhs nodes, with a fixed-size stack. Reads the nodes (two
+// texels each) and triangles (four texels each) from the scene table (scene.wgsl imported).
+// The CPU backend traverses the same tree with
 // obvhs itself; only ties between equal distances can resolve differently. A scene without
 // triangles is uploaded as one leaf holding one degenerate triangle, which no ray hits.
 
@@ -12,16 +12,16 @@ struct Hit {
 }
 
 fn bvh_node(i: u32) -> BvhNode {
-    let a = textureLoad(node_table, table_texel(2u * i), 0);
-    let b = textureLoad(node_table, table_texel(2u * i + 1u), 0);
+    let a = scene_texel(scene.nodes + 2u * i);
+    let b = scene_texel(scene.nodes + 2u * i + 1u);
     return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
 }
 
 fn scene_triangle(i: u32) -> GpuTriangle {
-    let a = textureLoad(triangle_table, table_texel(4u * i), 0);
-    let b = textureLoad(triangle_table, table_texel(4u * i + 1u), 0);
-    let c = textureLoad(triangle_table, table_texel(4u * i + 2u), 0);
-    let d = textureLoad(triangle_table, table_texel(4u * i + 3u), 0);
+    let a = scene_texel(scene.triangles + 4u * i);
+    let b = scene_texel(scene.triangles + 4u * i + 1u);
+    let c = scene_texel(scene.triangles + 4u * i + 2u);
+    let d = scene_texel(scene.triangles + 4u * i + 3u);
     return GpuTriangle(
         bitcast<vec3<f32>>(a.xyz), a.w,
         bitcast<vec3<f32>>(b.xyz), b.w,
@@ -33,9 +33,9 @@ fn scene_triangle(i: u32) -> GpuTriangle {
 // Distance along the ray to triangle `i` if within (0, tmax), else T_MISS; reads only the
 // texels the test needs (the vertex and the two edges).
 fn hit_distance(origin: vec3<f32>, dir: vec3<f32>, i: u32, tmax: f32) -> f32 {
-    let v0 = bitcast<vec3<f32>>(textureLoad(triangle_table, table_texel(4u * i), 0).xyz);
-    let e1 = bitcast<vec3<f32>>(textureLoad(triangle_table, table_texel(4u * i + 1u), 0).xyz);
-    let e2 = bitcast<vec3<f32>>(textureLoad(triangle_table, table_texel(4u * i + 2u), 0).xyz);
+    let v0 = bitcast<vec3<f32>>(scene_texel(scene.triangles + 4u * i).xyz);
+    let e1 = bitcast<vec3<f32>>(scene_texel(scene.triangles + 4u * i + 1u).xyz);
+    let e2 = bitcast<vec3<f32>>(scene_texel(scene.triangles + 4u * i + 2u).xyz);
     return intersect_triangle(origin, dir, v0, e1, e2, 0.0, tmax);
 }
 

@@ -1,5 +1,5 @@
 // Where photons leave the lights: the twin of ppm_core::emission. Needs the bindings
-// `light_table`, `counts`, `material_table`, `emitter` and `recorded` in the importing pass.
+// `scene_table`, `scene`, `emitter` and `recorded` in the importing pass.
 
 const EMISSION_ORDINARY: u32 = 0u;
 const EMISSION_REGION: u32 = 1u;

@@ -109,8 +109,8 @@ fn oct_encode(n: vec3<f32>) -> u32 {
 }
 
 fn oct_unfold(bits: u32) -> vec3<f32> {
-    var x = f32(bits & 0xffffu) / 65535.0 * 2.0 - 1.0;
-    var y = f32(bits >> 16u) / 65535.0 * 2.0 - 1.0;
+    var x = f32(bits & 0xffffu) * (2.0 / 65535.0) - 1.0;
+    var y = f32(bits >> 16u) * (2.0 / 65535.0) - 1.0;
     let z = 1.0 - abs(x) - abs(y);
     if z < 0.0 {
         let ox = x;

@@ -1,11 +1,11 @@
-// Emitting triangles as a table (four texels each) and their selection by power: needs the
-// bindings `light_table` and `counts` in the importing pass, and tables.wgsl and counts.wgsl.
+// Emitting triangles, four texels each in the scene table (scene.wgsl imported),
+// and their selection by power.
 
 fn scene_light(i: u32) -> GpuLight {
-    let a = textureLoad(light_table, table_texel(4u * i), 0);
-    let b = textureLoad(light_table, table_texel(4u * i + 1u), 0);
-    let c = textureLoad(light_table, table_texel(4u * i + 2u), 0);
-    let d = textureLoad(light_table, table_texel(4u * i + 3u), 0);
+    let a = scene_texel(scene.lights + 4u * i);
+    let b = scene_texel(scene.lights + 4u * i + 1u);
+    let c = scene_texel(scene.lights + 4u * i + 2u);
+    let d = scene_texel(scene.lights + 4u * i + 3u);
     return GpuLight(
         bitcast<vec3<f32>>(a.xyz), bitcast<f32>(a.w),
         bitcast<vec3<f32>>(b.xyz), bitcast<f32>(b.w),
@@ -17,10 +17,10 @@ fn scene_light(i: u32) -> GpuLight {
 // The light whose cumulative share of the power first exceeds `u` (reads only the cdf word).
 fn sample_light(u: f32) -> u32 {
     var lo = 0u;
-    var hi = max(counts.lights, 1u) - 1u;
+    var hi = max(scene.light_count, 1u) - 1u;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if u < bitcast<f32>(textureLoad(light_table, table_texel(4u * mid + 1u), 0).w) {
+        if u < bitcast<f32>(scene_texel(scene.lights + 4u * mid + 1u).w) {
             hi = mid;
         } else {
             lo = mid + 1u;

@@ -1,11 +1,11 @@
 // The boxes moving objects stay inside (ppm_core::compile::CompiledScene::movers), for the
-// passes that flag paths crossing them: a table of two texels a box, bound as `mover_table`
-// with `counts` (tables.wgsl and counts.wgsl imported). A still scene has none, and its
+// passes that flag paths crossing them: two texels a box in the scene table (scene.wgsl
+// imported). A still scene has none, and its
 // rays test nothing. The twin of backend-cpu's SceneData::near_mover.
 
 fn mover_bounds(i: u32) -> GpuBounds {
-    let a = textureLoad(mover_table, table_texel(2u * i), 0);
-    let b = textureLoad(mover_table, table_texel(2u * i + 1u), 0);
+    let a = scene_texel(scene.movers + 2u * i);
+    let b = scene_texel(scene.movers + 2u * i + 1u);
     return GpuBounds(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
 }
 
@@ -38,7 +38,7 @@ fn segment_meets_box(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, lo: vec3<f32
 }
 
 fn near_mover(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
-    for (var i = 0u; i < counts.movers; i++) {
+    for (var i = 0u; i < scene.mover_count; i++) {
         let b = mover_bounds(i);
         if segment_meets_box(origin, dir, t_max, b.min, b.max) {
             return true;
@@ -48,7 +48,7 @@ fn near_mover(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
 }
 
 fn in_mover(p: vec3<f32>) -> bool {
-    for (var i = 0u; i < counts.movers; i++) {
+    for (var i = 0u; i < scene.mover_count; i++) {
         let b = mover_bounds(i);
         if all(p >= b.min) && all(p <= b.max) {
             return true;
