@@ -6,6 +6,11 @@
 
 const STACK_SIZE: u32 = 64u;
 
+// The traversal stack, one per invocation rather than per traversal: WGSL zeroes a variable
+// where it is declared, and lavapipe zeroes this one entry by entry and lane by lane (512
+// masked stores), which cost a quarter of the eye and photon passes when every ray did it.
+var<private> stack: array<u32, STACK_SIZE>;
+
 struct Hit {
     t: f32,
     triangle: u32,
@@ -65,7 +70,6 @@ fn ray_box(origin: vec3<f32>, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) 
 fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, any_hit: bool) -> Hit {
     var hit = Hit(tmax, 0xffffffffu);
     let inv_dir = vec3<f32>(safe_inverse(dir.x), safe_inverse(dir.y), safe_inverse(dir.z));
-    var stack: array<u32, STACK_SIZE>;
     var sp = 0u;
     var node = bvh_node(0u);
     var enter = ray_box(origin, inv_dir, node.min, node.max);
