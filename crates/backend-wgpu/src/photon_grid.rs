@@ -65,7 +65,7 @@ impl PhotonGridKernels {
             ReadWrite, Read,
         ];
         let kernel = |entry, workgroup, used: &[usize]| {
-            let mut own = [Slot::Unused; 11];
+            let mut own = slots.map(|_| Slot::Unused);
             for &i in used {
                 own[i] = slots[i];
             }

@@ -51,16 +51,14 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
         let local = cosine_hemisphere(v.x, v.y);
         let w = to_world(local, hp.normal);
         let hit = closest_hit(origin, w, T_MISS);
-        // Changes with a move only if it reached a light across a mover's box or met a mover
-        // (backend-cpu's direct_light.rs says why).
-        if hit.triangle != 0xffffffffu {
-            let reached_light = scene_triangle(hit.triangle).light != NO_MATERIAL;
-            near = near || ((reached_light || in_mover(origin + w * hit.t)) && near_mover(origin, w, hit.t));
-        }
         if hit.triangle != 0xffffffffu {
             let tri = scene_triangle(hit.triangle);
+            let reached_light = tri.light != NO_MATERIAL;
+            // Changes with a move only if it reached a light across a mover's box or met a
+            // mover (backend-cpu's direct_light.rs says why).
+            near = near || ((reached_light || in_mover(origin + w * hit.t)) && near_mover(origin, w, hit.t));
             let cos_l = -dot(tri.normal, w);
-            if tri.light != NO_MATERIAL && cos_l > 0.0 {
+            if reached_light && cos_l > 0.0 {
                 let hit_light = scene_light(tri.light);
                 let le = scene_material(hit_light.material).emission;
                 let pl = light_pdf(hit_light.pdf, hit_light.area, hit.t * hit.t, cos_l);

@@ -1,8 +1,8 @@
 // BVH traversal over the flattened obvhs nodes, with a fixed-size stack. Reads the nodes (two
 // texels each) and triangles (four texels each) from the scene table (scene.wgsl imported).
-// The CPU backend traverses the same tree with
-// obvhs itself; only ties between equal distances can resolve differently. A scene without
-// triangles is uploaded as one leaf holding one degenerate triangle, which no ray hits.
+// The CPU backend traverses the same tree with obvhs itself; only ties between equal
+// distances can resolve differently. A scene without triangles is uploaded as one leaf
+// holding one degenerate triangle, which no ray hits.
 
 const STACK_SIZE: u32 = 64u;
 

@@ -1,7 +1,7 @@
 // The boxes moving objects stay inside (ppm_core::compile::CompiledScene::movers), for the
 // passes that flag paths crossing them: two texels a box in the scene table (scene.wgsl
-// imported). A still scene has none, and its
-// rays test nothing. The twin of backend-cpu's SceneData::near_mover.
+// imported). A still scene has none, and its rays test nothing. The twin of backend-cpu's
+// SceneData::near_mover.
 
 fn mover_bounds(i: u32) -> GpuBounds {
     let a = scene_texel(scene.movers + 2u * i);
