@@ -4,7 +4,7 @@
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::compile::camera_ray;
-use ppm_core::geometry::specular_bounce;
+use ppm_core::geometry::{Transport, specular_bounce};
 use ppm_core::layout::{
     EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, eye_flags, hit_flags, material_kind,
 };
@@ -125,8 +125,8 @@ fn trace_eye_path(
                 return u64::from(depth) + 1;
             }
             _ => {
-                let bounce =
-                    specular_bounce(material, dir, facing, front, key.uniform(DIM_GLASS + depth));
+                let u = key.uniform(DIM_GLASS + depth);
+                let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
                 throughput *= bounce.weight;
                 dir = bounce.dir;
                 let side = if bounce.transmitted { -facing } else { facing };

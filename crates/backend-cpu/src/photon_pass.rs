@@ -4,7 +4,7 @@
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::emission::{EMISSION_DIMS, Emission};
-use ppm_core::geometry::{oct_encode, specular_bounce, to_world};
+use ppm_core::geometry::{Transport, oct_encode, specular_bounce, to_world};
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind, photon_flags};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::{PassKind, StreamKey};
@@ -188,8 +188,10 @@ fn trace_photon(
                 origin = position + facing * params.ray_epsilon;
             }
             _ => {
+                let front = facing == normal;
+                let u = key.uniform(d);
                 let bounce =
-                    specular_bounce(material, dir, facing, facing == normal, key.uniform(d));
+                    specular_bounce(material, dir, facing, front, u, Transport::Importance);
                 power *= bounce.weight;
                 dir = bounce.dir;
                 let side = if bounce.transmitted { -facing } else { facing };

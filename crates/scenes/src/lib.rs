@@ -64,6 +64,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         description: "the furnace with a lossless mirror wall and a glass cube: radiance is still exactly 2",
         build: || Ok(analytic::specular_furnace(glam::Vec3::splat(0.5), 1.0)),
     },
+    BuiltinScene {
+        name: "water-furnace",
+        description: "the furnace half full of water (ior 1.8), seen from the air: radiance is still exactly 2, through the water too; frame 1 moves a block under water",
+        build: || Ok(analytic::water_furnace(glam::Vec3::splat(0.5), 1.0, 1.8)),
+    },
 ];
 
 /// The built-in scene called `name`.

@@ -2,7 +2,7 @@
 //! each saying in one line what it stresses, and what the result must be: a closed form where
 //! one exists, or at least finite statistics.
 
-use crate::analytic::{furnace, specular_furnace};
+use crate::analytic::{box_triangles, furnace, specular_furnace, water_furnace};
 use glam::Vec3;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, RenderParams};
@@ -133,52 +133,6 @@ fn add_object(scene: &mut Scene, name: &str, kind: MaterialKind, triangles: Vec<
     });
 }
 
-fn box_triangles(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 3]> {
-    let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let (a, b) = (lo, hi);
-    [
-        [
-            c(a.x, a.y, a.z),
-            c(b.x, a.y, a.z),
-            c(b.x, a.y, b.z),
-            c(a.x, a.y, b.z),
-        ],
-        [
-            c(a.x, b.y, a.z),
-            c(a.x, b.y, b.z),
-            c(b.x, b.y, b.z),
-            c(b.x, b.y, a.z),
-        ],
-        [
-            c(a.x, a.y, a.z),
-            c(a.x, b.y, a.z),
-            c(b.x, b.y, a.z),
-            c(b.x, a.y, a.z),
-        ],
-        [
-            c(a.x, a.y, b.z),
-            c(b.x, a.y, b.z),
-            c(b.x, b.y, b.z),
-            c(a.x, b.y, b.z),
-        ],
-        [
-            c(a.x, a.y, a.z),
-            c(a.x, a.y, b.z),
-            c(a.x, b.y, b.z),
-            c(a.x, b.y, a.z),
-        ],
-        [
-            c(b.x, a.y, a.z),
-            c(b.x, b.y, a.z),
-            c(b.x, b.y, b.z),
-            c(b.x, a.y, b.z),
-        ],
-    ]
-    .into_iter()
-    .flat_map(quad_triangles)
-    .collect()
-}
-
 const WHITE: MaterialKind = MaterialKind::Diffuse {
     albedo: Vec3::splat(0.7),
 };
@@ -280,6 +234,21 @@ pub const STRESS: &[StressCase] = &[
         name: "glass-ior-3.0",
         stresses: "glass with ior 3: strong reflection and wide total internal reflection",
         build: || specular_case(3.0),
+    },
+    StressCase {
+        name: "water-furnace",
+        stresses: "visible points under water seen from the air: radiance refracted out divides by ior^2",
+        build: || water_case(None),
+    },
+    StressCase {
+        name: "water-furnace-local-move",
+        stresses: "a block moves under water, local mode: the dynamic passes' eye paths refract alike",
+        build: || {
+            water_case(Some(MoveStress {
+                region_photons: 20_000,
+                mode: MoveMode::Local,
+            }))
+        },
     },
     StressCase {
         name: "hall-of-mirrors",
@@ -612,7 +581,21 @@ fn specular_case(ior: f32) -> StressSetup {
             *i = ior;
         }
     }
-    let params = small(&scene);
+    radiance_two(scene, None)
+}
+
+/// The water furnace (ior 1.8): every pixel is 2, under the water too, in both frames.
+fn water_case(moves: Option<MoveStress>) -> StressSetup {
+    radiance_two(water_furnace(Vec3::splat(0.5), 1.0, 1.8), moves)
+}
+
+/// A furnace variant whose every pixel is 2 (within 6%), frame 0 then the move if any
+/// (two iterations each side of it).
+fn radiance_two(scene: Scene, moves: Option<MoveStress>) -> StressSetup {
+    let mut params = small(&scene);
+    if moves.is_some() {
+        params.passes = 2;
+    }
     StressSetup {
         scene,
         params,
@@ -621,7 +604,7 @@ fn specular_case(ior: f32) -> StressSetup {
             tolerance: 0.06,
         },
         seed: None,
-        moves: None,
+        moves,
     }
 }
 

@@ -88,7 +88,8 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             rays = depth + 1u;
             break;
         }
-        let bounce = specular_bounce(material, dir, facing, front, stream_uniform(key, DIM_GLASS + depth));
+        let u = stream_uniform(key, DIM_GLASS + depth);
+        let bounce = specular_bounce(material, dir, facing, front, u, TRANSPORT_RADIANCE);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = select(facing, -facing, bounce.transmitted);

@@ -146,7 +146,7 @@ fn trace_photon(path: u32) -> Traced {
             dir = to_world(cosine_hemisphere(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u)), facing);
             origin = position + facing * params.ray_epsilon;
         } else {
-            let sb = specular_bounce(material, dir, facing, front, stream_uniform(key, d));
+            let sb = specular_bounce(material, dir, facing, front, stream_uniform(key, d), TRANSPORT_IMPORTANCE);
             power *= sb.weight;
             dir = sb.dir;
             let side = select(facing, -facing, sb.transmitted);

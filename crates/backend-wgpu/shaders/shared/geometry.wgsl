@@ -68,13 +68,19 @@ fn fresnel_refract(d: vec3<f32>, n: vec3<f32>, eta: f32) -> Fresnel {
     return Fresnel(clamp(f, 0.0, 1.0), true, normalize(t));
 }
 
+// What a path carries: the twin of ppm_core::geometry::Transport. An eye path's throughput
+// weights radiance, which refraction scales by (eta_i / eta_t)^2; a photon's power is flux,
+// which it keeps.
+const TRANSPORT_RADIANCE: u32 = 0u;
+const TRANSPORT_IMPORTANCE: u32 = 1u;
+
 struct SpecularBounce {
     dir: vec3<f32>,
     transmitted: bool,
     weight: vec3<f32>,
 }
 
-fn specular_bounce(material: GpuMaterial, dir: vec3<f32>, facing: vec3<f32>, front: bool, u: f32) -> SpecularBounce {
+fn specular_bounce(material: GpuMaterial, dir: vec3<f32>, facing: vec3<f32>, front: bool, u: f32, transport: u32) -> SpecularBounce {
     let reflected = reflect(dir, facing);
     if material.kind == MATERIAL_MIRROR {
         return SpecularBounce(reflected, false, material.albedo);
@@ -82,7 +88,8 @@ fn specular_bounce(material: GpuMaterial, dir: vec3<f32>, facing: vec3<f32>, fro
     let eta = select(material.ior, 1.0 / material.ior, front);
     let fresnel = fresnel_refract(dir, facing, eta);
     if fresnel.refracts && u >= fresnel.reflectance {
-        return SpecularBounce(fresnel.refracted, true, vec3<f32>(1.0));
+        let scale = select(1.0, eta * eta, transport == TRANSPORT_RADIANCE);
+        return SpecularBounce(fresnel.refracted, true, vec3<f32>(scale));
     }
     return SpecularBounce(reflected, false, vec3<f32>(1.0));
 }
