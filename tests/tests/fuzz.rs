@@ -19,7 +19,7 @@ use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-const CORNELL: &str = include_str!("../../crates/scenes/data/cornell-box.toml");
+const CORNELL: &str = include_str!("../../scenes/data/cornell-box.toml");
 
 /// Numbers at the edges of what TOML, `f32` and `u32` hold, and past them.
 const EXTREMES: &[&str] = &[
