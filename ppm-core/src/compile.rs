@@ -102,15 +102,17 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let bvh = build_bvh2_from_tris(&obvhs_tris, BVH_PARAMS, &mut core_time);
     let bvh_build_time = start.elapsed();
 
-    let mut triangles = Vec::with_capacity(bvh.primitive_indices.len());
+    // Lights in the scene's order, not the BVH's: a move rebuilds the BVH, and the paired
+    // passes of a move (difference photons, the direct-light correction) trace both poses
+    // with the same random numbers, which must pick the same light point in both.
     let mut lights = Vec::new();
-    for &p in &bvh.primitive_indices {
-        let (t, material, object) = tris[p as usize];
-        let mut gpu = gpu_triangle(t, material, object, moving[object as usize]);
+    let mut light_of = vec![NO_MATERIAL; tris.len()];
+    for (i, &(t, material, object)) in tris.iter().enumerate() {
         if let MaterialKind::Light { .. } = scene.materials[material as usize].kind {
+            let gpu = gpu_triangle(t, material, object, false);
             let area = light_area(Vec3::from(gpu.e1), Vec3::from(gpu.e2));
             if area > 0.0 {
-                gpu.light = lights.len() as u32;
+                light_of[i] = lights.len() as u32;
                 lights.push(GpuLight {
                     v0: gpu.v0,
                     area,
@@ -122,8 +124,18 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 });
             }
         }
-        triangles.push(gpu);
     }
+    let triangles: Vec<GpuTriangle> = bvh
+        .primitive_indices
+        .iter()
+        .map(|&p| {
+            let (t, material, object) = tris[p as usize];
+            GpuTriangle {
+                light: light_of[p as usize],
+                ..gpu_triangle(t, material, object, moving[object as usize])
+            }
+        })
+        .collect();
     let light_power = assign_light_distribution(&mut lights, &materials);
     let nodes: Vec<BvhNode> = bvh
         .nodes
