@@ -36,8 +36,7 @@ pub fn sequence_start(params: &DirectLightParams, hp: &HitPoint) -> u32 {
     }
 }
 
-/// Emitting triangles up to which a cosine ray that crosses no mover's box tests them one by
-/// one, then casts one shadow ray to the nearest, instead of finding its nearest hit in the BVH:
+/// Emitting triangles up to which a cosine ray tests them one by one, then casts one shadow ray to the nearest, instead of finding its nearest hit in the BVH:
 /// most cosine rays meet no emitter and skip the BVH (cornell-box's direct light at 768x768, two
 /// runs side by side: 97 and 99 ms before, 88 and 89 after). The wgpu backend keeps the
 /// closest-hit query: where SIMD lanes split between the two paths the vector runs both (its
@@ -64,20 +63,14 @@ pub fn direct_light_main(
             if hp.flags & hit_flags::RESTING != 0 {
                 return 0;
             }
-            if correcting
-                && (hp.flags & hit_flags::SHADOW_NEAR_MOVER == 0
-                    || hp.flags & hit_flags::UPDATED != 0)
-            {
+            if correcting && hp.flags & hit_flags::DIRECT_MAY_CHANGE == 0 {
                 return 0;
             }
-            let (estimate, rays, near) = if hp.is_valid() {
+            let (estimate, rays) = if hp.is_valid() {
                 slot_direct(params, scene, hp, slot as u32)
             } else {
-                (Vec3::ZERO, 0, false)
+                (Vec3::ZERO, 0)
             };
-            if near {
-                hp.flags |= hit_flags::SHADOW_NEAR_MOVER;
-            }
             if correcting {
                 let shift = params.sign * hp.iterations as f32 * estimate;
                 hp.direct = (Vec3::from(hp.direct) + shift).into();
@@ -94,14 +87,14 @@ pub fn direct_light_main(
     DirectStats { rays }
 }
 
-/// One visible point's direct radiance towards the eye, throughput included, the rays traced
-/// for it, and whether one of them crossed a moving object's box.
+/// One visible point's direct radiance towards the eye, throughput included, and the rays
+/// traced for it.
 fn slot_direct(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,
     slot: u32,
-) -> (Vec3, u64, bool) {
+) -> (Vec3, u64) {
     let material = &scene.materials[hp.material as usize];
     let mut direct = if hp.flags & hit_flags::FRONT != 0 {
         Vec3::from(material.emission)
@@ -110,31 +103,27 @@ fn slot_direct(
     };
     let albedo = Vec3::from(material.albedo);
     let mut rays = 0;
-    let mut near = false;
     if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
-        let (irradiance, crossed) = estimate_irradiance(params, scene, hp, slot);
-        direct += irradiance * albedo * FRAC_1_PI;
+        direct += estimate_irradiance(params, scene, hp, slot) * albedo * FRAC_1_PI;
         rays = u64::from(params.samples * RAYS_PER_SAMPLE);
-        near = crossed;
     }
-    (Vec3::from(hp.throughput) * direct, rays, near)
+    (Vec3::from(hp.throughput) * direct, rays)
 }
 
 /// Irradiance from the lights, `E = integral of Le cos_x`: per sample, light sampling
 /// (`Le cos_x / p_light`, `p_light` the solid-angle density of a point chosen by power then by
 /// area) and cosine sampling (`Le pi` where the ray meets a light's front), each weighted by
-/// the power heuristic against the other. Also says whether a ray crossed a mover's box.
+/// the power heuristic against the other.
 fn estimate_irradiance(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,
     slot: u32,
-) -> (Vec3, bool) {
+) -> Vec3 {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
     let origin = x + n * params.ray_epsilon;
     let mut sum = Vec3::ZERO;
-    let mut near = false;
     let start = sequence_start(params, hp) * params.samples;
     let stream = StratifiedStream::new(params.seed, PassKind::DirectLight, slot);
     for s in 0..params.samples {
@@ -151,7 +140,6 @@ fn estimate_irradiance(
         if dist2 > 0.0 {
             let dist = dist2.sqrt();
             let w = to_light / dist;
-            near |= scene.near_mover(origin, w, dist);
             let cos_x = n.dot(w);
             let cos_l = -Vec3::from(light.normal).dot(w);
             if cos_x > 0.0
@@ -166,22 +154,12 @@ fn estimate_irradiance(
         let (v1, v2) = pair(PAIR_DIRECTION);
         let local = cosine_hemisphere(v1, v2);
         let w = to_world(local, n);
-        let hit = if scene.emitters.len() <= FEW_EMITTERS
-            && !scene.near_mover(origin, w, f32::INFINITY)
-        {
-            // Only an emitter met first adds light, and no move changes what this ray meets.
+        // Only an emitter met first adds light.
+        let hit = if scene.emitters.len() <= FEW_EMITTERS {
             scene.closest_hit_if_emitter(origin, w)
         } else {
             scene.closest_hit(origin, w, f32::INFINITY)
         };
-        // A cosine ray changes with a move only if it reached a light across a mover's box
-        // (it may be blocked in another pose) or met a mover (it may reach a light in
-        // another pose): one blocked in every pose adds nothing either way.
-        if let Some(h) = hit {
-            let reached_light = scene.triangles[h.triangle as usize].light != NO_MATERIAL;
-            near |= (reached_light || scene.in_mover(origin + w * h.t))
-                && scene.near_mover(origin, w, h.t);
-        }
         if let Some(hit) = hit {
             let tri = &scene.triangles[hit.triangle as usize];
             let cos_l = -Vec3::from(tri.normal).dot(w);
@@ -193,5 +171,5 @@ fn estimate_irradiance(
             }
         }
     }
-    (sum / params.samples as f32, near)
+    sum / params.samples as f32
 }

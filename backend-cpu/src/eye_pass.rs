@@ -6,7 +6,8 @@ use glam::Vec3;
 use ppm_core::compile::camera_ray;
 use ppm_core::geometry::{Transport, specular_bounce};
 use ppm_core::layout::{
-    EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, eye_flags, hit_flags, material_kind,
+    EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, SlotBounds, eye_flags, hit_flags,
+    material_kind,
 };
 use ppm_core::passes::EyeStats;
 use ppm_core::rng::{PassKind, StreamKey, stratified_pair};
@@ -18,27 +19,67 @@ const DIM_GLASS: u32 = 2;
 
 /// Writes the visible point of every slot of `hit_points` (`width * height * spp` slots,
 /// slot = pixel * spp + sample), starting the slots fresh or keeping their statistics as
-/// `params.flags` says.
+/// `params.flags` says; with [`eye_flags::RECORD_BOUNDS`], extends each slot's `bounds`.
 pub fn eye_pass_main(
     params: &EyePassParams,
     camera: &GpuCamera,
     scene: &SceneData,
     hit_points: &mut [HitPoint],
+    bounds: Option<&mut [SlotBounds]>,
 ) -> EyeStats {
-    let (rays, visible) = hit_points
-        .par_iter_mut()
-        .enumerate()
-        .with_min_len(256)
-        .map(|(slot, hp)| {
-            let rays = trace_eye_path(params, camera, scene, slot as u32, hp);
-            (rays, u64::from(hp.is_valid()))
-        })
-        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let trace = |slot: usize, hp: &mut HitPoint| {
+        let mut path = PathBounds::NOTHING;
+        let rays = trace_eye_path(params, camera, scene, slot as u32, hp, &mut path);
+        (rays, u64::from(hp.is_valid()), path)
+    };
+    let record = params.flags & eye_flags::RECORD_BOUNDS != 0;
+    let (rays, visible) = match bounds {
+        Some(bounds) if record => hit_points
+            .par_iter_mut()
+            .zip(bounds.par_iter_mut())
+            .enumerate()
+            .with_min_len(256)
+            .map(|(slot, (hp, b))| {
+                let (rays, visible, path) = trace(slot, hp);
+                *b = extended(*b, hp, path);
+                (rays, visible)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
+        _ => hit_points
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(256)
+            .map(|(slot, hp)| {
+                let (rays, visible, _) = trace(slot, hp);
+                (rays, visible)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
+    };
     EyeStats {
         rays,
         hit_points: visible,
     }
 }
+
+/// A slot's bounds after an eye pass: started over where its statistics start (no direct
+/// sample yet: a fresh or reset slot), left alone where it rested, else grown by `path`.
+fn extended(bounds: SlotBounds, hp: &HitPoint, path: PathBounds) -> SlotBounds {
+    if hp.flags & hit_flags::RESTING != 0 {
+        return bounds;
+    }
+    let start = if hp.iterations == 0 {
+        PathBounds::NOTHING
+    } else {
+        bounds
+    };
+    SlotBounds::new(
+        Vec3::from(start.min).min(path.min.into()),
+        Vec3::from(start.max).max(path.max.into()),
+    )
+}
+
+/// The vertices of one eye path after the camera, as a box.
+type PathBounds = SlotBounds;
 
 /// Traces one slot's eye path and writes its visible point; returns the rays traced.
 fn trace_eye_path(
@@ -47,6 +88,7 @@ fn trace_eye_path(
     scene: &SceneData,
     slot: u32,
     out: &mut HitPoint,
+    vertices: &mut PathBounds,
 ) -> u64 {
     let pixel = slot / params.spp;
     let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
@@ -93,23 +135,17 @@ fn trace_eye_path(
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
     for depth in 0..=params.max_depth {
-        let hit = scene.closest_hit(origin, dir, f32::INFINITY);
-        if scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t)) {
-            out.flags |= if depth == 0 {
-                hit_flags::EYE_NEAR_MOVER
-            } else {
-                hit_flags::EYE_CHAIN_NEAR_MOVER
-            };
-        }
-        let Some(hit) = hit else {
+        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
             return u64::from(depth) + 1;
         };
         let tri = &scene.triangles[hit.triangle as usize];
-        if tri.moving != 0 {
-            out.flags |= hit_flags::EYE_MET_MOVER;
-        }
+        out.eye_met |= tri.group;
         let material = &scene.materials[tri.material as usize];
         let position = origin + dir * hit.t;
+        *vertices = SlotBounds::new(
+            Vec3::from(vertices.min).min(position),
+            Vec3::from(vertices.max).max(position),
+        );
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
@@ -125,6 +161,7 @@ fn trace_eye_path(
                 return u64::from(depth) + 1;
             }
             _ => {
+                out.flags |= hit_flags::EYE_CHAINED;
                 let u = key.uniform(DIM_GLASS + depth);
                 let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
                 throughput *= bounce.weight;

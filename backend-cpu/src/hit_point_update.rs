@@ -26,10 +26,10 @@ pub fn update_hit_points_main(
 ) -> UpdateStats {
     let mut fresh = vec![HitPoint::default(); hit_points.len()];
     let fresh_params = EyePassParams {
-        flags: params.flags & !eye_flags::KEEP_STATISTICS,
+        flags: params.flags & !(eye_flags::KEEP_STATISTICS | eye_flags::RECORD_BOUNDS),
         ..*params
     };
-    let eye = eye_pass_main(&fresh_params, camera, scene, &mut fresh);
+    let eye = eye_pass_main(&fresh_params, camera, scene, &mut fresh, None);
     let updated: u64 = hit_points
         .par_iter_mut()
         .zip(&fresh)

@@ -24,7 +24,7 @@ use ppm_core::emission::{guided_emission, ordinary_emission, region_emission};
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
-    ResolveParams,
+    ResolveParams, SlotBounds,
 };
 use ppm_core::layout::{
     EmissionRegion, GuidedEmission, RecordedPath, eye_flags, hit_flags, photon_flags,
@@ -48,6 +48,8 @@ use trace::SceneData;
 pub struct CpuBackend {
     scene: Option<(SceneData, GpuCamera)>,
     hit_points: Vec<HitPoint>,
+    /// The box of each slot's eye-path vertices (eye passes that record it).
+    slot_bounds: Vec<SlotBounds>,
     /// Squared radius new hit points start with (from the last eye pass).
     r2_initial: f32,
     photons: Vec<Photon>,
@@ -133,6 +135,7 @@ impl SceneUpload for CpuBackend {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.scene = Some((SceneData::new(scene), scene.camera));
         self.hit_points.clear();
+        self.slot_bounds.clear();
         self.photons.clear();
         self.weights = None;
         self.grid = PhotonIndex::NoPass;
@@ -147,6 +150,10 @@ impl SceneUpdate for CpuBackend {
         self.weights = None;
         self.grid = PhotonIndex::NoPass;
         Ok(())
+    }
+
+    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        Ok(self.slot_bounds.clone())
     }
 }
 
@@ -204,7 +211,14 @@ impl EyePass for CpuBackend {
         }
         let mut hit_points = std::mem::take(&mut self.hit_points);
         hit_points.resize(slots, HitPoint::default());
-        let stats = eye_pass::eye_pass_main(params, camera, scene, &mut hit_points);
+        self.slot_bounds.resize(slots, SlotBounds::NOTHING);
+        let stats = eye_pass::eye_pass_main(
+            params,
+            camera,
+            scene,
+            &mut hit_points,
+            Some(&mut self.slot_bounds),
+        );
         self.hit_points = hit_points;
         if !keep {
             self.pending = vec![[0.0; 4]; slots];

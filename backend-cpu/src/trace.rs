@@ -59,14 +59,6 @@ impl SceneData {
             .any(|b| segment_meets_box(origin, dir, tmax, b.min.into(), b.max.into()))
     }
 
-    /// Whether `p` lies in the box of a moving object.
-    #[inline]
-    pub fn in_mover(&self, p: Vec3) -> bool {
-        self.movers
-            .iter()
-            .any(|b| p.cmpge(b.min.into()).all() && p.cmple(b.max.into()).all())
-    }
-
     /// Nearest hit with `tmin < t < tmax`.
     #[inline]
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {

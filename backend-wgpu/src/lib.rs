@@ -36,7 +36,7 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams, eye_flags, photon_flags,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams, SlotBounds, eye_flags, photon_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
@@ -91,6 +91,8 @@ pub struct WgpuBackend {
     counters: wgpu::Buffer,
     scene: Option<SceneBuffers>,
     hit_points: Option<(wgpu::Buffer, u32)>,
+    /// Per hit point: the box of its eye paths' vertices (`slot_bounds` in eye_pass.wgsl).
+    slot_bounds: Option<wgpu::Buffer>,
     /// Per hit point: photons found, their power and weight so far in the current pass.
     accumulated: Option<wgpu::Buffer>,
     /// Per hit point: deferred region photons (area mode).
@@ -146,6 +148,7 @@ impl WgpuBackend {
             counters,
             scene: None,
             hit_points: None,
+            slot_bounds: None,
             accumulated: None,
             pending: None,
             r2_initial: None,
@@ -269,6 +272,7 @@ impl SceneUpload for WgpuBackend {
             .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene))??;
         self.scene = Some(buffers);
         self.hit_points = None;
+        self.slot_bounds = None;
         self.accumulated = None;
         self.pending = None;
         self.map = None;
@@ -284,6 +288,13 @@ impl SceneUpdate for WgpuBackend {
         self.scene = Some(buffers);
         self.map = None;
         Ok(())
+    }
+
+    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        match (&self.slot_bounds, &self.hit_points) {
+            (Some(buffer), Some((_, slots))) => read_back(&self.ctx, buffer, *slots as usize),
+            _ => Ok(Vec::new()),
+        }
     }
 }
 
@@ -308,6 +319,11 @@ impl EyePass for WgpuBackend {
                 slots64 * size_of::<HitPoint>() as u64,
             )?,
         };
+        if !keep || self.slot_bounds.is_none() {
+            let bytes = slots64 * size_of::<SlotBounds>() as u64;
+            self.slot_bounds = Some(storage_zeroed(&self.ctx, "slot bounds", bytes)?);
+        }
+        let bounds = self.slot_bounds.as_ref().expect("allocated above");
         let scene = self.scene("eye")?;
         let targets = Slots {
             hit_points: &hit_points,
@@ -317,7 +333,7 @@ impl EyePass for WgpuBackend {
         let counters = self.run("eye", |encoder| {
             self.kernels
                 .eye
-                .record(&self.ctx, encoder, params, scene, &targets);
+                .record(&self.ctx, encoder, params, scene, &targets, bounds);
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;
@@ -613,13 +629,22 @@ impl HitPointUpdate for WgpuBackend {
             count: *slots,
         };
         let fresh_params = EyePassParams {
-            flags: params.flags & !eye_flags::KEEP_STATISTICS,
+            flags: params.flags & !(eye_flags::KEEP_STATISTICS | eye_flags::RECORD_BOUNDS),
             ..*params
         };
+        let bounds = self.slot_bounds.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "hit-point update",
+            needs: "an eye pass",
+        })?;
         let eye = self.run("hit-point update eye", |encoder| {
-            self.kernels
-                .eye
-                .record(&self.ctx, encoder, &fresh_params, scene, &eye_targets);
+            self.kernels.eye.record(
+                &self.ctx,
+                encoder,
+                &fresh_params,
+                scene,
+                &eye_targets,
+                bounds,
+            );
             Ok(())
         })?;
         let update = UpdateParams {

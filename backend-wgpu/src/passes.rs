@@ -28,7 +28,9 @@ impl EyePassKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
-        let slots = [Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite];
+        let slots = [
+            Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite,
+        ];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -38,7 +40,8 @@ impl EyePassKernel {
         ))
     }
 
-    /// Records the eye pass over every hit-point slot.
+    /// Records the eye pass over every hit-point slot; `bounds` holds a box per slot, which
+    /// the pass extends with [`ppm_core::layout::eye_flags::RECORD_BOUNDS`].
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -46,6 +49,7 @@ impl EyePassKernel {
         params: &EyePassParams,
         scene: &SceneBuffers,
         slots: &Slots,
+        bounds: &wgpu::Buffer,
     ) {
         let params = uniform(ctx, "eye params", params);
         let group = self.0.bind(
@@ -57,6 +61,7 @@ impl EyePassKernel {
                 &scene.index,
                 slots.hit_points,
                 slots.counters,
+                bounds,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);

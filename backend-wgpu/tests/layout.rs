@@ -60,7 +60,7 @@ fn buffer_elements_match_their_wgsl_twins() {
         emitted,
         iterations,
         flags,
-        _pad0,
+        eye_met,
         _pad1
     });
     same_layout!(Photon {
@@ -77,7 +77,7 @@ fn buffer_elements_match_their_wgsl_twins() {
         e2,
         light,
         normal,
-        moving
+        group
     });
     same_layout!(BvhNode {
         min,
@@ -259,15 +259,14 @@ fn shared_constants_agree() {
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
         ("HIT_UPDATED", hit_flags::UPDATED),
-        ("HIT_EYE_NEAR_MOVER", hit_flags::EYE_NEAR_MOVER),
-        ("HIT_SHADOW_NEAR_MOVER", hit_flags::SHADOW_NEAR_MOVER),
+        ("HIT_DIRECT_MAY_CHANGE", hit_flags::DIRECT_MAY_CHANGE),
         ("HIT_RESTING", hit_flags::RESTING),
-        ("HIT_EYE_MET_MOVER", hit_flags::EYE_MET_MOVER),
-        ("HIT_EYE_CHAIN_NEAR_MOVER", hit_flags::EYE_CHAIN_NEAR_MOVER),
+        ("HIT_EYE_CHAINED", hit_flags::EYE_CHAINED),
         ("HIT_OBJECT_SHIFT", hit_flags::OBJECT_SHIFT),
         ("EYE_KEEP_STATISTICS", eye_flags::KEEP_STATISTICS),
         ("EYE_JITTER", eye_flags::JITTER),
         ("EYE_FOCUS", eye_flags::FOCUS),
+        ("EYE_RECORD_BOUNDS", eye_flags::RECORD_BOUNDS),
         ("PHOTON_CHANGED_ONLY", photon_flags::CHANGED_ONLY),
         ("PHOTON_RECORD_CROSSED", photon_flags::RECORD_CROSSED),
         ("PHOTON_CULL_UNCROSSED", photon_flags::CULL_UNCROSSED),

@@ -62,10 +62,9 @@ pub struct CompiledScene {
     pub bvh_build_time: Duration,
     /// Levels of the deepest leaf (the root is level 1): bounds a traversal stack.
     pub bvh_depth: usize,
-    /// A box per moving object that holds it in every pose of its move (from this pose to
-    /// the move's end, unless the caller sets the boxes of a whole animation): eye and
-    /// direct-light paths that cross one are flagged, so a move knows what it may change.
-    /// Empty when nothing moves.
+    /// The boxes of the objects a local move moves, in both poses: its photon passes store
+    /// and trace only what follows a crossing of one ([`photon_flags`](crate::layout::photon_flags)).
+    /// Empty (nothing tests them) until a move sets them ([`mover_boxes`]).
     pub movers: Vec<GpuBounds>,
 }
 
@@ -86,9 +85,6 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             tris.push((t, object.material as u32, object_index as u32));
         }
     }
-    let moving: Vec<bool> = (0..scene.objects.len())
-        .map(|o| scene.moves.iter().any(|m| m.object == o))
-        .collect();
     let obvhs_tris: Vec<Triangle> = tris
         .iter()
         .map(|(t, _, _)| Triangle {
@@ -109,7 +105,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let mut light_of = vec![NO_MATERIAL; tris.len()];
     for (i, &(t, material, object)) in tris.iter().enumerate() {
         if let MaterialKind::Light { .. } = scene.materials[material as usize].kind {
-            let gpu = gpu_triangle(t, material, object, false);
+            let gpu = gpu_triangle(t, material, object);
             let area = light_area(Vec3::from(gpu.e1), Vec3::from(gpu.e2));
             if area > 0.0 {
                 light_of[i] = lights.len() as u32;
@@ -132,7 +128,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             let (t, material, object) = tris[p as usize];
             GpuTriangle {
                 light: light_of[p as usize],
-                ..gpu_triangle(t, material, object, moving[object as usize])
+                ..gpu_triangle(t, material, object)
             }
         })
         .collect();
@@ -172,8 +168,25 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         light_power,
         bvh_build_time,
         bvh_depth,
-        movers: scene.swept_bounds(MOVER_MARGIN_RELATIVE * extent),
+        movers: Vec::new(),
     }
+}
+
+/// The boxes of `objects` as posed in `before` and in `after`, widened by
+/// [`MOVER_MARGIN_RELATIVE`] of `extent`: what a move of them may change lies on paths that
+/// cross one of them.
+pub fn mover_boxes(
+    before: &Scene,
+    after: &Scene,
+    objects: &[usize],
+    extent: f32,
+) -> Vec<GpuBounds> {
+    let margin = Vec3::splat(MOVER_MARGIN_RELATIVE * extent);
+    [before, after]
+        .iter()
+        .flat_map(|scene| objects.iter().map(move |&o| scene.objects[o].bounds()))
+        .map(|(lo, hi)| GpuBounds::new(lo - margin, hi + margin))
+        .collect()
 }
 
 /// Depth of the flattened tree, walked iteratively (the deepest tree must not overflow this).
@@ -241,7 +254,7 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
     }
 }
 
-fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32, moving: bool) -> GpuTriangle {
+fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];
     GpuTriangle {
@@ -252,8 +265,19 @@ fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32, moving: bool) -> GpuT
         e2: e2.into(),
         light: NO_MATERIAL,
         normal: unit_normal(e1, e2).into(),
-        moving: u32::from(moving),
+        group: object_group(object as usize),
     }
+}
+
+/// Groups an object shares with others: the slots record which groups their eye paths met
+/// in 32 bits, so objects beyond the 32nd share a bit with an earlier one (`index % 32`). A
+/// move of an object then resets the slots that met any object of its group: more than it
+/// must, never less.
+pub const OBJECT_GROUPS: usize = 32;
+
+/// The bit of object `index`'s group in [`HitPoint::eye_met`](crate::layout::HitPoint::eye_met).
+pub fn object_group(index: usize) -> u32 {
+    1 << (index % OBJECT_GROUPS)
 }
 
 /// The unit normal of edges `e1`, `e2`: in `f32`, or in `f64` where the cross product's

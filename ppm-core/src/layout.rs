@@ -26,28 +26,21 @@ pub mod hit_flags {
     pub const FRONT: u32 = 2;
     /// The slot was reset by the last hit-point update (ALGORITHM.md 2.4).
     pub const UPDATED: u32 = 4;
-    /// Some eye ray of the slot from the camera, since its statistics started, crossed the
-    /// bounds a moving object sweeps before its hit: a move may change what the slot sees if
-    /// the object's new pose covers the pixel (local mode tests that on the screen).
-    pub const EYE_NEAR_MOVER: u32 = 8;
-    /// Some shadow or cosine ray of the slot's direct sum crossed those bounds: a move may
-    /// change its direct light (local mode restarts the sum).
-    pub const SHADOW_NEAR_MOVER: u32 = 16;
+    /// Set by a local move on the kept slots whose direct light the move may change: the
+    /// paired correction ([`direct_accumulate::CORRECT`](super::direct_accumulate::CORRECT))
+    /// serves them alone.
+    pub const DIRECT_MAY_CHANGE: u32 = 16;
     /// The slot sits out this iteration's eye pass and direct light (an eye pass with
     /// [`eye_flags::FOCUS`](super::eye_flags::FOCUS) found it ahead of the slots a move reset):
     /// its last visible point stays and gathers the iteration's photons, which cost nothing
     /// more to trace.
     pub const RESTING: u32 = 32;
-    /// Some eye path of the slot since its statistics started met a moving object: a move
-    /// changes what the slot saw (local mode resets it).
-    pub const EYE_MET_MOVER: u32 = 64;
-    /// Some eye path of the slot since its statistics started crossed a moving object's
-    /// bounds after a mirror or glass bounce, where the screen cannot tell whether the new
-    /// pose meets it (local mode resets it).
-    pub const EYE_CHAIN_NEAR_MOVER: u32 = 128;
+    /// Some eye path of the slot since its statistics started bounced off a mirror or glass
+    /// before its visible point: what it sees in another pose of an object the screen cannot
+    /// tell (a local move probes it).
+    pub const EYE_CHAINED: u32 = 128;
     /// The flags a slot keeps from iteration to iteration (`sppm`).
-    pub const KEPT: u32 =
-        UPDATED | EYE_NEAR_MOVER | SHADOW_NEAR_MOVER | EYE_MET_MOVER | EYE_CHAIN_NEAR_MOVER;
+    pub const KEPT: u32 = UPDATED | EYE_CHAINED;
     /// The index of the object hit sits in the bits from here up (24 bits).
     pub const OBJECT_SHIFT: u32 = 8;
 }
@@ -96,8 +89,10 @@ pub struct HitPoint {
     pub iterations: u32,
     /// [`hit_flags`] bits.
     pub flags: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// The object groups ([`object_group`](crate::compile::object_group)) that the slot's
+    /// eye paths met since its statistics started: a move of one of them changes what the
+    /// slot saw (a local move resets it).
+    pub eye_met: u32,
     /// Padding.
     pub _pad1: u32,
 }
@@ -163,9 +158,9 @@ pub struct GpuTriangle {
     pub light: u32,
     /// Unit geometric normal, `normalize(e1 x e2)`; zero for a degenerate triangle.
     pub normal: [f32; 3],
-    /// 1 where the triangle's object moves between frames, else 0: an eye path that meets
-    /// it flags its slot ([`hit_flags::EYE_MET_MOVER`]).
-    pub moving: u32,
+    /// The bit of the triangle's object group ([`object_group`](crate::compile::object_group)):
+    /// an eye path that meets the triangle sets it in its slot's [`HitPoint::eye_met`].
+    pub group: u32,
 }
 
 /// A node of the binary BVH built by obvhs, flattened for traversal on any backend.
@@ -199,7 +194,9 @@ pub struct GpuMaterial {
     pub ior: f32,
 }
 
-/// An axis-aligned box that a moving object stays inside through all its poses. 32 bytes.
+/// An axis-aligned box: a moved object's box in one of its poses (the boxes whose crossing a
+/// move's photon passes watch for), or the box of the vertices a slot's eye paths reached
+/// ([`SlotBounds`]). 32 bytes.
 /// An empty box (`min > max`) stands for "nothing moves" and no ray crosses it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -214,7 +211,22 @@ pub struct GpuBounds {
     pub _pad1: u32,
 }
 
+/// The box of every vertex a slot's eye paths reached after leaving the camera (mirror and
+/// glass bounces and visible points) since its statistics started: a local move tests
+/// against it where the slot's paths and shadow rays may have gone. Fresh, it is
+/// [`GpuBounds::NOTHING`].
+pub type SlotBounds = GpuBounds;
+
 impl GpuBounds {
+    /// The box of no point, which any point's box contains: `min` at `f32::MAX` and `max` at
+    /// `-f32::MAX`, so that taking the minimum and maximum with a point gives that point.
+    pub const NOTHING: GpuBounds = GpuBounds {
+        min: [f32::MAX; 3],
+        _pad0: 0,
+        max: [-f32::MAX; 3],
+        _pad1: 0,
+    };
+
     /// The box no ray crosses.
     pub const EMPTY: GpuBounds = GpuBounds {
         min: [1.0; 3],
@@ -290,6 +302,10 @@ pub mod eye_flags {
     /// (local mode, after a move: that work goes to the slots the move reset until they catch
     /// up with the kept ones).
     pub const FOCUS: u32 = 4;
+    /// Extend each kept slot's [`SlotBounds`] by its eye path's vertices (started over where
+    /// the slot's statistics start); without it the bounds are left alone (the probe of a
+    /// local move, the hit-point update of the other modes).
+    pub const RECORD_BOUNDS: u32 = 8;
 }
 
 /// Parameters of one eye pass. 32 bytes.
@@ -344,7 +360,7 @@ pub mod direct_accumulate {
     pub const REPLACE: u32 = 0;
     /// Add it to the sum as one more iteration (`sppm`).
     pub const ADD: u32 = 1;
-    /// Local mode's paired correction: only at kept slots flagged `SHADOW_NEAR_MOVER`, add
+    /// Local mode's paired correction: only at kept slots flagged `DIRECT_MAY_CHANGE`, add
     /// `sign * iterations * estimate` to the sum, the iteration count unchanged. Run with
     /// the same random numbers before (`sign` -1) and after (+1) a move, the two passes
     /// shift the slot's mean by an unbiased estimate of the change of its direct light; where
@@ -398,12 +414,12 @@ pub struct PhotonPassParams {
 
 /// Bits of [`PhotonPassParams::flags`].
 pub mod photon_flags {
-    /// Store only the deposits whose path crossed a mover's box before reaching them
-    /// (local mode's difference passes): a path that has not met a box is the same in every
-    /// pose, so its deposits would cancel between the two poses; dropping them in both is
+    /// Store only the deposits whose path crossed a moved object's box before reaching them
+    /// (local mode's difference passes): a path that has not met a box is the same in both
+    /// poses, so its deposits would cancel between the two poses; dropping them in both is
     /// exact, and the gathers then cost in proportion to the light the move touches.
     pub const CHANGED_ONLY: u32 = 1;
-    /// Write into the crossed-path mask, per path traced, whether it crossed a mover's box
+    /// Write into the crossed-path mask, per path traced, whether it crossed a moved object's box
     /// anywhere, its last segment included (local mode's pose-A difference passes).
     pub const RECORD_CROSSED: u32 = 2;
     /// Skip the paths whose bit in the crossed-path mask is clear (pose B, with the mask pose

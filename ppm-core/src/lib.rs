@@ -25,6 +25,7 @@ pub mod output;
 pub mod params;
 pub mod passes;
 pub mod qmc;
+pub mod reach;
 pub mod region;
 pub mod rng;
 pub mod sampling;

@@ -11,7 +11,7 @@ use crate::compile::CompiledScene;
 use crate::image::Image;
 use crate::layout::{
     DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams, SlotBounds,
 };
 use thiserror::Error;
 
@@ -215,8 +215,13 @@ pub trait Backend:
 
 /// Swaps the geometry under the hit points when an object moves (ALGORITHM.md 2.3).
 pub trait SceneUpdate {
-    /// Replaces triangles, BVH and lights with `scene`'s, keeping hit points and statistics.
+    /// Replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
+    /// statistics.
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
+    /// The box of each slot's eye-path vertices, slot by slot, that eye passes with
+    /// [`crate::layout::eye_flags::RECORD_BOUNDS`] keep: where a local move looks for what
+    /// the slot may have seen ([`crate::layout::SlotBounds`]).
+    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError>;
 }
 
 /// Hit-point update after a move (ALGORITHM.md 2.4).

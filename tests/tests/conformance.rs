@@ -101,6 +101,9 @@ impl SceneUpdate for DropsOneInTen {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.0.update_scene(scene)
     }
+    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        self.0.read_slot_bounds()
+    }
 }
 impl HitPointUpdate for DropsOneInTen {
     fn update_hit_points(

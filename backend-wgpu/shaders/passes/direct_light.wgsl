@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh lights movers tables scene materials
+// #import layout rng qmc sampling geometry bvh lights tables scene materials
 // Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
@@ -7,9 +7,6 @@
 @group(0) @binding(2) var<uniform> scene: SceneIndex;
 @group(0) @binding(3) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 4>;
-
-// Whether a ray of this invocation's estimate crossed a mover's box.
-var<private> near: bool;
 
 // Stratified pairs of each sample (see backend-cpu's direct_light.rs).
 const PAIR_LIGHT_POINT: u32 = 0u;
@@ -38,7 +35,6 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
         if dist2 > 0.0 {
             let dist = sqrt(dist2);
             let w = to_light / dist;
-            near = near || near_mover(origin, w, dist);
             let cos_x = dot(hp.normal, w);
             let cos_l = -dot(light.normal, w);
             if cos_x > 0.0 && cos_l > 0.0 && !occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
@@ -54,9 +50,6 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
         if hit.triangle != 0xffffffffu {
             let tri = scene_triangle(hit.triangle);
             let reached_light = tri.light != NO_MATERIAL;
-            // Changes with a move only if it reached a light across a mover's box or met a
-            // mover (backend-cpu's direct_light.rs says why).
-            near = near || ((reached_light || in_mover(origin + w * hit.t)) && near_mover(origin, w, hit.t));
             let cos_l = -dot(tri.normal, w);
             if reached_light && cos_l > 0.0 {
                 let hit_light = scene_light(tri.light);
@@ -80,11 +73,10 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     let correcting = params.accumulate == DIRECT_CORRECT;
-    if correcting && ((hp.flags & HIT_SHADOW_NEAR_MOVER) == 0u || (hp.flags & HIT_UPDATED) != 0u) {
+    if correcting && (hp.flags & HIT_DIRECT_MAY_CHANGE) == 0u {
         return;
     }
     var estimate = vec3<f32>(0.0);
-    near = false;
     if (hp.flags & HIT_VALID) != 0u {
         let material = scene_material(hp.material);
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
@@ -93,10 +85,6 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }
         estimate = hp.throughput * direct;
-    }
-    var flags = hp.flags;
-    if near {
-        flags |= HIT_SHADOW_NEAR_MOVER;
     }
     var direct = estimate;
     var iterations = 1u;
@@ -109,7 +97,6 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     // Only the fields this pass changes are written back (a whole slot is 24 word stores,
     // which lavapipe makes one invocation at a time).
-    hit_points[slot].flags = flags;
     hit_points[slot].direct = direct;
     hit_points[slot].iterations = iterations;
 }

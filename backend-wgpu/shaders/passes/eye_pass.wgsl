@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh movers tables scene materials
+// #import layout rng qmc sampling geometry bvh tables scene materials
 // Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -8,6 +8,7 @@
 @group(0) @binding(3) var<uniform> scene: SceneIndex;
 @group(0) @binding(4) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(6) var<storage, read_write> slot_bounds: array<GpuBounds>;
 
 const DIM_GLASS: u32 = 2u;
 
@@ -62,21 +63,21 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     var throughput = vec3<f32>(1.0);
     var out = cleared_slot(slot, pixel);
     var rays = params.max_depth + 1u;
+    // The box of the path's vertices after the camera (backend-cpu's eye_pass.rs).
+    var lo = vec3<f32>(F32_MAX);
+    var hi = vec3<f32>(-F32_MAX);
     for (var depth = 0u; depth <= params.max_depth; depth++) {
         let hit = closest_hit(origin, dir, T_MISS);
-        if near_mover(origin, dir, hit.t) {
-            out.flags |= select(HIT_EYE_CHAIN_NEAR_MOVER, HIT_EYE_NEAR_MOVER, depth == 0u);
-        }
         if hit.triangle == 0xffffffffu {
             rays = depth + 1u;
             break;
         }
         let tri = scene_triangle(hit.triangle);
-        if tri.moving != 0u {
-            out.flags |= HIT_EYE_MET_MOVER;
-        }
+        out.eye_met |= tri.group;
         let material = scene_material(tri.material);
         let position = origin + dir * hit.t;
+        lo = min(lo, position);
+        hi = max(hi, position);
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
         if material.kind == MATERIAL_DIFFUSE {
@@ -88,6 +89,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             rays = depth + 1u;
             break;
         }
+        out.flags |= HIT_EYE_CHAINED;
         let u = stream_uniform(key, DIM_GLASS + depth);
         let bounce = specular_bounce(material, dir, facing, front, u, TRANSPORT_RADIANCE);
         throughput *= bounce.weight;
@@ -96,6 +98,14 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         origin = position + side * params.ray_epsilon;
     }
     hit_points[slot] = out;
+    if (params.flags & EYE_RECORD_BOUNDS) != 0u {
+        // Started over where the slot's statistics start (no direct sample yet).
+        var bounds = GpuBounds(vec3<f32>(F32_MAX), 0u, vec3<f32>(-F32_MAX), 0u);
+        if out.iterations != 0u {
+            bounds = slot_bounds[slot];
+        }
+        slot_bounds[slot] = GpuBounds(min(bounds.min, lo), 0u, max(bounds.max, hi), 0u);
+    }
     atomicAdd(&counters[COUNTER_RAYS], rays);
     if (out.flags & HIT_VALID) != 0u {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);

@@ -8,12 +8,10 @@ const MATERIAL_GLASS: u32 = 2u;
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
 const HIT_UPDATED: u32 = 4u;
-const HIT_EYE_NEAR_MOVER: u32 = 8u;
-const HIT_SHADOW_NEAR_MOVER: u32 = 16u;
+const HIT_DIRECT_MAY_CHANGE: u32 = 16u;
 const HIT_RESTING: u32 = 32u;
-const HIT_EYE_MET_MOVER: u32 = 64u;
-const HIT_EYE_CHAIN_NEAR_MOVER: u32 = 128u;
-const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_NEAR_MOVER | HIT_SHADOW_NEAR_MOVER | HIT_EYE_MET_MOVER | HIT_EYE_CHAIN_NEAR_MOVER;
+const HIT_EYE_CHAINED: u32 = 128u;
+const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_CHAINED;
 const HIT_OBJECT_SHIFT: u32 = 8u;
 const NO_MATERIAL: u32 = 0xffffffffu;
 
@@ -41,7 +39,7 @@ struct HitPoint {
     emitted: f32,
     iterations: u32,
     flags: u32,
-    _pad0: u32,
+    eye_met: u32,
     _pad1: u32,
 }
 
@@ -60,7 +58,7 @@ struct GpuTriangle {
     e2: vec3<f32>,
     light: u32,
     normal: vec3<f32>,
-    moving: u32,
+    group: u32,
 }
 
 struct BvhNode {
@@ -102,6 +100,7 @@ struct GpuCamera {
 const EYE_KEEP_STATISTICS: u32 = 1u;
 const EYE_JITTER: u32 = 2u;
 const EYE_FOCUS: u32 = 4u;
+const EYE_RECORD_BOUNDS: u32 = 8u;
 
 struct EyePassParams {
     seed: u32,
@@ -231,6 +230,9 @@ fn is_finite_f32(x: f32) -> bool {
 fn is_finite_vec3(v: vec3<f32>) -> bool {
     return is_finite_f32(v.x) && is_finite_f32(v.y) && is_finite_f32(v.z);
 }
+
+// The largest finite f32: the corners of the box of no point (ppm_core's GpuBounds::NOTHING).
+const F32_MAX: f32 = 3.4028235e38;
 
 struct GpuBounds {
     min: vec3<f32>,

@@ -1,55 +1,59 @@
-//! Local mode (ours; ALGORITHM.md 3b): a move keeps everything it did not change.
+//! Local mode (ours; ALGORITHM.md 3b and 3c): a move keeps everything it did not change,
+//! whatever the move. Nothing about it is known before it happens: which objects move, where
+//! to, or when.
 //!
-//! Every `sppm` iteration flags, per slot, whether its eye paths met a moving object, and
-//! whether they (or separately its shadow and cosine rays) crossed a box that holds a moving
-//! object in all its poses (the start's
-//! [`CompiledScene::movers`](ppm_core::compile::CompiledScene::movers)). A path that crosses
-//! no box meets the same surfaces in every pose, so at a move:
-//! - a slot starts over when what it sees may change: its eye paths met a moving object (in
-//!   the pose left), or crossed a box after a mirror or glass bounce, or crossed a box from
-//!   the camera in a pixel the new pose may cover ([`covered_pixels`], conservative). This
-//!   finds the pixels the object newly covers, and keeps those that only saw past it, such
-//!   as the floor inside a ring;
+//! Every `sppm` iteration records, per slot, the object groups its eye paths met
+//! (`HitPoint::eye_met`, a bit per group of [`object_group`]), whether a path bounced off a
+//! mirror or glass before its visible point (`EYE_CHAINED`), and the box of every vertex its
+//! paths reached after the camera (`SlotBounds`). At a move of some objects from pose A to
+//! pose B:
+//! - a slot starts over when what it sees may change: its eye paths met a moved object's
+//!   group (pose A); or the pixel lies under pose B's outline ([`covered_pixels`],
+//!   conservative) and pose B comes nearer the eye than the farthest vertex its paths reached;
+//!   or its paths bounced, their box meets a moved object's box in pose B, and one of
+//!   [`PROBE_PATHS`] eye paths traced in pose B through random points of the pixel meets a
+//!   moved object ([`Renderer::probe`]);
 //! - any other slot keeps its visible points, the light it saw directly and its photon
-//!   statistics; if one of its direct-light rays crossed a box, its direct sum is corrected
-//!   by [`CORRECTION_SAMPLES`] shadow-ray samples traced at its visible point in both poses
-//!   with the same random numbers (an unbiased estimate of the change, exactly zero where
-//!   the move blocks or frees none of them);
+//!   statistics. Its direct light can change only through shadow or cosine rays from its
+//!   visible points to a light that cross a moved object's box in either pose: where a
+//!   segment from its box to a light's box may cross one ([`segments_may_meet`]), its direct
+//!   sum is corrected by [`CORRECTION_SAMPLES`] shadow-ray samples traced at its visible point
+//!   in both poses with the same random numbers (an unbiased estimate of the change, exactly
+//!   zero where the move blocks or frees none of them);
 //! - the kept slots' indirect light is corrected by difference passes: ordinary photons
 //!   traced in both poses with the same random numbers, whose deferred net sum is the change
 //!   of every photon path the move changed. A path is the same in both poses until it
-//!   crosses a box, so only deposits made after that are stored (in both poses): the
-//!   gathers cost in proportion to the light the object touches, and what would cancel
-//!   leaves no rounding behind. Pose A records, one bit per path, whether the path crossed a
-//!   box at all; pose B traces only those that did, since the others would store nothing
-//!   there (`culled_share` in the report). The correction is gathered within a disc wider
-//!   than a converged slot's ([`MoveParams::correction_radii`]), and added to the flux
-//!   alone: it brings no new photons to shrink the radius with.
+//!   crosses a moved object's box in pose A or in pose B, so only deposits made after that
+//!   are stored (in both poses): the gathers cost in proportion to the light the objects
+//!   touch. Pose A records, one bit per path, whether the path crossed a box at all; pose B
+//!   traces only those that did (`culled_share` in the report). The correction is gathered
+//!   within a disc wider than a converged slot's ([`MoveParams::correction_radii`]), and
+//!   added to the flux alone: it brings no new photons to shrink the radius with.
 //!
-//! The flags hold since a slot's statistics started, so a slot whose paths first meet the
-//! object late in its life is still reset by the next move.
+//! The records hold since a slot's statistics started, so a slot whose paths first meet an
+//! object late in its life is still reset by the next move of it. A moved light restarts.
 //!
 //! Then every second iteration ([`FOCUS_PERIOD`](super::FOCUS_PERIOD)) traces eye paths and
 //! direct light only for the slots with the fewest iterations: a slot whose direct sum holds
 //! more iterations than the slots the move reset rests (`hit_flags::RESTING`), until they
 //! catch up. Its last visible point still gathers the iteration's photons, traced anyway.
 //!
-//! A move to the same pose resets nothing, and its difference passes cancel.
-//!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
 use super::Renderer;
 use super::moves::{Compensation, MoveReport};
 use glam::Vec3;
-use ppm_core::compile::CompiledScene;
+use ppm_core::compile::{CompiledScene, mover_boxes, object_group};
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, HitPoint, direct_accumulate, eye_flags, gather_kind,
-    hit_flags,
+    DirectLightParams, EyePassParams, HitPoint, SlotBounds, direct_accumulate, eye_flags,
+    gather_kind, hit_flags,
 };
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
-use ppm_core::scene::{MaterialKind, Move, Scene};
+use ppm_core::reach::{Aabb, segments_may_meet};
+use ppm_core::scene::{MaterialKind, Scene};
 use ppm_core::screen_cover::covered_pixels;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Direct-light samples per slot of the paired correction, in each pose.
@@ -67,6 +71,10 @@ pub const PROBE_PATHS: u32 = 32;
 /// Keys the probe's random numbers apart from every iteration's.
 const PROBE_SEED: u32 = 0x9b0b_e5ed;
 
+/// Lights up to which the direct-light test takes each emitting triangle's box; beyond, the
+/// box around all of them.
+const LIGHT_BOXES: usize = 16;
+
 /// Slots a move reset, kept, and kept with their direct sum corrected.
 struct Resets {
     reset: u64,
@@ -74,39 +82,43 @@ struct Resets {
     direct_corrected: u64,
 }
 
+/// The moved objects' boxes in both poses and their group bits.
+struct Moved {
+    /// Bits of the moved objects' groups.
+    groups: u32,
+    /// Their boxes in pose A.
+    before: Vec<Aabb>,
+    /// Their boxes in pose B.
+    after: Vec<Aabb>,
+}
+
 impl Renderer<'_> {
-    /// Why local mode cannot keep anything for a move to `next`, if it cannot.
-    pub(super) fn local_plan(&self, next: &Scene) -> Result<Compensation, String> {
+    /// Why local mode cannot keep anything for a move of `changed` objects, if it cannot.
+    pub(super) fn local_plan(&self, changed: &[usize]) -> Result<Compensation, String> {
         if self.params.estimator != Estimator::Sppm {
             return Err("local mode keeps sppm slots; ppm restarts".to_owned());
         }
-        // Rays that escaped or met a wall are not flagged; a moving light could reach them.
-        let emits = |m: &Move| {
-            let material = self.scene.objects[m.object].material;
+        // Nothing records what a light's photons and shadow rays reached.
+        let emits = |&o: &usize| {
+            let material = self.scene.objects[o].material;
             matches!(
                 self.scene.materials[material].kind,
                 MaterialKind::Light { .. }
             )
         };
-        if self.scene.moves.iter().any(emits) {
-            return Err("a light moves: local mode restarts".to_owned());
-        }
-        let inside = |scene: &Scene| {
-            scene.moves.iter().zip(&self.movers).all(|(m, b)| {
-                let (lo, hi) = scene.objects[m.object].bounds();
-                lo.cmpge(b.min.into()).all() && hi.cmple(b.max.into()).all()
-            })
-        };
-        if self.movers.len() != next.moves.len() || !inside(&self.scene) || !inside(next) {
-            return Err("the move leaves the boxes flagged since the start".to_owned());
+        if let Some(&light) = changed.iter().find(|o| emits(o)) {
+            return Err(format!(
+                "a light moves ({}): local mode restarts",
+                self.scene.objects[light].name
+            ));
         }
         Ok(self.local_correction())
     }
 
     /// Local mode's indirect correction: difference passes that store only the deposits of
-    /// paths that crossed a mover's box (the others cancel between the poses), gathered
-    /// within `correction_radii` initial radii at least. A converged slot's disc is a
-    /// fraction of the initial one: the few hundred thousand photons of a correction would
+    /// paths that crossed a moved object's box (the others cancel between the poses),
+    /// gathered within `correction_radii` initial radii at least. A converged slot's disc is
+    /// a fraction of the initial one: the few hundred thousand photons of a correction would
     /// reach it too sparsely, and their noise would stay in statistics built from millions
     /// (on cornell-box the kept pixels' error is 0.047 within one initial radius, 0.035
     /// within two). The wider disc trades that noise for a blur of the change: 15 s after
@@ -121,19 +133,30 @@ impl Renderer<'_> {
         }
     }
 
-    /// Moves to `next`: the resets, then difference passes and the paired direct-light
-    /// correction in pose A and in pose B, their net change applied once to the kept slots.
+    /// Moves the `changed` objects to their pose in `next`: the resets, then difference
+    /// passes and the paired direct-light correction in pose A and in pose B, their net
+    /// change applied once to the kept slots.
     pub(super) fn move_locally(
         &mut self,
         next: Scene,
+        changed: &[usize],
         mut report: MoveReport,
         start: Instant,
     ) -> Result<MoveReport, BackendError> {
-        // The resets depend only on the flags and on pose B's outline, so they come first:
-        // the passes below then skip the reset slots in both poses alike.
-        let changed = self.scene.moving_vertices() != next.moving_vertices();
-        let compiled = self.compile(&next);
-        let resets = self.reset_near_movers(changed, &next, &compiled)?;
+        // The passes of both poses test the moved objects' boxes in both poses: a path is the
+        // same in A and B until it crosses one.
+        let movers = mover_boxes(&self.scene, &next, changed, self.extent);
+        let mut compiled = self.compile(&next);
+        compiled.movers = movers.clone();
+        self.compiled.movers = movers;
+        let moved = Moved {
+            groups: changed.iter().fold(0, |g, &o| g | object_group(o)),
+            before: changed.iter().map(|&o| aabb(&self.scene, o)).collect(),
+            after: changed.iter().map(|&o| aabb(&next, o)).collect(),
+        };
+        // The resets depend only on the records and on pose B, so they come first: the
+        // passes below then skip the reset slots in both poses alike.
+        let resets = self.reset_near(&next, &compiled, changed, &moved)?;
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
@@ -143,15 +166,16 @@ impl Renderer<'_> {
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
         let correction = self.local_correction();
+        self.backend.update_scene(&self.compiled)?;
         self.compensate(&correction, gather_kind::REGION_NEGATIVE)?;
-        if changed {
+        if resets.direct_corrected > 0 {
             self.correct_direct(-1.0)?;
         }
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
-        self.adopt(next, &compiled);
+        self.adopt(next, compiled);
         self.frame += 1;
-        if changed {
+        if resets.direct_corrected > 0 {
             self.correct_direct(1.0)?;
         }
         let positive = self.compensate(&correction, gather_kind::REGION_POSITIVE)?;
@@ -190,80 +214,130 @@ impl Renderer<'_> {
         self.run_direct_light(&params)
     }
 
-    /// Starts over the slots whose view the move to `next` (`compiled`) may change (only when
-    /// the geometry `changed`; see the module doc) and marks them `UPDATED`, so the
-    /// compensation skips them; counts the kept slots whose direct sums the paired correction
-    /// reaches.
-    fn reset_near_movers(
+    /// Starts over the slots whose view the move of `changed` objects to `next` (`compiled`)
+    /// may change (see the module doc) and marks them `UPDATED`, so the compensation skips
+    /// them; marks `DIRECT_MAY_CHANGE` the kept slots whose direct light it may change.
+    fn reset_near(
         &mut self,
-        changed: bool,
         next: &Scene,
         compiled: &CompiledScene,
+        changed: &[usize],
+        moved: &Moved,
     ) -> Result<Resets, BackendError> {
         let mut slots = self.backend.read_hit_points()?;
-        let posed: Vec<[Vec3; 3]> = next
-            .moves
+        let bounds = self.backend.read_slot_bounds()?;
+        let posed: Vec<[Vec3; 3]> = changed
             .iter()
-            .flat_map(|m| next.objects[m.object].triangles.iter().copied())
+            .flat_map(|&o| next.objects[o].triangles.iter().copied())
             .collect();
         let covered = covered_pixels(&compiled.camera, &posed);
-        let decided = |hp: &HitPoint| {
-            hp.flags & hit_flags::EYE_MET_MOVER != 0
-                || hp.flags & hit_flags::EYE_NEAR_MOVER != 0 && covered[hp.pixel as usize]
+        let eye = Vec3::from(compiled.camera.eye);
+        let nearest = moved
+            .after
+            .iter()
+            .map(|b| b.distance_from(eye))
+            .fold(f32::INFINITY, f32::min);
+        let reached = |i: usize| {
+            bounds
+                .get(i)
+                .map_or(Aabb::new(Vec3::MIN, Vec3::MAX), slot_box)
         };
-        let chained = |hp: &HitPoint| hp.flags & hit_flags::EYE_CHAIN_NEAR_MOVER != 0;
-        let undecided = |hp: &HitPoint| chained(hp) && !decided(hp);
-        let met_in_b = if changed && slots.iter().any(undecided) {
-            self.probe(compiled, &slots, undecided)?
+        // Pose A's records, and pose B in front of what the pixel's paths reached.
+        let decided = |i: usize, hp: &HitPoint| {
+            let b = reached(i);
+            hp.eye_met & moved.groups != 0
+                || covered[hp.pixel as usize] && (b.is_empty() || nearest < b.farthest_from(eye))
+        };
+        // Paths past a mirror or glass whose box meets pose B: the probe decides.
+        let chained = |i: usize, hp: &HitPoint| {
+            hp.flags & hit_flags::EYE_CHAINED != 0
+                && moved.after.iter().any(|b| b.overlaps(&reached(i)))
+        };
+        let undecided: Vec<bool> = slots
+            .iter()
+            .enumerate()
+            .map(|(i, hp)| !decided(i, hp) && chained(i, hp))
+            .collect();
+        let met_in_b = if undecided.iter().any(|&u| u) {
+            self.probe(compiled, &slots, &undecided, moved.groups)?
         } else {
             Vec::new()
         };
-        let sees_change = |hp: &HitPoint| decided(hp) || chained(hp) && met_in_b[hp.pixel as usize];
-        let mut resets = Resets {
-            reset: 0,
-            kept: 0,
-            direct_corrected: 0,
+        let lights = self.light_boxes();
+        let boxes: Vec<Aabb> = moved.before.iter().chain(&moved.after).copied().collect();
+        let direct_may_change = |b: &Aabb| {
+            lights
+                .iter()
+                .any(|l| boxes.iter().any(|m| segments_may_meet(b, l, m)))
         };
         let r2_initial = self.params.initial_radius * self.params.initial_radius;
-        for hp in &mut slots {
-            if changed && sees_change(hp) {
-                *hp = HitPoint {
-                    r2: r2_initial,
-                    flags: hit_flags::UPDATED,
-                    ..HitPoint::empty(hp.pixel)
-                };
-                resets.reset += 1;
-                continue;
-            }
-            hp.flags &= !(hit_flags::UPDATED | hit_flags::RESTING);
-            if hp.flags & hit_flags::SHADOW_NEAR_MOVER != 0 {
-                resets.direct_corrected += 1;
-            }
-            resets.kept += 1;
-        }
+        let (reset, corrected) = slots
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, hp)| {
+                let sees_change = decided(i, hp) || undecided[i] && met_in_b[hp.pixel as usize];
+                if sees_change {
+                    *hp = HitPoint {
+                        r2: r2_initial,
+                        flags: hit_flags::UPDATED,
+                        ..HitPoint::empty(hp.pixel)
+                    };
+                    return (1, 0);
+                }
+                hp.flags &=
+                    !(hit_flags::UPDATED | hit_flags::RESTING | hit_flags::DIRECT_MAY_CHANGE);
+                if direct_may_change(&reached(i)) {
+                    hp.flags |= hit_flags::DIRECT_MAY_CHANGE;
+                    return (0, 1);
+                }
+                (0, 0)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         self.backend.write_hit_points(&slots)?;
-        Ok(resets)
+        Ok(Resets {
+            reset,
+            kept: slots.len() as u64 - reset,
+            direct_corrected: corrected,
+        })
+    }
+
+    /// The boxes the direct-light test reaches for: each light's, or one around all of them.
+    fn light_boxes(&self) -> Vec<Aabb> {
+        let boxes: Vec<Aabb> = self
+            .lights
+            .iter()
+            .map(|l| {
+                let v0 = Vec3::from(l.v0);
+                Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)])
+            })
+            .collect();
+        if boxes.len() <= LIGHT_BOXES {
+            return boxes;
+        }
+        vec![boxes.iter().skip(1).fold(boxes[0], |a, b| a.union(b))]
     }
 
     /// Per pixel, whether one of [`PROBE_PATHS`] eye paths through random points of it
-    /// meets a moving object in the pose `next` holds, for the `probed` slots: the test for paths that
-    /// crossed a mover's box after a mirror or glass bounce, which the screen cannot judge.
-    /// Every other slot rests, so the probe costs in proportion to the slots it decides.
-    /// Leaves scratch in the slots (the caller writes them back) and the current pose loaded.
+    /// meets one of the moved `groups` in the pose `next` holds, for the `probed` slots: the
+    /// test for paths past a mirror or glass bounce, which the screen cannot judge. Every
+    /// other slot rests, so the probe costs in proportion to the slots it decides. Leaves
+    /// scratch in the slots (the caller writes them back) and pose B loaded.
     fn probe(
         &mut self,
         next: &CompiledScene,
         slots: &[HitPoint],
-        probed: impl Fn(&HitPoint) -> bool,
+        probed: &[bool],
+        groups: u32,
     ) -> Result<Vec<bool>, BackendError> {
         // A kept slot continues its own sample sequence from `iterations` and rests from
         // `rest_at` on: the probed slots start theirs at 0, and each pass's own seed gives
-        // them a fresh point. `EYE_MET_MOVER` is a kept flag, so it gathers over the passes.
+        // them a fresh point. `eye_met` is kept, so it gathers over the passes.
         let scratch: Vec<HitPoint> = slots
             .iter()
-            .map(|hp| HitPoint {
-                iterations: if probed(hp) { 0 } else { u32::MAX },
-                flags: hp.flags & !hit_flags::EYE_MET_MOVER,
+            .zip(probed)
+            .map(|(hp, &p)| HitPoint {
+                iterations: if p { 0 } else { u32::MAX },
+                eye_met: 0,
                 ..*hp
             })
             .collect();
@@ -280,9 +354,19 @@ impl Renderer<'_> {
         }
         let mut met = vec![false; (self.params.width * self.params.height) as usize];
         for hp in self.backend.read_hit_points()? {
-            met[hp.pixel as usize] |= hp.flags & hit_flags::EYE_MET_MOVER != 0;
+            met[hp.pixel as usize] |= hp.eye_met & groups != 0;
         }
-        self.backend.update_scene(&self.compile(&self.scene))?;
         Ok(met)
     }
+}
+
+/// Object `o`'s box as posed in `scene`.
+fn aabb(scene: &Scene, o: usize) -> Aabb {
+    let (lo, hi) = scene.objects[o].bounds();
+    Aabb::new(lo, hi)
+}
+
+/// A slot's recorded box.
+fn slot_box(b: &SlotBounds) -> Aabb {
+    Aabb::new(b.min.into(), b.max.into())
 }

@@ -24,9 +24,9 @@ use crate::report::{RenderReport, left_out};
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, GpuBounds, GpuLight, GpuMaterial,
-    GuidedEmission, PhotonPassParams, RecordedPath, ResolveParams, direct_accumulate, eye_flags,
-    first_hit, gather_kind,
+    DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
+    PhotonPassParams, RecordedPath, ResolveParams, direct_accumulate, eye_flags, first_hit,
+    gather_kind,
 };
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{BackendError, DynamicBackend, PhotonStats};
@@ -60,10 +60,9 @@ pub struct Renderer<'a> {
     lights: Vec<GpuLight>,
     materials: Vec<GpuMaterial>,
     extent: f32,
-    /// The boxes the moving objects stay inside from the start pose through their moves:
-    /// kept for every pose, so the paths flagged before a move are flagged against the same
-    /// boxes as those after it.
-    movers: Vec<GpuBounds>,
+    /// The current pose as the backend holds it: a local move uploads it again with the
+    /// moved objects' boxes.
+    compiled: CompiledScene,
     /// Poses loaded or moved to so far: keys `ppm`'s eye and direct passes.
     frame: u32,
     /// `sppm` iterations so far: keys their eye and direct passes.
@@ -99,11 +98,11 @@ impl<'a> Renderer<'a> {
             backend,
             params: params.clone(),
             moves: moves.clone(),
-            scene: scene.clone(),
-            lights: Vec::new(),
-            materials: Vec::new(),
-            extent: 0.0,
-            movers: compiled.movers.clone(),
+            scene,
+            lights: compiled.lights.clone(),
+            materials: compiled.materials.clone(),
+            extent: compiled.extent,
+            compiled,
             frame: 0,
             iteration: 0,
             fresh: true,
@@ -117,18 +116,24 @@ impl<'a> Renderer<'a> {
             counts: PhotonCounts::default(),
             report,
         };
-        r.load(scene, &compiled)?;
+        r.start_over()?;
         Ok(r)
     }
 
     /// Starts over on `scene`: its buffers, fresh slots, and for `ppm` the eye pass and
     /// direct light.
-    fn load(&mut self, scene: Scene, compiled: &CompiledScene) -> Result<(), BackendError> {
-        let t = Instant::now();
-        self.backend.load_scene(compiled)?;
-        self.report.times.upload += t.elapsed().as_secs_f64();
-        self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
+    fn load(&mut self, scene: Scene, compiled: CompiledScene) -> Result<(), BackendError> {
         self.adopt(scene, compiled);
+        self.start_over()
+    }
+
+    /// Uploads the current pose with fresh slots, and for `ppm` traces the eye pass and
+    /// direct light.
+    fn start_over(&mut self) -> Result<(), BackendError> {
+        let t = Instant::now();
+        self.backend.load_scene(&self.compiled)?;
+        self.report.times.upload += t.elapsed().as_secs_f64();
+        self.report.times.bvh_build += self.compiled.bvh_build_time.as_secs_f64();
         self.guide = None;
         self.focus = false;
         self.fresh = true;
@@ -139,19 +144,18 @@ impl<'a> Renderer<'a> {
         Ok(())
     }
 
-    /// Flattens `scene` (a pose of this render's scene) with the start's mover boxes.
+    /// Flattens `scene`, a pose of this render's scene.
     fn compile(&self, scene: &Scene) -> CompiledScene {
-        CompiledScene {
-            movers: self.movers.clone(),
-            ..compile_scene(scene, self.params.width, self.params.height)
-        }
+        compile_scene(scene, self.params.width, self.params.height)
     }
 
-    fn adopt(&mut self, scene: Scene, compiled: &CompiledScene) {
+    /// Takes `scene` and its flattened form (which the backend now holds) as the pose.
+    fn adopt(&mut self, scene: Scene, compiled: CompiledScene) {
         self.scene = scene;
         self.lights = compiled.lights.clone();
         self.materials = compiled.materials.clone();
         self.extent = compiled.extent;
+        self.compiled = compiled;
     }
 
     /// One iteration: for `sppm` an eye pass and direct light, then for both estimators one
@@ -240,7 +244,8 @@ impl<'a> Renderer<'a> {
     fn eye_params(&self, key: u32, keep: bool) -> EyePassParams {
         let mut flags = if keep { eye_flags::KEEP_STATISTICS } else { 0 };
         if self.params.estimator == Estimator::Sppm {
-            flags |= eye_flags::JITTER;
+            // What the slots' paths reached is what a local move tests against.
+            flags |= eye_flags::JITTER | eye_flags::RECORD_BOUNDS;
         }
         // After a local move the reset slots hold `steps_since_move` iterations: every other
         // iteration, the slots that hold more rest, until those catch up.

@@ -19,7 +19,7 @@ use ppm_core::params::{Estimator, MoveMode};
 use ppm_core::passes::{BackendError, PhotonStats};
 use ppm_core::region::{RegionError, emitting_region};
 use ppm_core::rng::{DIFFERENCE_PASS_BASE, PassKind, StreamKey};
-use ppm_core::scene::Scene;
+use ppm_core::scene::{Move, Scene};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -101,7 +101,23 @@ pub(super) enum Compensation {
 }
 
 impl Renderer<'_> {
-    /// Moves to `next` (the same scene in its next pose) the way `mode` says.
+    /// Moves objects of the current pose rigidly, all at once, the way `mode` says: any
+    /// object, any rigid transform, none of it declared in the scene.
+    pub fn move_objects(
+        &mut self,
+        moves: &[Move],
+        mode: MoveMode,
+    ) -> Result<MoveReport, BackendError> {
+        let mut next = self.scene.clone();
+        for (i, m) in moves.iter().enumerate() {
+            next.check_move(m)
+                .map_err(|why| BackendError::Unsupported(format!("move {i}: {why}")))?;
+            next.apply(m);
+        }
+        self.move_to(next, mode)
+    }
+
+    /// Moves to `next` (the same scene in another pose) the way `mode` says.
     pub fn move_to(&mut self, next: Scene, mode: MoveMode) -> Result<MoveReport, BackendError> {
         let start = Instant::now();
         let mut report = MoveReport {
@@ -116,23 +132,30 @@ impl Renderer<'_> {
             restarted: None,
             seconds: 0.0,
         };
-        let vertices: Vec<Vec3> = self
-            .scene
-            .moving_vertices()
-            .into_iter()
-            .chain(next.moving_vertices())
+        let changed = self.scene.changed_objects(&next);
+        if changed.is_empty() {
+            // Nothing moved: every slot keeps everything, in every mode.
+            report.kept = self.backend.read_hit_points()?.len() as u64;
+            report.seconds = start.elapsed().as_secs_f64();
+            return Ok(report);
+        }
+        let vertices: Vec<Vec3> = [&self.scene, &next]
+            .iter()
+            .flat_map(|s| changed.iter().flat_map(|&o| s.objects[o].triangles.iter()))
+            .flatten()
+            .copied()
             .collect();
         let plan = if self.fresh && self.params.estimator == Estimator::Sppm {
             Err("no iteration has run: nothing to keep".to_owned())
         } else {
-            self.compensation_plan(mode, &vertices, &next)
+            self.compensation_plan(mode, &vertices, &changed)
         };
         let plan = match plan {
             Ok(plan) => plan,
             Err(why) => {
                 self.frame += 1;
                 let compiled = self.compile(&next);
-                self.load(next, &compiled)?;
+                self.load(next, compiled)?;
                 report.restarted = Some(why);
                 report.seconds = start.elapsed().as_secs_f64();
                 self.report.times.moves += report.seconds;
@@ -141,7 +164,7 @@ impl Renderer<'_> {
         };
         self.focus = mode == MoveMode::Local;
         if self.focus {
-            return self.move_locally(next, report, start);
+            return self.move_locally(next, &changed, report, start);
         }
         if let Compensation::Region { region, .. } = &plan {
             report.region_area = region.area;
@@ -152,7 +175,7 @@ impl Renderer<'_> {
         let compiled = self.compile(&next);
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
-        self.adopt(next, &compiled);
+        self.adopt(next, compiled);
         self.frame += 1;
         // Each slot traces its last sample again in the new pose: the frame's for `ppm`, the
         // last iteration's (same jitter) for `sppm`.
@@ -221,17 +244,17 @@ impl Renderer<'_> {
         Ok(report)
     }
 
-    /// How `mode` compensates a move of `vertices` (both poses) to `next`, or why it must
-    /// restart.
+    /// How `mode` compensates a move of the `changed` objects, whose vertices in both poses
+    /// are `vertices`, or why it must restart.
     fn compensation_plan(
         &self,
         mode: MoveMode,
         vertices: &[Vec3],
-        next: &Scene,
+        changed: &[usize],
     ) -> Result<Compensation, String> {
         let kind = match mode {
             MoveMode::Restart => return Err("restart mode".to_owned()),
-            MoveMode::Local => return self.local_plan(next),
+            MoveMode::Local => return self.local_plan(changed),
             MoveMode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
             MoveMode::Difference => {
                 return Ok(Compensation::Difference {

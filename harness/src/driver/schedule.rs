@@ -10,7 +10,8 @@ use crate::report::{RenderReport, left_out};
 use ppm_core::image::Image;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{BackendError, DynamicBackend};
-use ppm_core::scene::Scene;
+use ppm_core::scene::path::{After, MovePath};
+use ppm_core::scene::{Move, Scene};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -48,7 +49,7 @@ impl Budget {
 }
 
 /// One step of a schedule.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Step {
     /// Iterate until the budget is spent.
     Render(Budget),
@@ -60,10 +61,18 @@ pub enum Step {
         /// How the render follows.
         mode: MoveMode,
     },
+    /// Move objects of the pose that stands then, rigidly, all at once: moves nobody
+    /// declared in the scene (a path's event).
+    MoveObjects {
+        /// The moves, applied in order.
+        moves: Vec<Move>,
+        /// How the render follows.
+        mode: MoveMode,
+    },
 }
 
 /// A render described as data: the starting pose and the steps.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Schedule {
     /// The pose the render starts in (see [`Step::Move`]).
     pub start: f32,
@@ -111,6 +120,31 @@ impl Schedule {
             start: 0.0,
             steps: s,
         }
+    }
+}
+
+impl Schedule {
+    /// Frame 0, then each event of `path` after its rendering time, the way `mode` says
+    /// (restart starts over at each), then `after`.
+    pub fn path(path: &MovePath, mode: MoveMode, after: Budget) -> Self {
+        let mut steps = Vec::new();
+        for event in &path.events {
+            steps.push(Step::Render(match event.after {
+                After::Seconds(s) => Budget::seconds(s),
+                After::Iterations(n) => Budget::iterations(n),
+            }));
+            steps.push(Step::MoveObjects {
+                moves: event.moves.clone(),
+                mode,
+            });
+        }
+        steps.push(Step::Render(after));
+        Self { start: 0.0, steps }
+    }
+
+    /// Whether a step moves the scene.
+    pub fn moves(&self) -> bool {
+        self.steps.iter().any(|s| !matches!(s, Step::Render(_)))
     }
 }
 
@@ -247,8 +281,8 @@ pub fn run(
         at.step = index;
         at.step_iterations = 0;
         let step_start = clock.seconds();
-        let observed = match *step {
-            Step::Render(budget) => {
+        let observed = match step {
+            &Step::Render(budget) => {
                 while !budget.spent(at.step_iterations, clock.seconds() - step_start) {
                     if let Err(e) = renderer.iteration() {
                         error = Some(e);
@@ -271,8 +305,12 @@ pub fn run(
                 clock.pause();
                 observer.step_done(&at, &mut renderer)
             }
-            Step::Move { time, mode } => {
-                let moved = renderer.move_to(scene.at_time(time), mode);
+            Step::Move { .. } | Step::MoveObjects { .. } => {
+                let moved = match step {
+                    &Step::Move { time, mode } => renderer.move_to(scene.at_time(time), mode),
+                    Step::MoveObjects { moves, mode } => renderer.move_objects(moves, *mode),
+                    Step::Render(_) => unreachable!("matched above"),
+                };
                 at.step_seconds = clock.seconds() - step_start;
                 at.seconds = clock.seconds();
                 clock.pause();
@@ -299,11 +337,7 @@ pub fn run(
     let mut image = renderer.resolve()?;
     let mut report = renderer.report().clone();
     report.frame = u32::from(schedule.start >= 1.0);
-    let moving = schedule
-        .steps
-        .iter()
-        .any(|s| matches!(s, Step::Move { .. }));
-    report.left_out = left_out(&report.features, params, moving);
+    report.left_out = left_out(&report.features, params, schedule.moves());
     for p in image.pixels.iter_mut().flatten().filter(|v| !v.is_finite()) {
         *p = 0.0;
         report.non_finite_pixels_zeroed += 1;

@@ -509,7 +509,7 @@ fn list(v: Vec3) -> String {
 }
 
 /// Rotation from Euler angles in degrees, applied about x, then y, then z.
-fn euler_degrees(deg: Vec3) -> Quat {
+pub(crate) fn euler_degrees(deg: Vec3) -> Quat {
     Quat::from_euler(
         EulerRot::ZYX,
         deg.z.to_radians(),

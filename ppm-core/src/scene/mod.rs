@@ -8,6 +8,7 @@ mod magnitude;
 pub mod mesh_file;
 pub mod mitsuba;
 mod model;
+pub mod path;
 pub mod pbrt;
 
 pub use error::SceneError;

@@ -1,6 +1,5 @@
 //! The scene model: what a scene is, independent of any file format or backend.
 
-use crate::layout::GpuBounds;
 use crate::params::Estimator;
 use glam::{Quat, Vec3};
 
@@ -145,55 +144,82 @@ impl Scene {
             return scene;
         }
         for m in &self.moves {
-            let rotation = Quat::IDENTITY.slerp(m.rotation, t);
-            let object = &mut scene.objects[m.object];
-            let centre = object.bounds_centre();
-            for tri in &mut object.triangles {
-                for v in tri.iter_mut() {
-                    *v = rotation * (*v - centre) + centre + m.translation * t;
-                }
-            }
+            scene.apply(&Move {
+                rotation: Quat::IDENTITY.slerp(m.rotation, t),
+                translation: m.translation * t,
+                ..*m
+            });
         }
         scene
     }
 
-    /// Vertices of every moving object, as posed in `self`.
-    pub fn moving_vertices(&self) -> Vec<Vec3> {
-        self.moves
+    /// Moves one object rigidly: rotation about the centre of its bounding box as it stands,
+    /// then translation. Any move, declared in the scene or not.
+    pub fn apply(&mut self, m: &Move) {
+        let object = &mut self.objects[m.object];
+        let centre = object.bounds_centre();
+        for v in object.triangles.iter_mut().flatten() {
+            *v = m.rotation * (*v - centre) + centre + m.translation;
+        }
+    }
+
+    /// Why `m` cannot be applied to this pose, if it cannot: an object that does not exist, a
+    /// translation or rotation that is not finite (or not a unit quaternion), or vertices
+    /// beyond [`MAX_COORDINATE`](super::MAX_COORDINATE) afterwards.
+    pub fn check_move(&self, m: &Move) -> Result<(), String> {
+        let Some(object) = self.objects.get(m.object) else {
+            return Err(format!(
+                "object {} does not exist (the scene has {})",
+                m.object,
+                self.objects.len()
+            ));
+        };
+        if !m.translation.is_finite() || !m.rotation.is_finite() {
+            return Err(format!(
+                "{}: translation {} or rotation {} is not finite",
+                object.name, m.translation, m.rotation
+            ));
+        }
+        if (m.rotation.length() - 1.0).abs() > 1e-3 {
+            return Err(format!(
+                "{}: rotation {} is not a unit quaternion",
+                object.name, m.rotation
+            ));
+        }
+        let (lo, hi) = object.bounds();
+        let reach = (hi - lo).length() + m.translation.abs().max_element();
+        if lo.abs().max(hi.abs()).max_element() + reach > super::MAX_COORDINATE {
+            return Err(format!(
+                "{}: the move takes its vertices beyond {:e}",
+                object.name,
+                super::MAX_COORDINATE
+            ));
+        }
+        Ok(())
+    }
+
+    /// The objects whose geometry differs between `self` and `other`, two poses of one
+    /// scene (the same objects in the same order).
+    pub fn changed_objects(&self, other: &Scene) -> Vec<usize> {
+        self.objects
             .iter()
-            .flat_map(|m| self.objects[m.object].triangles.iter().flatten().copied())
+            .zip(&other.objects)
+            .enumerate()
+            .filter(|(_, (a, b))| a.triangles != b.triangles)
+            .map(|(i, _)| i)
             .collect()
     }
 
-    /// A box per move that its object stays inside for every pose `at_time(t)`,
-    /// `0 <= t <= 1`, of this (unmoved) scene, widened by `margin` on every side: for a
-    /// translation, the box around both poses' boxes; with a rotation about the box centre,
-    /// the centre's path widened by the object's largest distance from it.
-    pub fn swept_bounds(&self, margin: f32) -> Vec<GpuBounds> {
-        self.moves
+    /// Smallest and largest corner of the box around every object.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.objects
             .iter()
-            .map(|m| {
-                let object = &self.objects[m.object];
-                let (lo, hi) = object.bounds();
-                let (lo, hi) = if m.rotation == Quat::IDENTITY {
-                    (lo.min(lo + m.translation), hi.max(hi + m.translation))
-                } else {
-                    let centre = (lo + hi) * 0.5;
-                    let reach = object
-                        .triangles
-                        .iter()
-                        .flatten()
-                        .map(|v| v.distance(centre))
-                        .fold(0.0f32, f32::max);
-                    let end = centre + m.translation;
-                    (
-                        centre.min(end) - Vec3::splat(reach),
-                        centre.max(end) + Vec3::splat(reach),
-                    )
-                };
-                GpuBounds::new(lo - Vec3::splat(margin), hi + Vec3::splat(margin))
-            })
-            .collect()
+            .filter(|o| !o.triangles.is_empty())
+            .map(Object::bounds)
+            .fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+            )
     }
 
     /// Index of the object called `name`.
