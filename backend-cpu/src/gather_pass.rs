@@ -6,7 +6,7 @@ use crate::photon_search::{Found, PhotonMap, RUN, photons_in_discs};
 use glam::Vec3;
 use ppm_core::layout::{GatherParams, GpuMaterial, HitPoint, gather_kind, hit_flags};
 use ppm_core::passes::GatherStats;
-use ppm_core::update::{Statistics, compensation_update, ppm_update};
+use ppm_core::update::{Statistics, compensation_update, history_kept, luminance, ppm_update};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 
@@ -50,7 +50,8 @@ pub fn gather_pass_main(
         .zip(pending.par_chunks_mut(RUN))
         .with_min_len(32)
         .map(|(slots, pending)| {
-            let found = photons_in_discs(slots, |hp| gathers(hp, params.kind), map);
+            let squares = params.kind & gather_kind::ADD_FLUX != 0;
+            let found = photons_in_discs(slots, |hp| gathers(hp, params.kind), map, squares);
             let mut stats = (0, 0);
             for ((hp, pending), found) in slots.iter_mut().zip(pending).zip(found) {
                 if !gathers(hp, params.kind) {
@@ -100,6 +101,7 @@ fn update_slot(
         count: found,
         weight: weight_sum,
         flux,
+        power_sq,
     } = found;
     // Photons found in a floor disc wider than the slot's stand for their density
     // over the slot's own disc (a slot's own disc, even of radius 0, scales nothing).
@@ -122,15 +124,22 @@ fn update_slot(
         found as f32
     };
     let brdf = Vec3::from(materials[hp.material as usize].albedo) * FRAC_1_PI;
-    let dtau: [f32; 3] = (flux * Vec3::from(hp.throughput) * brdf * scale).into();
+    let factor = Vec3::from(hp.throughput) * brdf * scale;
+    let dtau: [f32; 3] = (flux * factor).into();
     if deferred {
         let sign = if kind == gather_kind::REGION_NEGATIVE {
             -1.0
         } else {
             1.0
         };
+        // A flux-only correction keeps the variance of its flux where the count would go.
+        let count = if params.kind & gather_kind::ADD_FLUX != 0 {
+            power_sq * (luminance(factor.into()) * shrink).powi(2)
+        } else {
+            sign * m
+        };
         *pending = [
-            pending[0] + sign * m,
+            pending[0] + count,
             pending[1] + dtau[0],
             pending[2] + dtau[1],
             pending[3] + dtau[2],
@@ -160,7 +169,9 @@ fn update_slot(
 
 /// Folds each hit point's pending region photons into its statistics as one update: eqs 1-3
 /// when the net count grew, eqs 5-7 with their clamps when it fell; flux clamped at zero.
-/// With `add`, only the flux is added (clamped at zero).
+/// With `add`, only the flux is added (clamped at zero), and the pending count, which then
+/// holds the correction's variance, weighs how much of the slot's history stays
+/// ([`history_kept`]).
 fn apply_pending(
     alpha: f32,
     r2_initial: f32,
@@ -177,7 +188,12 @@ fn apply_pending(
                 return;
             }
             if add {
-                hp.tau = [hp.tau[0] + t0, hp.tau[1] + t1, hp.tau[2] + t2].map(|t| t.max(0.0));
+                // `m` holds the correction's variance: the slot keeps the share of its history
+                // that is worth keeping against it (ALGORITHM.md 3c).
+                let tau = [hp.tau[0] + t0, hp.tau[1] + t1, hp.tau[2] + t2].map(|t| t.max(0.0));
+                let kept = history_kept(hp.n, tau, m);
+                hp.tau = tau.map(|t| t * kept);
+                hp.emitted *= kept;
                 return;
             }
             let s = Statistics {

@@ -26,6 +26,7 @@ use crate::photon_grid::{CellPhoton, PhotonGrid};
 use glam::Vec3;
 use ppm_core::grid::{cell_key, cell_range, cells_in, scan_instead};
 use ppm_core::layout::HitPoint;
+use ppm_core::update::luminance;
 
 /// Slots searched together: consecutive pixels of a row.
 pub const RUN: usize = 8;
@@ -49,14 +50,18 @@ pub struct Found {
     pub weight: f32,
     /// Their summed power.
     pub flux: Vec3,
+    /// Their summed squared power luminance, where the search was asked for it (the
+    /// variance of a local move's correction); zero otherwise.
+    pub power_sq: f32,
 }
 
 /// What each slot of a run of at most [`RUN`] neighbouring slots found in its disc; zero for
-/// the slots `searched` leaves out.
+/// the slots `searched` leaves out. `squares` asks for [`Found::power_sq`] too.
 pub fn photons_in_discs(
     slots: &[HitPoint],
     searched: impl Fn(&HitPoint) -> bool,
     map: &PhotonMap,
+    squares: bool,
 ) -> [Found; RUN] {
     let mut found = [Found::default(); RUN];
     let discs: [Option<Disc>; RUN] = std::array::from_fn(|lane| {
@@ -66,10 +71,16 @@ pub fn photons_in_discs(
             .map(|hp| Disc::new(hp, map))
     });
     let count = map.grid.params.photon_count;
-    if map.weights.is_some() || discs.iter().flatten().any(|d| scan_instead(d.range, count)) {
+    let one_by_one = squares || map.weights.is_some();
+    if one_by_one || discs.iter().flatten().any(|d| scan_instead(d.range, count)) {
         for (lane, hp) in slots.iter().enumerate() {
             if discs[lane].is_some() {
-                found[lane] = photons_in_disc(hp, map);
+                let f = photons_in_disc(hp, map);
+                found[lane] = if squares {
+                    f
+                } else {
+                    Found { power_sq: 0.0, ..f }
+                };
             }
         }
     } else {
@@ -217,6 +228,7 @@ impl Lanes {
             count: count[l],
             weight: count[l] as f32,
             flux: Vec3::new(flux[0][l], flux[1][l], flux[2][l]),
+            power_sq: 0.0,
         })
     }
 }
@@ -228,6 +240,7 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
         found.count += 1;
         found.weight += map.weights.map_or(1.0, |w| w[i]);
         found.flux += p.power;
+        found.power_sq += luminance(p.power.into()).powi(2);
     });
     found
 }
@@ -414,14 +427,20 @@ mod tests {
             };
             let searched = |hp: &HitPoint| hp.position[0] * 1e4 % 10.0 > 1.0;
             for slots in hit_points.chunks(RUN) {
-                let found = photons_in_discs(slots, searched, &map);
+                let found = photons_in_discs(slots, searched, &map, false);
+                let with_squares = photons_in_discs(slots, searched, &map, true);
                 for (lane, hp) in slots.iter().enumerate() {
                     let alone = if searched(hp) {
                         photons_in_disc(hp, &map)
                     } else {
                         Found::default()
                     };
-                    assert_eq!(found[lane], alone, "floor {floor}, {hp:?}");
+                    let unsquared = Found {
+                        power_sq: 0.0,
+                        ..alone
+                    };
+                    assert_eq!(found[lane], unsquared, "floor {floor}, {hp:?}");
+                    assert_eq!(with_squares[lane], alone, "floor {floor}, {hp:?}");
                 }
                 let discs = std::array::from_fn(|l| slots.get(l).map(|hp| Disc::new(hp, &map)));
                 let lanes = Lanes::new(&discs, 0..slots.len());

@@ -4,7 +4,7 @@
 use crate::chart::{ChartError, Series, write_loglog_chart};
 use crate::driver::{
     Budget, MoveReport, Observer, ObserverResult, PhotonCounts, Progress, Renderer, RunError,
-    Schedule, Step, Stoppable, run,
+    Schedule, Stoppable, run,
 };
 use ppm_core::image::Image;
 use ppm_core::layout::{HitPoint, hit_flags};
@@ -12,6 +12,7 @@ use ppm_core::metrics::relative_rmse_parts;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
+use ppm_core::scene::path::{After, MovePath, PathEvent};
 use serde::Serialize;
 use std::path::Path;
 
@@ -22,9 +23,10 @@ pub struct ErrorSettings {
     pub params: RenderParams,
     /// Settings of the passes that follow a move.
     pub moves: MoveParams,
-    /// Seconds of ordinary passes on the old pose before the move.
-    pub warmup_seconds: f64,
-    /// Seconds measured after the move.
+    /// The moves, each after its rendering time: the scene's own `[[moves]]` after the
+    /// warm-up ([`MovePath::declared`]), or a path nobody declared.
+    pub path: MovePath,
+    /// Seconds measured after the last move.
     pub seconds: f64,
 }
 
@@ -45,13 +47,13 @@ pub struct Measurement {
     pub passes: u32,
 }
 
-/// One mode's run after the move.
+/// One mode's run after the moves.
 #[derive(Clone, Debug, Serialize)]
 pub struct ModeRun {
     /// Mode.
     pub mode: MoveMode,
-    /// The move (absent for restart).
-    pub moved: Option<MoveReport>,
+    /// What each move did, in order (none for restart, which renders the last pose).
+    pub moves: Vec<MoveReport>,
     /// Photons of each kind after the move (emitted, deposited).
     pub counts: PhotonCounts,
     /// Initial squared radius.
@@ -60,15 +62,15 @@ pub struct ModeRun {
     pub measurements: Vec<Measurement>,
 }
 
-/// The pixels whose slots the move from frame 0 to frame 1 resets (any of their slots),
-/// including slots that gain or lose their visible point (an object's silhouette over the
-/// void), after one iteration on frame 0.
+/// The pixels whose slots some move of the path resets (any of their slots), including slots
+/// that gain or lose their visible point (an object's silhouette over the void), with one
+/// iteration before each move.
 pub fn reset_pixels(
     backend: &mut dyn DynamicBackend,
     scene: &Scene,
     settings: &ErrorSettings,
 ) -> Result<Vec<bool>, RunError> {
-    /// Compares the slots before and after the move.
+    /// Compares the slots before and after each move.
     struct Resets {
         before: Vec<HitPoint>,
         mask: Vec<bool>,
@@ -87,22 +89,25 @@ pub fn reset_pixels(
             Ok(())
         }
     }
-    // A move with no compensation passes: difference mode needs no emitting region, so the
-    // slots are updated whatever the object's shape around the lights.
+    // Moves with no compensation passes: difference mode needs no emitting region, so the
+    // slots are updated (ALGORITHM.md 2.4's test) whatever the objects' shape around the
+    // lights; the split is the same for every mode.
     let moves = MoveParams {
         difference_passes: 0,
         ..settings.moves.clone()
     };
-    let schedule = Schedule {
-        start: 0.0,
-        steps: vec![
-            Step::Render(Budget::iterations(1)),
-            Step::Move {
-                time: 1.0,
-                mode: MoveMode::Difference,
-            },
-        ],
+    let path = MovePath {
+        events: settings
+            .path
+            .events
+            .iter()
+            .map(|e| PathEvent {
+                after: After::Iterations(1),
+                ..e.clone()
+            })
+            .collect(),
     };
+    let schedule = Schedule::path(&path, MoveMode::Difference, Budget::iterations(0));
     let p = &settings.params;
     let mut resets = Resets {
         before: Vec::new(),
@@ -112,16 +117,16 @@ pub fn reset_pixels(
     Ok(resets.mask)
 }
 
-/// Measures a run after its move (or from its start, for restart).
+/// Measures a run after its last move (or from its start, for restart).
 struct AfterMove<'a> {
     mode: MoveMode,
     truth: &'a Image,
     reset: &'a [bool],
-    /// The step whose iterations are measured.
+    /// The step whose iterations are measured (the last move is the step before).
     measured_step: usize,
-    /// Seconds the move took, counted in the time since the move.
+    /// Seconds the last move took, counted in the time since the move.
     move_seconds: f64,
-    moved: Option<MoveReport>,
+    moves: Vec<MoveReport>,
     measurements: Vec<Measurement>,
 }
 
@@ -150,9 +155,12 @@ impl Observer for AfterMove<'_> {
     }
 
     fn moved(&mut self, at: &Progress, m: &MoveReport, r: &mut Renderer) -> ObserverResult {
-        self.move_seconds = at.step_seconds;
-        self.moved = Some(m.clone());
-        self.measure(r, at.step_seconds, 0)
+        self.moves.push(m.clone());
+        if at.step + 1 == self.measured_step {
+            self.move_seconds = at.step_seconds;
+            self.measure(r, at.step_seconds, 0)?;
+        }
+        Ok(())
     }
 
     fn step_done(&mut self, at: &Progress, r: &mut Renderer) -> ObserverResult {
@@ -164,8 +172,9 @@ impl Observer for AfterMove<'_> {
     }
 }
 
-/// Runs `mode` after a move: warm-up on frame 0 (not for restart, which starts on frame 1),
-/// the move, then iterations until `settings.seconds`, measuring after each; `reset` (from
+/// Runs `mode` along the path: frame 0, each move after its rendering time, then iterations
+/// until `settings.seconds` after the last move, measuring after each; restart renders the
+/// last pose from scratch (what it keeps of earlier poses is nothing). `reset` (from
 /// [`reset_pixels`]) splits the error. Ends early, with the measurements so far, when `stop`
 /// says so.
 pub fn run_mode(
@@ -177,23 +186,23 @@ pub fn run_mode(
     reset: &[bool],
     stop: &dyn Fn() -> bool,
 ) -> Result<ModeRun, RunError> {
-    let schedule = Schedule::after_move(
-        Budget::seconds(settings.warmup_seconds),
-        mode,
-        Budget::seconds(settings.seconds),
-    );
+    let after = Budget::seconds(settings.seconds);
+    let (start, schedule) = match mode {
+        MoveMode::Restart => (settings.path.final_pose(scene), Schedule::frame(0, after)),
+        _ => (scene.clone(), Schedule::path(&settings.path, mode, after)),
+    };
     let mut observer = AfterMove {
         mode,
         truth,
         reset,
         measured_step: schedule.steps.len() - 1,
         move_seconds: 0.0,
-        moved: None,
+        moves: Vec::new(),
         measurements: Vec::new(),
     };
     let outcome = run(
         backend,
-        scene,
+        &start,
         &settings.params,
         &settings.moves,
         &schedule,
@@ -207,7 +216,7 @@ pub fn run_mode(
     }
     Ok(ModeRun {
         mode,
-        moved: observer.moved,
+        moves: observer.moves,
         counts: outcome.counts,
         r2_initial: settings.params.initial_radius * settings.params.initial_radius,
         measurements: observer.measurements,
@@ -215,7 +224,8 @@ pub fn run_mode(
 }
 
 /// The error a perfect compensation that costs nothing would reach, over time: its kept
-/// pixels as good as a from-scratch render of frame 1 for the warm-up time (every change
+/// pixels as good as a from-scratch render of the last pose for the rendering time before
+/// the last move (every change
 /// removed, nothing stale, no compensation noise), its reset pixels as restart's. A mode
 /// gets below it only where its reset pixels converge faster than restart's (guiding, or
 /// local mode's iterations spent on them) or its kept pixels keep converging past the
@@ -232,7 +242,12 @@ pub fn perfect_compensation(
 ) -> Result<Option<Vec<(f64, f64)>>, RunError> {
     let mut params = settings.params.clone();
     params.seed = params.seed.wrapping_add(1);
-    let schedule = Schedule::frame(1, Budget::seconds(settings.warmup_seconds));
+    let budget = match settings.path.before_last() {
+        (n, s) if s > 0.0 || n == 0 => Budget::seconds(s),
+        (n, _) => Budget::iterations(n),
+    };
+    let schedule = Schedule::frame(0, budget);
+    let last = settings.path.final_pose(scene);
     let mut nothing = ();
     let mut observer = Stoppable {
         observer: &mut nothing,
@@ -240,7 +255,7 @@ pub fn perfect_compensation(
     };
     let outcome = run(
         backend,
-        scene,
+        &last,
         &params,
         &settings.moves,
         &schedule,

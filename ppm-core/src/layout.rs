@@ -452,9 +452,12 @@ pub mod gather_kind {
     /// Flag: region photons count raw in `M` (thesis mode) instead of as the ordinary photons
     /// their weights stand for (area mode).
     pub const RAW_COUNT: u32 = 0x100;
-    /// Flag on `REGION_APPLY`: add the pending flux to `tau` (clamped at zero) and leave `n`,
-    /// `r2` and `emitted` alone (local mode: the pending sum corrects the light of the same
-    /// disc; it brings no new photons to shrink the radius with).
+    /// Local mode's flux-only correction (it brings no new photons to shrink the radius
+    /// with). On deferred region kinds: the pending count keeps the correction's variance
+    /// instead (the squared luminance of each photon's contribution, summed). On
+    /// `REGION_APPLY`: add the pending flux to `tau` (clamped at zero), leave `n` and `r2`,
+    /// and scale `tau` and `emitted` by the share of the slot's history worth keeping against
+    /// that variance ([`crate::update::history_kept`]).
     pub const ADD_FLUX: u32 = 0x400;
 }
 

@@ -254,8 +254,13 @@ pub struct MoveParams {
     pub max_recorded: usize,
     /// Distance beyond which a hit point counts as moved, relative to the scene's extent.
     pub update_epsilon: f32,
-    /// Difference passes per move (each one negative and one positive ordinary pass).
+    /// Difference passes per move in difference mode (each one negative and one positive
+    /// ordinary pass).
     pub difference_passes: u32,
+    /// Difference passes per move in local mode: its correction's noise fades as the
+    /// iterations after the move outweigh it ([`crate::update::history_kept`]), so a move
+    /// can afford few, and a drag's many small moves cost about an iteration each.
+    pub correction_passes: u32,
     /// Local mode gathers its correction within at least this many initial radii (0: each
     /// slot's own radius). Wider discs trade the correction's noise for a blur of the change
     /// (measured in `harness::driver::local`).
@@ -309,6 +314,7 @@ impl Default for MoveParams {
             max_recorded: 1024,
             update_epsilon: 1e-4,
             difference_passes: 8,
+            correction_passes: 2,
             correction_radii: 3.0,
             cull_uncrossed: true,
         }

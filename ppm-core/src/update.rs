@@ -100,6 +100,37 @@ pub fn radiance(tau: [f32; 3], r2: f32, emitted: f32) -> [f32; 3] {
     tau.map(|t| ((t / emitted) / area).min(f32::MAX))
 }
 
+/// Rec. 709 luminance of a linear RGB value: how the corrections below weigh channels.
+#[inline]
+pub fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// How much of a slot's history to keep after a correction of variance `variance` (in squared
+/// luminance of flux) was added to statistics `n`, `tau` (the corrected flux), ALGORITHM.md 3c.
+///
+/// A slot's flux sum built from `n` photons has relative variance about `1 / n`; the
+/// correction adds `variance / lum(tau)^2`. The corrected statistics are then worth as much as
+/// `1 / (1/n + variance / lum(tau)^2)` photons of their own, a fraction
+/// `f = 1 / (1 + n * variance / lum(tau)^2)` of `n`: scaling `tau` and `emitted` by `f` keeps
+/// the estimate and lets the photons that follow weigh what they are worth against it, so the
+/// correction's noise fades at the rate of a consistent estimator instead of freezing in
+/// statistics built from many more samples. No variance keeps everything; a correction that
+/// leaves no flux (or noise of any size against zero) keeps nothing.
+#[inline]
+pub fn history_kept(n: f32, tau: [f32; 3], variance: f32) -> f32 {
+    // NaN counts as no variance, as in the WGSL twin.
+    if variance.is_nan() || variance <= 0.0 {
+        return 1.0;
+    }
+    let lum = luminance(tau);
+    let relative = variance / (lum * lum);
+    if !relative.is_finite() {
+        return 0.0;
+    }
+    (1.0 / (1.0 + n * relative)).clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,6 +142,24 @@ mod tests {
             r2,
             tau: [tau; 3],
         }
+    }
+
+    /// A correction as noisy as the slot's own statistics halves what it keeps; none keeps
+    /// everything; one against no flux keeps nothing; the weight falls as the noise grows.
+    #[test]
+    fn history_kept_weighs_the_correction_against_the_slot() {
+        let tau = [10.0; 3];
+        // Relative variance 1/n from n = 100 photons; the same again from the correction.
+        let own = 100.0 / 100.0;
+        assert_relative_eq!(history_kept(100.0, tau, own), 0.5, epsilon = 1e-6);
+        assert_eq!(history_kept(100.0, tau, 0.0), 1.0);
+        assert_eq!(history_kept(100.0, [0.0; 3], 1.0), 0.0);
+        let (small, large) = (
+            history_kept(100.0, tau, 0.1),
+            history_kept(100.0, tau, 10.0),
+        );
+        assert!(1.0 > small && small > 0.5 && 0.5 > large && large > 0.0);
+        assert_eq!(history_kept(1e30, tau, 1e30), 0.0);
     }
 
     #[test]

@@ -16,7 +16,7 @@
 @group(0) @binding(4) var bucket_table: texture_storage_2d<r32uint, read>;
 @group(0) @binding(5) var<storage, read> order: array<u32>;
 @group(0) @binding(6) var<storage, read_write> hit_points: array<HitPoint>;
-// Per hit point, two rows: (power, count) and (weight sum, 0, 0, 0).
+// Per hit point, two rows: (power, count) and (weight sum, squared power luminance, 0, 0).
 @group(0) @binding(7) var<storage, read_write> accumulated: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(9) var<storage, read> weights: array<f32>;
@@ -39,11 +39,13 @@ fn bucket_start(b: u32) -> u32 {
     return textureLoad(bucket_table, table_texel(b)).x;
 }
 
-// Running sums of the photons a slot found: count, path weight, power.
+// Running sums of the photons a slot found: count, path weight, power, and squared power
+// luminance (the variance of a local move's correction).
 struct Found {
     m: u32,
     weight: f32,
     flux: vec3<f32>,
+    power_sq: f32,
 }
 
 fn visit(found: ptr<function, Found>, hp: HitPoint, r2: f32, p: GridPhoton, k: u32) {
@@ -54,6 +56,8 @@ fn visit(found: ptr<function, Found>, hp: HitPoint, r2: f32, p: GridPhoton, k: u
             (*found).weight += weights[order[k]];
         }
         (*found).flux += p.power;
+        let lum = luminance(p.power);
+        (*found).power_sq += lum * lum;
     }
 }
 
@@ -74,7 +78,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     let r = sqrt(r2);
     let lo = cell_of(hp.position - vec3<f32>(r), g.cell_size);
     let hi = cell_of(hp.position + vec3<f32>(r), g.cell_size);
-    var found = Found(0u, 0.0, vec3<f32>(0.0));
+    var found = Found(0u, 0.0, vec3<f32>(0.0), 0.0);
     if scan_instead(lo, hi, g.photon_count) {
         for (var k = 0u; k < g.photon_count; k++) {
             visit(&found, hp, r2, sorted_photon(k), k);
@@ -125,7 +129,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     let shrink = select(1.0, hp.r2 / radii.y, radii.y > hp.r2);
     weight *= shrink;
     accumulated[2u * slot] += vec4<f32>(found.flux * shrink, f32(found.m));
-    accumulated[2u * slot + 1u] += vec4<f32>(weight, 0.0, 0.0, 0.0);
+    accumulated[2u * slot + 1u] += vec4<f32>(weight, found.power_sq * shrink * shrink, 0.0, 0.0);
 }
 
 // Whether a slot belongs to the set the pass kind serves, visible point or not.
@@ -167,6 +171,7 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     let hp = hit_points[slot];
     let acc = accumulated[2u * slot];
     let weight_sum = accumulated[2u * slot + 1u].x;
+    let power_sq = accumulated[2u * slot + 1u].y;
     accumulated[2u * slot] = vec4<f32>(0.0);
     accumulated[2u * slot + 1u] = vec4<f32>(0.0);
     let kind = params.kind & GATHER_KIND_MASK;
@@ -178,7 +183,12 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
             return;
         }
         if (params.kind & GATHER_ADD_FLUX) != 0u {
-            hit_points[slot].tau = max(hp.tau + p.xyz, vec3<f32>(0.0));
+            // `w` holds the correction's variance: the slot keeps the share of its history
+            // worth keeping against it (backend-cpu's gather_pass.rs).
+            let tau = max(hp.tau + p.xyz, vec3<f32>(0.0));
+            let kept = history_kept(hp.n, tau, p.w);
+            hit_points[slot].tau = tau * kept;
+            hit_points[slot].emitted = hp.emitted * kept;
             return;
         }
         if p.w >= 0.0 {
@@ -207,14 +217,18 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         m = weight_sum * scale;
     }
     let brdf = scene_material(hp.material).albedo * (1.0 / PI);
-    let dtau = acc.xyz * hp.throughput * brdf * scale;
+    let factor = hp.throughput * brdf * scale;
+    let dtau = acc.xyz * factor;
     if found > 0.0 {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
         atomicAdd(&counters[COUNTER_GATHERED], u32(found));
     }
     if (params.kind & GATHER_DEFERRED) != 0u {
         let sign = select(1.0, -1.0, kind == GATHER_REGION_NEGATIVE);
-        pending[slot] += vec4<f32>(dtau, sign * m);
+        // A flux-only correction keeps the variance of its flux where the count would go.
+        let lum = luminance(factor);
+        let count = select(sign * m, power_sq * lum * lum, (params.kind & GATHER_ADD_FLUX) != 0u);
+        pending[slot] += vec4<f32>(dtau, count);
         return;
     }
     var emitted = hp.emitted + params.emitted_increment;

@@ -36,3 +36,21 @@ fn compensation_update(s: Statistics, m: f32, dtau: vec3<f32>, alpha: f32, r2_in
     let ratio = 1.0 + (1.0 - alpha) * (m / (s.n - m));
     return Statistics(s.n - alpha * m, min(s.r2 * ratio, r2_initial), max((s.tau + dtau) * ratio, vec3<f32>(0.0)));
 }
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// ppm_core::update::history_kept: the share of a slot's history worth keeping after a
+// correction of `variance` (squared luminance) was added to its flux `tau`.
+fn history_kept(n: f32, tau: vec3<f32>, variance: f32) -> f32 {
+    if !(variance > 0.0) {
+        return 1.0;
+    }
+    let lum = luminance(tau);
+    let relative = variance / (lum * lum);
+    if !is_finite_f32(relative) {
+        return 0.0;
+    }
+    return clamp(1.0 / (1.0 + n * relative), 0.0, 1.0);
+}

@@ -53,6 +53,7 @@ use ppm_core::passes::BackendError;
 use ppm_core::reach::{Aabb, segments_may_meet};
 use ppm_core::scene::{MaterialKind, Scene};
 use ppm_core::screen_cover::covered_pixels;
+use ppm_core::update::{history_kept, luminance};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -75,11 +76,13 @@ const PROBE_SEED: u32 = 0x9b0b_e5ed;
 /// box around all of them.
 const LIGHT_BOXES: usize = 16;
 
-/// Slots a move reset, kept, and kept with their direct sum corrected.
+/// Slots a move reset, kept, and kept with their direct sum corrected, and every slot's
+/// direct sum before the correction.
 struct Resets {
     reset: u64,
     kept: u64,
     direct_corrected: u64,
+    direct_before: Vec<[f32; 3]>,
 }
 
 /// The moved objects' boxes in both poses and their group bits.
@@ -177,13 +180,14 @@ impl Renderer<'_> {
         self.frame += 1;
         if resets.direct_corrected > 0 {
             self.correct_direct(1.0)?;
+            self.weigh_direct_corrections(&resets.direct_before)?;
         }
         let positive = self.compensate(&correction, gather_kind::REGION_POSITIVE)?;
         if positive.emitted > 0 {
             report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
         }
-        self.difference_pass += self.moves.difference_passes;
-        if self.moves.difference_passes > 0 {
+        self.difference_pass += self.moves.correction_passes;
+        if self.moves.correction_passes > 0 {
             self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;
         }
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;
@@ -212,6 +216,32 @@ impl Renderer<'_> {
             ..self.direct_params(0, true)
         };
         self.run_direct_light(&params)
+    }
+
+    /// Weighs each corrected direct sum against its correction (ALGORITHM.md 3c): the
+    /// paired samples estimate the change at one visible point of the pixel, so a change of
+    /// size `d` is known only to about `d`; against the slot's mean `D` over `N` iterations
+    /// (relative noise about `1 / N`) its history is then worth
+    /// `N' = N / (1 + N d^2 / D^2)` iterations ([`history_kept`]), and the sum keeps its mean
+    /// at that count. An unchanged slot (`d = 0`) keeps all of it; a large change leaves the
+    /// samples that follow to decide, at the rate of a consistent estimator. Channels the
+    /// correction drove below zero are clamped there.
+    fn weigh_direct_corrections(&mut self, before: &[[f32; 3]]) -> Result<(), BackendError> {
+        let mut slots = self.backend.read_hit_points()?;
+        slots.par_iter_mut().zip(before).for_each(|(hp, old)| {
+            if hp.flags & hit_flags::DIRECT_MAY_CHANGE == 0 || hp.iterations == 0 {
+                return;
+            }
+            let n = hp.iterations as f32;
+            let corrected = hp.direct.map(|d| d.max(0.0));
+            let change = std::array::from_fn(|c| (hp.direct[c] - old[c]) / n);
+            let mean = corrected.map(|d| d / n);
+            let kept = history_kept(n, mean, luminance(change).powi(2));
+            let count = ((n * kept).round() as u32).clamp(1, hp.iterations);
+            hp.direct = corrected.map(|d| d * count as f32 / n);
+            hp.iterations = count;
+        });
+        self.backend.write_hit_points(&slots)
     }
 
     /// Starts over the slots whose view the move of `changed` objects to `next` (`compiled`)
@@ -298,6 +328,7 @@ impl Renderer<'_> {
             reset,
             kept: slots.len() as u64 - reset,
             direct_corrected: corrected,
+            direct_before: slots.iter().map(|hp| hp.direct).collect(),
         })
     }
 

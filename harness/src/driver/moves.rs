@@ -319,12 +319,19 @@ impl Renderer<'_> {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
                 let n = self.params.photons_per_pass;
-                let total = (n * self.moves.difference_passes) as f32;
+                let passes = if *changed_only {
+                    self.moves.correction_passes
+                } else {
+                    self.moves.difference_passes
+                };
+                let total = (n * passes) as f32;
                 // Storing only what follows a box crossing, pose A also records which paths
                 // crossed one, each pass in its own slot of the mask, and pose B traces only
                 // those: the others would store nothing.
                 let mut flags = 0;
+                let mut gathered = kind | gather_kind::DEFERRED;
                 if *changed_only {
+                    gathered |= gather_kind::ADD_FLUX;
                     flags |= photon_flags::CHANGED_ONLY;
                     if self.moves.cull_uncrossed {
                         flags |= if kind == gather_kind::REGION_NEGATIVE {
@@ -334,12 +341,11 @@ impl Renderer<'_> {
                         };
                     }
                 }
-                for k in 0..self.moves.difference_passes {
+                for k in 0..passes {
                     let index = DIFFERENCE_PASS_BASE + self.difference_pass + k;
                     let mask_offset = k.checked_mul(n).ok_or_else(|| {
                         BackendError::Limit(format!(
-                            "crossed-path mask: {} difference passes of {n} photons exceed 2^32 bits",
-                            self.moves.difference_passes
+                            "crossed-path mask: {passes} difference passes of {n} photons exceed 2^32 bits"
                         ))
                     })?;
                     let params = PhotonPassParams {
@@ -353,7 +359,7 @@ impl Renderer<'_> {
                     self.count_photons(&stats, t);
                     total_stats.add(&stats);
                     self.count_compensation(kind, &stats);
-                    self.gather(kind | gather_kind::DEFERRED, 0.0, total)?;
+                    self.gather(gathered, 0.0, total)?;
                 }
             }
         }

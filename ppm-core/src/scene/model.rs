@@ -93,7 +93,7 @@ pub struct Object {
 
 /// A rigid transform of one named object: rotation about the object's bounding-box centre, then
 /// translation.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Move {
     /// Index into [`Scene::objects`].
     pub object: usize,
@@ -144,11 +144,13 @@ impl Scene {
             return scene;
         }
         for m in &self.moves {
-            scene.apply(&Move {
+            // Frame 1 applies each move exactly as declared (as a path of them does).
+            let partial = Move {
                 rotation: Quat::IDENTITY.slerp(m.rotation, t),
                 translation: m.translation * t,
                 ..*m
-            });
+            };
+            scene.apply(if t == 1.0 { m } else { &partial });
         }
         scene
     }

@@ -43,7 +43,7 @@ impl After {
 }
 
 /// Moves made at one time: the rigid moves of one or more objects, after `after`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PathEvent {
     /// Rendering before it, since the previous event (or the start).
     pub after: After,
@@ -52,7 +52,7 @@ pub struct PathEvent {
 }
 
 /// Moves nobody declared in the scene, in time order.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct MovePath {
     /// The events, in order.
     pub events: Vec<PathEvent>,
@@ -248,6 +248,27 @@ impl MovePath {
             });
         }
         path
+    }
+
+    /// The scene's own `[[moves]]` as a path: all of them at once, after `after`.
+    pub fn declared(scene: &Scene, after: After) -> MovePath {
+        MovePath {
+            events: vec![PathEvent {
+                after,
+                moves: scene.moves.clone(),
+            }],
+        }
+    }
+
+    /// Rendering before the last event: iterations and seconds summed over the events'
+    /// waits (each event waits in one unit).
+    pub fn before_last(&self) -> (u32, f64) {
+        self.events
+            .iter()
+            .fold((0, 0.0), |(n, s), e| match e.after {
+                After::Iterations(k) => (n.saturating_add(k), s),
+                After::Seconds(t) => (n, s + t),
+            })
     }
 
     /// Every move of the path, in order, applied to `scene`: the final pose.

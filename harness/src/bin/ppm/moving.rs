@@ -11,12 +11,14 @@ use harness::error_report::{self, ErrorSettings};
 use ppm_core::output::write_bytes;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::scene::Scene;
+use ppm_core::scene::path::{After, MovePath, load_path_file};
 use std::path::PathBuf;
 
 /// Scene, backend and settings of a command on a moving scene.
 #[derive(clap::Args)]
 pub struct MovingArgs {
-    /// Built-in scene name or path to a scene file (its `[[moves]]` define the motion).
+    /// Built-in scene name or path to a scene file (its `[[moves]]` define the motion unless
+    /// --path or --random-path give another).
     scene: String,
     /// Backend.
     #[arg(long, value_enum, default_value = "cpu")]
@@ -25,22 +27,51 @@ pub struct MovingArgs {
     options: RenderOptions,
     #[command(flatten)]
     moves: MoveOptions,
+    /// Path file of moves nobody declared in the scene ([[step]] after_seconds or
+    /// after_iterations, object, translate, rotate); the scene's [[moves]] are ignored.
+    #[arg(long, conflicts_with = "random_path")]
+    path: Option<PathBuf>,
+    /// This many random rigid moves of random objects that are not lights, kept inside the
+    /// scene's bounds and keyed by --seed, instead of the scene's [[moves]].
+    #[arg(long)]
+    random_path: Option<u32>,
 }
 
 impl MovingArgs {
-    /// The scene (which must move), its settings, 256x256 unless the options say, and the
-    /// settings of its moves.
+    /// The scene, its settings (256x256 unless the options say) and the settings of its
+    /// moves.
     fn setup(&self) -> Result<(Scene, RenderParams, MoveParams)> {
         let scene = harness::load_scene(&self.scene)?;
-        if scene.moves.is_empty() {
-            bail!(
-                "{}: the scene has no [[moves]]: nothing to animate",
-                self.scene
-            );
-        }
         let params = self.options.params(&scene, Some((256, 256)))?;
         let moves = self.moves.params(&scene, &params)?;
         Ok((scene, params, moves))
+    }
+
+    /// The moves nobody declared, if the options give them (a random path's first move
+    /// after `first`, the others after `then`); `None` means the scene's own [[moves]],
+    /// refused when it has none.
+    fn unplanned(&self, scene: &Scene, first: After, then: After) -> Result<Option<MovePath>> {
+        if let Some(file) = &self.path {
+            return Ok(Some(load_path_file(file, scene)?));
+        }
+        if let Some(n) = self.random_path {
+            let path = MovePath::random(scene, n, self.options.seed, first, then);
+            if n == 0 || path.events.is_empty() {
+                bail!(
+                    "--random-path = {n}: {} has no object that may move (none but lights, or \
+                     none with room inside the scene's bounds)",
+                    self.scene
+                );
+            }
+            return Ok(Some(path));
+        }
+        if scene.moves.is_empty() {
+            bail!(
+                "{}: the scene has no [[moves]]: give --path FILE or --random-path N",
+                self.scene
+            );
+        }
+        Ok(None)
     }
 }
 
@@ -48,13 +79,15 @@ impl MovingArgs {
 pub struct AnimateArgs {
     #[command(flatten)]
     common: MovingArgs,
-    /// Steps from frame 0 to frame 1 (the scene's move cut into equal parts).
+    /// Steps from frame 0 to frame 1 (the scene's move cut into equal parts; not with a
+    /// path, whose own steps are the frames).
     #[arg(long, default_value_t = 8)]
     steps: u32,
     /// How each step is followed.
-    #[arg(long, default_value = "area", value_parser = clap::value_parser!(MoveMode))]
+    #[arg(long, default_value = "local", value_parser = clap::value_parser!(MoveMode))]
     mode: MoveMode,
-    /// Seconds of iterations per frame.
+    /// Seconds of iterations per frame (with --random-path, also between its moves; a path
+    /// file times its own moves).
     #[arg(long, default_value_t = 2.0)]
     time_per_frame: f64,
     /// Output folder: frame-NNN.exr, .png and .json.
@@ -66,6 +99,8 @@ pub struct AnimateArgs {
 struct FrameWriter<'a> {
     args: &'a AnimateArgs,
     scene: &'a str,
+    /// Moves in the animation.
+    steps: u32,
     last_move: Option<MoveReport>,
     frame_start: (u32, f64),
     /// Frames written so far.
@@ -87,7 +122,7 @@ impl Observer for FrameWriter<'_> {
         let iterations = at.iterations - self.frame_start.0;
         let seconds = at.seconds - self.frame_start.1;
         let report = serde_json::json!({
-            "scene": self.scene, "frame": frame, "steps": self.args.steps,
+            "scene": self.scene, "frame": frame, "steps": self.steps,
             "mode": self.args.mode, "estimator": r.params().estimator, "iterations": iterations,
             "seconds": seconds, "move": self.last_move.take(), "photons": r.counts,
             "left_out": r.report().left_out,
@@ -122,19 +157,30 @@ pub fn animate(args: AnimateArgs) -> Result<()> {
             args.time_per_frame
         );
     }
+    let frame = Budget::seconds(args.time_per_frame);
+    let each = After::Seconds(args.time_per_frame);
+    let (schedule, steps) = match args.common.unplanned(&scene, each, each)? {
+        Some(path) => (
+            Schedule::path(&path, args.mode, frame),
+            path.events.len() as u32,
+        ),
+        None => (
+            Schedule::animation(args.steps, args.mode, frame),
+            args.steps,
+        ),
+    };
     output_folder(&args.output, &format!("-o {}", args.output.display()))?;
     let mut backend = args.common.backend.start()?;
-    let schedule = Schedule::animation(args.steps, args.mode, Budget::seconds(args.time_per_frame));
     eprintln!(
-        "rendering {} in {} steps ({}), {}s a frame",
+        "rendering {} in {steps} steps ({}), {}s a frame",
         scene.name,
-        args.steps,
         args.mode.name(),
         args.time_per_frame
     );
     let mut writer = FrameWriter {
         args: &args,
         scene: &scene.name,
+        steps,
         last_move: None,
         frame_start: (0, 0.0),
         written: 0,
@@ -165,10 +211,13 @@ pub fn animate(args: AnimateArgs) -> Result<()> {
 pub struct ErrorArgs {
     #[command(flatten)]
     common: MovingArgs,
-    /// Seconds of iterations on frame 0 before the move.
+    /// Seconds of iterations on frame 0 before the (first) move; a path file times its own.
     #[arg(long, default_value_t = 10.0)]
     warmup: f64,
-    /// Seconds measured after the move.
+    /// Seconds of iterations between the moves of a random path.
+    #[arg(long, default_value_t = 1.0)]
+    between: f64,
+    /// Seconds measured after the (last) move.
     #[arg(long, default_value_t = 8.0)]
     seconds: f64,
     /// Modes to measure, comma-separated (default: all); the perfect-compensation bound
@@ -185,19 +234,29 @@ pub struct ErrorArgs {
 pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
     interrupt::install()?;
     let (scene, params, moves) = args.common.setup()?;
-    for (name, v) in [("--warmup", args.warmup), ("--seconds", args.seconds)] {
+    for (name, v) in [
+        ("--warmup", args.warmup),
+        ("--between", args.between),
+        ("--seconds", args.seconds),
+    ] {
         if !(v.is_finite() && v > 0.0) {
             bail!("{name} = {v}: must be a positive number of seconds");
         }
     }
+    let warmup = After::Seconds(args.warmup);
+    let path = args
+        .common
+        .unplanned(&scene, warmup, After::Seconds(args.between))?
+        .unwrap_or_else(|| MovePath::declared(&scene, warmup));
     output_folder(&args.output, &format!("-o {}", args.output.display()))?;
     let settings = ErrorSettings {
         params,
         moves,
-        warmup_seconds: args.warmup,
+        path,
         seconds: args.seconds,
     };
-    let truth = args.truth.truth(&scene, 1, &settings.params)?;
+    let last_pose = settings.path.final_pose(&scene);
+    let truth = args.truth.truth(&last_pose, 0, &settings.params)?;
     let truth = &truth.image;
     let mut backend = args.common.backend.start()?;
     eprintln!("finding the pixels the move resets");

@@ -137,6 +137,9 @@ pub struct MoveOptions {
     /// of the ordinary photon count).
     #[arg(long, default_value_t = 8)]
     pub difference_passes: u32,
+    /// Difference passes per move in local mode.
+    #[arg(long, default_value_t = 2)]
+    pub correction_passes: u32,
     /// Local mode gathers its correction within at least this many initial radii (0: each
     /// slot's own radius).
     #[arg(long, default_value_t = 3.0)]
@@ -151,6 +154,7 @@ impl MoveOptions {
             region_photons: self.region_photons,
             cone_deg: self.cone_deg,
             difference_passes: self.difference_passes,
+            correction_passes: self.correction_passes,
             correction_radii: self.correction_radii,
             ..MoveParams::default()
         };
@@ -278,6 +282,7 @@ mod tests {
         "--region-photons",
         "--cone-deg",
         "--difference-passes",
+        "--correction-passes",
         "--correction-radii",
     ];
 
