@@ -631,3 +631,82 @@ fn an_interrupted_report_writes_the_rows_measured() {
     assert_eq!(report["interrupted"], true);
     assert!(rows >= 2, "{rows} lines");
 }
+
+/// `ppm animate --path FILE` follows moves the scene never declared: a frame before the
+/// first step and one after each step (two steps at the same time make one), each JSON
+/// saying what its move did in local mode, the default.
+#[test]
+fn animate_follows_a_path_file() {
+    let dir = scratch("path");
+    let path = dir.join("path.toml");
+    std::fs::write(
+        &path,
+        "[[step]]\nafter_iterations = 2\nobject = \"short-block\"\ntranslate = [-60.0, 0.0, 200.0]\n\
+         rotate = [0.0, 25.0, 0.0]\n[[step]]\nobject = \"tall-block\"\ntranslate = [0.0, 0.0, -50.0]\n\
+         [[step]]\nafter_iterations = 1\nobject = \"short-block\"\ntranslate = [20.0, 0.0, 0.0]\n",
+    )
+    .unwrap();
+    let frames = dir.join("frames");
+    let out = ppm(&[
+        "animate",
+        "cornell-box",
+        "--path",
+        path.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--photons-per-pass",
+        "2000",
+        "--time-per-frame",
+        "0.05",
+        "-o",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for frame in 0..3 {
+        let stem = frames.join(format!("frame-{frame:03}"));
+        assert!(stem.with_extension("exr").is_file(), "frame {frame}");
+        let report = json(&stem.with_extension("json"));
+        assert_eq!(report["mode"], "local");
+        if frame > 0 {
+            assert!(report["move"]["restarted"].is_null(), "{report}");
+            assert!(report["move"]["updated"].as_u64().unwrap() > 0, "{report}");
+        }
+    }
+    assert!(!frames.join("frame-003.exr").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A path file that names no object of the scene, or gives a number that is not one, is
+/// refused before rendering, naming the file, the step, the field and the value.
+#[test]
+fn a_bad_path_file_names_its_step_field_and_value() {
+    let dir = scratch("bad-path");
+    let path = dir.join("path.toml");
+    let refused = |text: &str| {
+        std::fs::write(&path, text).unwrap();
+        let out = ppm(&[
+            "animate",
+            "cornell-box",
+            "--path",
+            path.to_str().unwrap(),
+            "-o",
+            dir.join("frames").to_str().unwrap(),
+        ]);
+        assert!(!out.status.success());
+        stderr(&out)
+    };
+    let unknown = refused("[[step]]\nafter_seconds = 1.0\nobject = \"chair\"\n");
+    assert!(
+        unknown.contains("path.toml: step[0].object = \"chair\": no object has this name"),
+        "{unknown}"
+    );
+    let outside = refused("[[step]]\nobject = \"tall-block\"\ntranslate = [0.0, 900.0, 0.0]\n");
+    assert!(
+        outside.contains("step[0] = \"tall-block\": moves the object to"),
+        "{outside}"
+    );
+    assert!(!dir.join("frames").exists(), "nothing rendered");
+    std::fs::remove_dir_all(&dir).ok();
+}

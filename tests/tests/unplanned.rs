@@ -1,0 +1,336 @@
+//! Moves nobody planned (ALGORITHM.md 3c): any object, any rigid move, at any time, none of
+//! it declared in the scene. Local mode resets the slots that may see the change and keeps
+//! the others, on both backends alike; a path of such moves converges to the truth of its
+//! final pose; and whatever iteration a move lands on, no mode blows a pixel up.
+
+use backend_cpu::CpuBackend;
+use backend_wgpu::backend_or_skip;
+use glam::{Quat, Vec3};
+use harness::driver::{Budget, Renderer, Schedule, run};
+use harness::reference::{ReferenceBudget, render_reference};
+use ppm_core::compile::{camera_ray, compile_scene};
+use ppm_core::image::Image;
+use ppm_core::layout::hit_flags;
+use ppm_core::metrics::{block_relative_rmse, relative_rmse};
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
+use ppm_core::scene::path::{After, MovePath, PathEvent};
+use ppm_core::scene::{Move, Scene};
+use std::ops::ControlFlow;
+use tests::luminance;
+
+fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let mut p = RenderParams::for_scene(&scene);
+    (p.width, p.height, p.photons_per_pass) = (size, size, photons);
+    p.initial_radius = 20.0;
+    (scene, p)
+}
+
+/// A move of `name` in `scene`: `degrees` about y, then `by`.
+fn rigid(scene: &Scene, name: &str, degrees: f32, by: [f32; 3]) -> Move {
+    Move {
+        object: scene.object_index(name).unwrap(),
+        translation: Vec3::from(by),
+        rotation: Quat::from_rotation_y(degrees.to_radians()),
+    }
+}
+
+/// The object each pixel's centre ray meets first.
+fn objects_seen(scene: &Scene, size: u32) -> Vec<Option<u32>> {
+    let compiled = compile_scene(scene, size, size);
+    let data = backend_cpu::trace::SceneData::new(&compiled);
+    (0..size * size)
+        .map(|i| {
+            let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
+            let dir = camera_ray(&compiled.camera, x, y);
+            data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
+                .map(|h| data.triangles[h.triangle as usize].object)
+        })
+        .collect()
+}
+
+/// Whether `f` holds for pixel `i` and its eight neighbours (clipped to the image).
+fn around(i: usize, size: u32, f: impl Fn(usize) -> bool) -> bool {
+    let (x, y, size) = (
+        (i as u32 % size) as i64,
+        (i as u32 / size) as i64,
+        size as i64,
+    );
+    (-1..=1).all(|dy| {
+        (-1..=1).all(|dx| {
+            let (nx, ny) = (x + dx, y + dy);
+            !(0..size).contains(&nx) || !(0..size).contains(&ny) || f((ny * size + nx) as usize)
+        })
+    })
+}
+
+fn truth(scene: &Scene, size: u32, spp: u32) -> Image {
+    let compiled = compile_scene(scene, size, size);
+    let budget = ReferenceBudget {
+        spp: Some(spp),
+        seconds: None,
+    };
+    let reference = render_reference(&compiled, 5, budget, &mut |_, _| ControlFlow::Continue(()));
+    assert!(reference.error.is_none(), "{:?}", reference.error);
+    reference.image
+}
+
+/// The short block turned by 25 degrees and moved to the back left, where no `[[moves]]`
+/// of the scene takes it (the scene moves the tall block): every pixel that saw it before,
+/// and every one whose centre ray meets it after, is reset; nine in ten of the pixels that
+/// see neither it nor its neighbourhood in either pose are kept; both backends reset the
+/// same slots.
+#[test]
+fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest() {
+    const SIZE: u32 = 48;
+    let (scene, p) = cornell(SIZE, 20_000);
+    let block = scene.object_index("short-block").unwrap() as u32;
+    let m = rigid(&scene, "short-block", 25.0, [-60.0, 0.0, 250.0]);
+    let mut moved = scene.clone();
+    moved.apply(&m);
+    let (seen_a, seen_b) = (objects_seen(&scene, SIZE), objects_seen(&moved, SIZE));
+    let pixels = 0..(SIZE * SIZE) as usize;
+    let saw: Vec<usize> = pixels
+        .clone()
+        .filter(|&i| around(i, SIZE, |j| seen_a[j] == Some(block)))
+        .collect();
+    let sees: Vec<usize> = pixels
+        .clone()
+        .filter(|&i| seen_b[i] == Some(block))
+        .collect();
+    let apart: Vec<usize> = pixels
+        .filter(|&i| {
+            around(i, SIZE, |j| {
+                seen_a[j] != Some(block) && seen_b[j] != Some(block)
+            })
+        })
+        .collect();
+    assert!(saw.len() > 20 && sees.len() > 20 && apart.len() > 1000);
+    let run = |backend: &mut dyn DynamicBackend| {
+        let mut render =
+            Renderer::start(backend, scene.clone(), &p, &MoveParams::default()).unwrap();
+        for _ in 0..6 {
+            render.iteration().unwrap();
+        }
+        let report = render.move_objects(&[m], MoveMode::Local).unwrap();
+        assert!(report.restarted.is_none(), "{report:?}");
+        let slots = render.backend().read_hit_points().unwrap();
+        let reset: Vec<bool> = slots
+            .iter()
+            .map(|h| h.flags & hit_flags::UPDATED != 0)
+            .collect();
+        let name = render.backend().name().to_owned();
+        let missed: Vec<&usize> = saw.iter().chain(&sees).filter(|&&i| !reset[i]).collect();
+        assert!(
+            missed.is_empty(),
+            "{name}: kept, yet see the block: {missed:?}"
+        );
+        let kept_apart = apart.iter().filter(|&&i| !reset[i]).count();
+        println!(
+            "{name}: {report:?}; {kept_apart} of {} apart kept",
+            apart.len()
+        );
+        assert!(
+            kept_apart * 10 >= apart.len() * 9,
+            "{name}: {kept_apart} of {}",
+            apart.len()
+        );
+        reset
+    };
+    let cpu = run(&mut CpuBackend::new());
+    if let Some(mut gpu) = backend_or_skip("a_move_nobody_declared_resets_what_sees_it") {
+        let wgpu = run(&mut gpu);
+        let differ = cpu.iter().zip(&wgpu).filter(|(a, b)| a != b).count();
+        assert!(
+            differ * 200 <= cpu.len(),
+            "{differ} slots reset on one backend only"
+        );
+    }
+}
+
+/// Three moves of two objects, at iterations nobody declared (the second moves both at once).
+fn path(scene: &Scene) -> MovePath {
+    let event = |after, moves| PathEvent {
+        after: After::Iterations(after),
+        moves,
+    };
+    MovePath {
+        events: vec![
+            event(
+                4,
+                vec![rigid(scene, "tall-block", 20.0, [-50.0, 0.0, 60.0])],
+            ),
+            event(
+                3,
+                vec![
+                    rigid(scene, "short-block", 0.0, [60.0, 0.0, 40.0]),
+                    rigid(scene, "tall-block", -10.0, [0.0, 0.0, 0.0]),
+                ],
+            ),
+            event(
+                3,
+                vec![rigid(scene, "short-block", 15.0, [-30.0, 0.0, 50.0])],
+            ),
+        ],
+    }
+}
+
+/// Along a path of unplanned moves, local mode converges to the truth of the final pose: its
+/// 8x8-block error against the path tracer falls between 8 and 64 iterations after the last
+/// move, to well below what the start pose's truth is from the final one's.
+#[test]
+fn a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose() {
+    const SIZE: u32 = 32;
+    let (scene, p) = cornell(SIZE, 10_000);
+    let path = path(&scene);
+    let last = path.final_pose(&scene);
+    let truth = truth(&last, SIZE, 1024);
+    let start_off = block_relative_rmse(&self::truth(&scene, SIZE, 256), &truth, 8);
+    let render = |after: u32| {
+        let schedule = Schedule::path(&path, MoveMode::Local, Budget::iterations(after));
+        let mut backend = CpuBackend::new();
+        let outcome = run(
+            &mut backend,
+            &scene,
+            &p,
+            &MoveParams::default(),
+            &schedule,
+            &mut (),
+        )
+        .unwrap();
+        assert!(outcome.error.is_none() && outcome.moves.len() == 3);
+        assert!(
+            outcome
+                .moves
+                .iter()
+                .all(|m| m.restarted.is_none() && m.updated > 0)
+        );
+        block_relative_rmse(&outcome.image, &truth, 8)
+    };
+    let (few, many) = (render(8), render(64));
+    println!("block error: start pose {start_off:.4}; 8 iterations {few:.4}; 64 {many:.4}");
+    assert!(many < few, "{few} then {many}");
+    assert!(
+        many < 0.04 && many < start_off / 3.0,
+        "{many} against {start_off}"
+    );
+}
+
+/// The same path on both backends: with the same seed they trace the same paths up to
+/// rounding (the images agree within 2% relative RMSE, the moves reset the same slots
+/// within 1%).
+#[test]
+fn both_backends_follow_a_path_alike() {
+    const SIZE: u32 = 32;
+    let Some(mut gpu) = backend_or_skip("both_backends_follow_a_path_alike") else {
+        return;
+    };
+    let (scene, p) = cornell(SIZE, 10_000);
+    let path = path(&scene);
+    let schedule = Schedule::path(&path, MoveMode::Local, Budget::iterations(4));
+    let follow = |backend: &mut dyn DynamicBackend| {
+        run(
+            backend,
+            &scene,
+            &p,
+            &MoveParams::default(),
+            &schedule,
+            &mut (),
+        )
+        .unwrap()
+    };
+    let cpu = follow(&mut CpuBackend::new());
+    let wgpu = follow(&mut gpu);
+    let differ = relative_rmse(&wgpu.image, &cpu.image);
+    println!("relative RMSE between the backends: {differ:.4}");
+    assert!(differ < 0.02, "{differ}");
+    for (c, w) in cpu.moves.iter().zip(&wgpu.moves) {
+        let (c, w) = (c.updated as f64, w.updated as f64);
+        assert!(
+            (c - w).abs() <= 0.01 * c.max(w) + 2.0,
+            "{c} against {w} reset"
+        );
+    }
+}
+
+/// Largest pixel luminance of an image.
+fn brightest(image: &Image) -> f32 {
+    image
+        .pixels
+        .iter()
+        .map(|p| luminance(*p))
+        .fold(0.0, f32::max)
+}
+
+/// Moves land on any iteration: over warm-ups of 1 to 8 iterations and two seeds, on every
+/// canonical scene, the declared move and a random unplanned one in every compensating mode
+/// leave the image finite and never negative, right after the move and two iterations
+/// later, and right after it (the corrections' own doing, before any new eye sample) no
+/// pixel brighter than twice the brighter of the truth's brightest and the image's before
+/// the move. Both backends (wgpu on fewer cases: lavapipe is slow).
+#[test]
+fn no_move_blows_a_pixel_up() {
+    const SIZE: u32 = 24;
+    let modes = [
+        MoveMode::Local,
+        MoveMode::Difference,
+        MoveMode::Area,
+        MoveMode::Thesis,
+    ];
+    let mut gpu = backend_or_skip("no_move_blows_a_pixel_up");
+    for name in ["cornell-box", "cornell-bunny", "wedding-band"] {
+        let scene = scenes::builtin(name).unwrap().load().unwrap();
+        let mut p = RenderParams::for_scene(&scene);
+        (p.width, p.height, p.photons_per_pass) = (SIZE, SIZE, 5_000);
+        let random = MovePath::random(&scene, 1, 9, After::Iterations(0), After::Iterations(0));
+        let targets = [scene.at_frame(1), random.final_pose(&scene)];
+        let truths: Vec<f32> = targets
+            .iter()
+            .map(|t| brightest(&truth(t, SIZE, 128)))
+            .collect();
+        let mut worst = 0.0f32;
+        let mut check = |backend: &mut dyn DynamicBackend, warm: u32, seed: u32| {
+            let p = RenderParams { seed, ..p.clone() };
+            let moves = MoveParams::default();
+            for (target, truth) in targets.iter().zip(&truths) {
+                for mode in modes {
+                    let mut render = Renderer::start(backend, scene.clone(), &p, &moves).unwrap();
+                    for _ in 0..warm {
+                        render.iteration().unwrap();
+                    }
+                    let before = brightest(&render.resolve().unwrap());
+                    render.move_to(target.clone(), mode).unwrap();
+                    let what = format!(
+                        "{name} {} {mode:?} warm-up {warm} seed {seed}",
+                        render.backend().name()
+                    );
+                    let moved = render.resolve().unwrap();
+                    let ratio = brightest(&moved) / truth.max(before);
+                    worst = worst.max(ratio);
+                    assert!(
+                        ratio <= 2.0,
+                        "{what}: brightest pixel {ratio:.2} times the bound"
+                    );
+                    for _ in 0..2 {
+                        render.iteration().unwrap();
+                    }
+                    for image in [moved, render.resolve().unwrap()] {
+                        assert!(image.is_finite(), "{what}: not finite");
+                        let negative = image.pixels.iter().flatten().any(|&v| v < 0.0);
+                        assert!(!negative, "{what}: negative");
+                    }
+                }
+            }
+        };
+        for (warm, seed) in [(1, 0), (2, 1), (3, 0), (5, 1), (8, 0)] {
+            check(&mut CpuBackend::new(), warm, seed);
+        }
+        if let Some(gpu) = gpu.as_mut() {
+            for warm in [1, 4] {
+                check(gpu, warm, 2);
+            }
+        }
+        println!("{name}: brightest pixel right after a move at most {worst:.3} times the bound");
+    }
+}
