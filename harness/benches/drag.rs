@@ -1,0 +1,105 @@
+//! What a drag costs in local mode: many small moves in a row, each followed by one
+//! iteration, against the iterations between them, side by side in one run.
+//!
+//! `cargo bench -p harness --bench drag` warms each canonical scene up for
+//! `PPM_BENCH_WARMUP` iterations (default 30) at `PPM_BENCH_SIZE` (default 256), then moves
+//! the object its `[[moves]]` name by a thirtieth of that move, `PPM_BENCH_MOVES` times
+//! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
+//! last ten) and per move (mean and largest), their ratio, and the slots the moves reset and
+//! corrected on average. Figures only, no threshold: machines are noisy, compare rows of one
+//! run. `PPM_BENCH_BACKENDS` (default `cpu,wgpu`) and `PPM_BENCH_SCENES` choose the rows.
+
+use backend_cpu::CpuBackend;
+use backend_wgpu::WgpuBackend;
+use harness::driver::Renderer;
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use ppm_core::passes::DynamicBackend;
+use ppm_core::scene::Move;
+use std::time::Instant;
+
+fn setting<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn main() {
+    let warmup: u32 = setting("PPM_BENCH_WARMUP", 30);
+    let moves: u32 = setting("PPM_BENCH_MOVES", 30);
+    let size: u32 = setting("PPM_BENCH_SIZE", 256);
+    let backends = std::env::var("PPM_BENCH_BACKENDS").unwrap_or_else(|_| "cpu,wgpu".into());
+    let scenes = std::env::var("PPM_BENCH_SCENES")
+        .unwrap_or_else(|_| "cornell-box,cornell-bunny,wedding-band".into());
+    let mut gpu = match WgpuBackend::new() {
+        _ if !backends.contains("wgpu") => None,
+        Ok(b) => Some(b),
+        Err(e) => {
+            println!("no wgpu rows: {e}");
+            None
+        }
+    };
+    println!(
+        "local mode, {size}x{size}, {warmup} iterations of warm-up, then {moves} moves of a \
+         thirtieth of the scene's move, one iteration after each"
+    );
+    println!(
+        "{:<14} {:<5} {:>12} {:>12} {:>12} {:>10} {:>9} {:>9}",
+        "scene", "back", "ms/iteration", "ms/move", "largest", "move/iter", "reset", "corrected"
+    );
+    for name in scenes.split(',') {
+        let Some(scene) = scenes::builtin(name.trim()).and_then(|s| s.load().ok()) else {
+            println!("{name}: no such built-in scene");
+            continue;
+        };
+        let Some(declared) = scene.moves.first().copied() else {
+            println!("{name}: declares no move to take a thirtieth of");
+            continue;
+        };
+        let step = Move {
+            translation: declared.translation / 30.0,
+            rotation: glam::Quat::IDENTITY.slerp(declared.rotation, 1.0 / 30.0),
+            ..declared
+        };
+        let mut p = RenderParams::for_scene(&scene);
+        (p.width, p.height) = (size, size);
+        let row = |backend: &mut dyn DynamicBackend| {
+            let mut r = Renderer::start(backend, scene.clone(), &p, &MoveParams::default())
+                .expect("the scene loads");
+            let mut iteration_ms = Vec::new();
+            for _ in 0..warmup {
+                let t = Instant::now();
+                r.iteration().expect("an iteration runs");
+                iteration_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+            let (mut move_ms, mut reset, mut corrected) = (Vec::new(), 0, 0);
+            for _ in 0..moves {
+                let t = Instant::now();
+                let m = r
+                    .move_objects(&[step], MoveMode::Local)
+                    .expect("a move runs");
+                move_ms.push(t.elapsed().as_secs_f64() * 1e3);
+                (reset, corrected) = (reset + m.updated, corrected + m.direct_corrected);
+                r.iteration().expect("an iteration runs");
+            }
+            let tail = &iteration_ms[iteration_ms.len().saturating_sub(10)..];
+            let per_iteration = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
+            let per_move = move_ms.iter().sum::<f64>() / move_ms.len().max(1) as f64;
+            let largest = move_ms.iter().copied().fold(0.0, f64::max);
+            let n = u64::from(moves.max(1));
+            println!(
+                "{name:<14} {:<5} {per_iteration:>12.1} {per_move:>12.1} {largest:>12.1} {:>10.2} {:>9} {:>9}",
+                r.backend().name(),
+                per_move / per_iteration,
+                reset / n,
+                corrected / n
+            );
+        };
+        if backends.contains("cpu") {
+            row(&mut CpuBackend::new());
+        }
+        if let Some(gpu) = gpu.as_mut() {
+            row(gpu);
+        }
+    }
+}
