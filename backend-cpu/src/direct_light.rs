@@ -1,4 +1,4 @@
-//! Direct light (ALGORITHM.md 1.2): emission seen at each hit point plus light reflected from
+//! Direct light (docs/algorithm.md 1.2): emission seen at each hit point plus light reflected from
 //! the area lights. Each sample is a shadow ray to a point on a light and a cosine-sampled ray
 //! that may meet a light, weighted by the power heuristic: light sampling alone has unbounded
 //! variance next to an emitter (a corner of the furnace's glowing walls), where the cosine

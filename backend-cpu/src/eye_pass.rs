@@ -1,4 +1,4 @@
-//! Eye pass (ALGORITHM.md 1.1): each slot's visible point, where its eye path first meets a
+//! Eye pass (docs/algorithm.md 1.1): each slot's visible point, where its eye path first meets a
 //! non-specular surface, following mirror and glass chains iteratively.
 
 use crate::trace::SceneData;

@@ -1,4 +1,4 @@
-//! Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): each hit point that gathers this
+//! Gather pass (docs/algorithm.md 1.4, and 3 "Who gathers what"): each hit point that gathers this
 //! kind of pass sums the photons within its radius and folds them into its statistics with
 //! ppm-core's stable updates.
 
@@ -10,7 +10,7 @@ use ppm_core::update::{Statistics, compensation_update, history_kept, luminance,
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 
-/// Whether a slot belongs to the set a pass of `kind` serves (ALGORITHM.md 3, "Who gathers
+/// Whether a slot belongs to the set a pass of `kind` serves (docs/algorithm.md 3, "Who gathers
 /// what"), visible point or not: such a slot counts the pass's photons in `emitted`.
 pub fn serves(hp: &HitPoint, kind: u32) -> bool {
     let updated = hp.flags & hit_flags::UPDATED != 0;
@@ -112,7 +112,7 @@ fn update_slot(
     };
     let (weight_sum, flux) = (weight_sum * shrink, flux * shrink);
     // Region photons stand for `emitted / N_c` ordinary photons each, times their
-    // path weight (ALGORITHM.md 3, "Power of region photons").
+    // path weight (docs/algorithm.md 3, "Power of region photons").
     let scale = if region {
         hp.emitted / params.region_photons
     } else {
@@ -189,7 +189,7 @@ fn apply_pending(
             }
             if add {
                 // `m` holds the correction's variance: the slot keeps the share of its history
-                // that is worth keeping against it (ALGORITHM.md 3c).
+                // that is worth keeping against it (docs/algorithm.md 3c).
                 let tau = [hp.tau[0] + t0, hp.tau[1] + t1, hp.tau[2] + t2].map(|t| t.max(0.0));
                 let kept = history_kept(hp.n, tau, m);
                 hp.tau = tau.map(|t| t * kept);

@@ -1,4 +1,4 @@
-//! Hit-point update after a move (ALGORITHM.md 2.4): the eye pass runs again on the new pose,
+//! Hit-point update after a move (docs/algorithm.md 2.4): the eye pass runs again on the new pose,
 //! and only slots whose visible point changed start over; every slot's direct sum restarts.
 
 use crate::eye_pass::eye_pass_main;

@@ -1,4 +1,4 @@
-//! Photon pass (ALGORITHM.md 1.3): photons leave the lights with the light's whole power,
+//! Photon pass (docs/algorithm.md 1.3): photons leave the lights with the light's whole power,
 //! bounce with Russian roulette, and deposit at non-specular surfaces.
 
 use crate::trace::SceneData;

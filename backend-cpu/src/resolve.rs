@@ -1,4 +1,4 @@
-//! Resolve (ALGORITHM.md 1.5): pixel = mean over its slots of `direct / iterations + L`, the
+//! Resolve (docs/algorithm.md 1.5): pixel = mean over its slots of `direct / iterations + L`, the
 //! throughput already folded into both.
 
 use glam::Vec3;

@@ -1,4 +1,4 @@
-//! Error against run time of a from-scratch render (ALGORITHM.md 6): how fast its image
+//! Error against run time of a from-scratch render (docs/algorithm.md 6): how fast its image
 //! approaches the truth, measured as a viewer would see it (pixel relative RMSE), with the
 //! noise averaged out (8x8-block relative RMSE: bias, blur and missing light stay), and as
 //! energy (the ratio of the means).

@@ -1,4 +1,4 @@
-//! Error against run time after a move (ALGORITHM.md 6): how fast each mode approaches the
+//! Error against run time after a move (docs/algorithm.md 6): how fast each mode approaches the
 //! truth of the new pose (a path-traced reference, or another renderer's image).
 
 use crate::chart::{ChartError, Series, write_loglog_chart};
@@ -90,7 +90,7 @@ pub fn reset_pixels(
         }
     }
     // Moves with no compensation passes: difference mode needs no emitting region, so the
-    // slots are updated (ALGORITHM.md 2.4's test) whatever the objects' shape around the
+    // slots are updated (docs/algorithm.md 2.4's test) whatever the objects' shape around the
     // lights; the split is the same for every mode.
     let moves = MoveParams {
         difference_passes: 0,

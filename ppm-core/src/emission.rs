@@ -1,6 +1,6 @@
-//! Where photons leave the lights: the ordinary distribution (ALGORITHM.md 1.3), region
+//! Where photons leave the lights: the ordinary distribution (docs/algorithm.md 1.3), region
 //! photons through the emitting rectangle, and guided photons around recorded paths
-//! (ALGORITHM.md 2 and 3). Shared by every backend and by the host, which rebuilds the
+//! (docs/algorithm.md 2 and 3). Shared by every backend and by the host, which rebuilds the
 //! emissions of testing photons from their path index.
 
 use crate::geometry::to_world;
@@ -110,7 +110,7 @@ pub fn region_emission(
     }
 }
 
-/// A guided photon (ALGORITHM.md 3, "Guided photons must not bias").
+/// A guided photon (docs/algorithm.md 3, "Guided photons must not bias").
 ///
 /// Weighted (ours): with probability `beta` an ordinary direction, otherwise a direction
 /// uniform in the cone around a recorded path's; the start point is drawn as for ordinary

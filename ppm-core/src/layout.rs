@@ -24,7 +24,7 @@ pub mod hit_flags {
     pub const VALID: u32 = 1;
     /// The eye ray met the surface on the side its normal points to: emitters emit only there.
     pub const FRONT: u32 = 2;
-    /// The slot was reset by the last hit-point update (ALGORITHM.md 2.4).
+    /// The slot was reset by the last hit-point update (docs/algorithm.md 2.4).
     pub const UPDATED: u32 = 4;
     /// Set by a local move on the kept slots whose direct light the move may change: the
     /// paired correction ([`direct_accumulate::CORRECT`](super::direct_accumulate::CORRECT))
@@ -49,7 +49,7 @@ pub mod hit_flags {
 pub const NO_MATERIAL: u32 = u32::MAX;
 
 /// One eye sample of one pixel (a slot): this iteration's visible point, and the progressive
-/// statistics the slot keeps across iterations (ALGORITHM.md 1).
+/// statistics the slot keeps across iterations (docs/algorithm.md 1).
 ///
 /// With `sppm` the visible point (position, normal, material, throughput, the `VALID`/`FRONT`
 /// flags) is traced anew every iteration while the statistics (`r2`, `n`, `tau`, `emitted`,
@@ -74,7 +74,7 @@ pub struct HitPoint {
     pub material: u32,
     /// Product of specular reflectances along this iteration's eye path.
     pub throughput: [f32; 3],
-    /// Squared gather radius `r2` (ALGORITHM.md 1.4).
+    /// Squared gather radius `r2` (docs/algorithm.md 1.4).
     pub r2: f32,
     /// Accumulated flux `tau` (power times throughput times BRDF), per channel.
     pub tau: [f32; 3],
@@ -83,7 +83,7 @@ pub struct HitPoint {
     /// Sum over the slot's iterations of the radiance towards the eye from emission seen and
     /// explicit direct light, times the eye path's throughput.
     pub direct: [f32; 3],
-    /// Photons emitted so far for this slot: the normaliser of ALGORITHM.md 1.5.
+    /// Photons emitted so far for this slot: the normaliser of docs/algorithm.md 1.5.
     pub emitted: f32,
     /// Iterations summed in `direct`.
     pub iterations: u32,
@@ -429,7 +429,7 @@ pub mod photon_flags {
 }
 
 /// Which photons a gather folds in, who gathers them, and with which update
-/// (ALGORITHM.md 3, "Who gathers what"), stored in [`GatherParams::kind`].
+/// (docs/algorithm.md 3, "Who gathers what"), stored in [`GatherParams::kind`].
 pub mod gather_kind {
     /// Ordinary photons: every hit point, eqs 1-3, `emitted` grows.
     pub const ORDINARY: u32 = 0;
@@ -465,7 +465,7 @@ pub mod gather_kind {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GatherParams {
-    /// Fraction of new photons kept, in (0, 1) (ALGORITHM.md 1.4).
+    /// Fraction of new photons kept, in (0, 1) (docs/algorithm.md 1.4).
     pub alpha: f32,
     /// Photons this pass adds to each gathering hit point's `emitted`.
     pub emitted_increment: f32,
@@ -476,7 +476,7 @@ pub struct GatherParams {
     pub region_photons: f32,
 }
 
-/// The emitting region of compensation and region photons (ALGORITHM.md 2.1, 3). 64 bytes.
+/// The emitting region of compensation and region photons (docs/algorithm.md 2.1, 3). 64 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct EmissionRegion {
@@ -498,7 +498,7 @@ pub struct EmissionRegion {
     pub _pad0: u32,
 }
 
-/// Where region photons start (ALGORITHM.md 3, "Which light point").
+/// Where region photons start (docs/algorithm.md 3, "Which light point").
 pub mod region_mode {
     /// Uniform on the area lights (ours, the default).
     pub const AREA: u32 = 0;
@@ -521,7 +521,7 @@ pub struct RecordedPath {
     pub _pad0: u32,
 }
 
-/// How guided photons are emitted (ALGORITHM.md 2.6, 3). 16 bytes.
+/// How guided photons are emitted (docs/algorithm.md 2.6, 3). 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GuidedEmission {

@@ -3,7 +3,7 @@
 use crate::scene::{MAX_COORDINATE, Scene, SceneError, number};
 use serde::{Deserialize, Serialize};
 
-/// Which progressive estimator renders (ALGORITHM.md 1).
+/// Which progressive estimator renders (docs/algorithm.md 1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Estimator {
@@ -48,7 +48,7 @@ impl std::str::FromStr for Estimator {
     }
 }
 
-/// Where direct light comes from (ALGORITHM.md 1.2).
+/// Where direct light comes from (docs/algorithm.md 1.2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DirectMode {
@@ -182,7 +182,7 @@ impl RenderParams {
     }
 }
 
-/// How a render follows a move (ALGORITHM.md 2, 3 and 3b): one row per mode, for every
+/// How a render follows a move (docs/algorithm.md 2, 3 and 3b): one row per mode, for every
 /// command, report and test.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]

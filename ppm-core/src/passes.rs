@@ -1,9 +1,9 @@
-//! The pass contract every backend implements (ALGORITHM.md section 1).
+//! The pass contract every backend implements (docs/algorithm.md section 1).
 //!
 //! One trait per pass, so that a harness, a conformance check or a debugging tool can name
 //! exactly the pass it drives. Each pass takes its `#[repr(C)]` parameter struct from
 //! [`crate::layout`], the same bytes a GPU backend uploads as a uniform, and returns counters.
-//! The dynamic passes of ALGORITHM.md section 2 arrive as further parameter fields (emission
+//! The dynamic passes of docs/algorithm.md section 2 arrive as further parameter fields (emission
 //! region, which hit points gather, sign of the power) and further traits beside these; the
 //! static passes keep their shape.
 
@@ -144,7 +144,7 @@ pub trait SceneUpload {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
 }
 
-/// Eye pass (ALGORITHM.md 1.1): the visible point of every slot, `width * height * spp`.
+/// Eye pass (docs/algorithm.md 1.1): the visible point of every slot, `width * height * spp`.
 pub trait EyePass {
     /// Traces one eye path per slot and writes its visible point. Without
     /// [`crate::layout::eye_flags::KEEP_STATISTICS`] the slots start fresh (`r2 =
@@ -153,7 +153,7 @@ pub trait EyePass {
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError>;
 }
 
-/// Direct light at every visible point (ALGORITHM.md 1.2).
+/// Direct light at every visible point (docs/algorithm.md 1.2).
 pub trait DirectLight {
     /// Estimates emission seen plus reflected direct light at each visible point, times the
     /// eye path's throughput (zero for a slot without one), and adds it to the slot's direct
@@ -161,13 +161,13 @@ pub trait DirectLight {
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError>;
 }
 
-/// Photon pass (ALGORITHM.md 1.3): emits, traces and stores this pass's photon map.
+/// Photon pass (docs/algorithm.md 1.3): emits, traces and stores this pass's photon map.
 pub trait PhotonPass {
     /// Replaces the photon map with this pass's deposits, indexed for gathering.
     fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError>;
 }
 
-/// Gather pass (ALGORITHM.md 1.4): folds the current photon map into the slots.
+/// Gather pass (docs/algorithm.md 1.4): folds the current photon map into the slots.
 pub trait GatherPass {
     /// Updates `n`, `r2` and `tau` of the slots that gather this pass's kind and have a
     /// visible point (flux times throughput times BRDF), and adds the pass's photons to
@@ -177,7 +177,7 @@ pub trait GatherPass {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError>;
 }
 
-/// Resolve (ALGORITHM.md 1.5): the image from the slots' statistics.
+/// Resolve (docs/algorithm.md 1.5): the image from the slots' statistics.
 pub trait Resolve {
     /// Averages `direct / iterations + tau / (pi r2 emitted)` over each pixel's slots.
     fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError>;
@@ -213,7 +213,7 @@ pub trait Backend:
     fn name(&self) -> &str;
 }
 
-/// Swaps the geometry under the hit points when an object moves (ALGORITHM.md 2.3).
+/// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3).
 pub trait SceneUpdate {
     /// Replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
     /// statistics.
@@ -224,7 +224,7 @@ pub trait SceneUpdate {
     fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError>;
 }
 
-/// Hit-point update after a move (ALGORITHM.md 2.4).
+/// Hit-point update after a move (docs/algorithm.md 2.4).
 pub trait HitPointUpdate {
     /// Re-runs the eye pass on the current geometry (with `params` keyed as the last
     /// iteration's, so each slot traces the same sample); a slot whose visible point changed
@@ -238,11 +238,11 @@ pub trait HitPointUpdate {
     ) -> Result<UpdateStats, BackendError>;
 }
 
-/// Compensation and region photons (ALGORITHM.md 2.2, 2.5).
+/// Compensation and region photons (docs/algorithm.md 2.2, 2.5).
 pub trait RegionPhotonPass {
     /// Replaces the photon map with photons emitted through `region`; `params.power_scale`
     /// is -1 for compensation photons. Each deposit keeps its path's weight for `M`. The map
-    /// is for the hit points that region passes reach (the kept ones, ALGORITHM.md 3): gather
+    /// is for the hit points that region passes reach (the kept ones, docs/algorithm.md 3): gather
     /// it with a region kind.
     fn region_photon_pass(
         &mut self,
@@ -251,7 +251,7 @@ pub trait RegionPhotonPass {
     ) -> Result<PhotonStats, BackendError>;
 }
 
-/// Guided photons around recorded paths (ALGORITHM.md 2.6).
+/// Guided photons around recorded paths (docs/algorithm.md 2.6).
 pub trait GuidedPhotonPass {
     /// Replaces the photon map with guided photons, for the updated hit points alone: gather
     /// it with the guided kind.
@@ -263,7 +263,7 @@ pub trait GuidedPhotonPass {
     ) -> Result<PhotonStats, BackendError>;
 }
 
-/// Which testing photons reached updated hit points (ALGORITHM.md 2.6).
+/// Which testing photons reached updated hit points (docs/algorithm.md 2.6).
 pub trait LandingPaths {
     /// Distinct path indices, ascending, of the current map's photons that lie within the
     /// radius of an updated hit point.

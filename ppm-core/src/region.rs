@@ -1,4 +1,4 @@
-//! The emitting region of compensation photons (ALGORITHM.md 2.1, thesis T3.3): the rectangle
+//! The emitting region of compensation photons (docs/algorithm.md 2.1, thesis T3.3): the rectangle
 //! through which the light sees a moving object in either pose.
 
 use crate::geometry::orthonormal_basis;
@@ -29,7 +29,7 @@ pub fn lights_centre(lights: &[GpuLight]) -> Vec3 {
 /// The plane passes through the vertices' centroid with normal `d`, the direction from the
 /// lights' centre to that centroid; its basis is `orthonormal_basis(d)`. Thesis mode projects
 /// from the centre only; area mode from every light vertex, so that every light point's view
-/// of the object is covered (ALGORITHM.md 3, "Which light point").
+/// of the object is covered (docs/algorithm.md 3, "Which light point").
 pub fn emitting_region(
     lights: &[GpuLight],
     vertices: &[Vec3],

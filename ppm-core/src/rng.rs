@@ -1,4 +1,4 @@
-//! Counter-based random generator (ALGORITHM.md section 5).
+//! Counter-based random generator (docs/algorithm.md section 5).
 //!
 //! A number is a pure function of (seed, pass kind, pass index, path index, dimension): no state
 //! is carried between draws, so any thread (or GPU invocation) can draw any number, and the

@@ -1,5 +1,5 @@
 //! Which pixels a mesh may cover, seen from the camera: local mode's test for the pose a
-//! moving object moves to (ALGORITHM.md 3b), where no eye path has been traced yet.
+//! moving object moves to (docs/algorithm.md 3b), where no eye path has been traced yet.
 //!
 //! Conservative: a pixel is marked when an eye ray through some point of its square (the
 //! eye pass jitters over the whole square) may meet a triangle, at any distance. Marking a

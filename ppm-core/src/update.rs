@@ -1,4 +1,4 @@
-//! The progressive update of a hit point's statistics (ALGORITHM.md 1.4, thesis eqs 1 to 4),
+//! The progressive update of a hit point's statistics (docs/algorithm.md 1.4, thesis eqs 1 to 4),
 //! written in the forms that stay accurate in f32.
 
 use std::f32::consts::PI;
@@ -46,7 +46,7 @@ pub fn ppm_update(s: Statistics, m: f32, dtau: [f32; 3], alpha: f32) -> Statisti
 }
 
 /// Folds one gather of compensation (negative) photons into the statistics (thesis eqs 5 to
-/// 7, ALGORITHM.md 3 "Counts under negative photons").
+/// 7, docs/algorithm.md 3 "Counts under negative photons").
 ///
 /// `m` counts the negative photons found (in ordinary-photon units), `dtau` is their
 /// (negative) flux. The count falls by `alpha * m` and radius and flux grow by the ratio
@@ -85,7 +85,7 @@ pub fn compensation_update(
     }
 }
 
-/// Reflected radiance estimate `tau / (pi * r2 * emitted)` (thesis eq 4, ALGORITHM.md 1.5).
+/// Reflected radiance estimate `tau / (pi * r2 * emitted)` (thesis eq 4, docs/algorithm.md 1.5).
 ///
 /// Divides in two steps so the product `pi * r2 * emitted` is never formed: it overflows at
 /// huge scales or photon counts, and underflows at tiny ones. Zero while nothing was emitted;
@@ -107,7 +107,8 @@ pub fn luminance(c: [f32; 3]) -> f32 {
 }
 
 /// How much of a slot's history to keep after a correction of variance `variance` (in squared
-/// luminance of flux) was added to statistics `n`, `tau` (the corrected flux), ALGORITHM.md 3c.
+/// luminance of flux) was added to statistics `n`, `tau` (the corrected flux);
+/// docs/algorithm.md 3c.
 ///
 /// A slot's flux sum built from `n` photons has relative variance about `1 / n`; the
 /// correction adds `variance / lum(tau)^2`. The corrected statistics are then worth as much as

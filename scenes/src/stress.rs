@@ -25,7 +25,7 @@ pub enum Expected {
     FiniteOrRefused,
 }
 
-/// A move to run through compensation photons (ALGORITHM.md 2).
+/// A move to run through compensation photons (docs/algorithm.md 2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MoveStress {
     /// Photons per compensation pass (two passes each way).

@@ -1,4 +1,4 @@
-//! Compensation photons on the CPU backend (ALGORITHM.md 2 and 3): in an unchanged scene a
+//! Compensation photons on the CPU backend (docs/algorithm.md 2 and 3): in an unchanged scene a
 //! negative region pass and a positive one cancel, and difference passes leave the statistics
 //! as they were; after a move, area and difference modes converge towards the new pose with
 //! either estimator; the clamps hold when negative photons outnumber the count.

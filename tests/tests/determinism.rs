@@ -1,4 +1,4 @@
-//! Same seed, same backend: the same buffers whatever the thread count (ALGORITHM.md 5).
+//! Same seed, same backend: the same buffers whatever the thread count (docs/algorithm.md 5).
 
 use ppm_core::params::RenderParams;
 use ppm_core::passes::ReadBack;

@@ -1,4 +1,4 @@
-//! `sppm` converges to the truth (ALGORITHM.md 1): against the reference path tracer, a
+//! `sppm` converges to the truth (docs/algorithm.md 1): against the reference path tracer, a
 //! render's error falls between two budgets on both backends, as a consistent estimator's
 //! must, while the thesis's fixed-hit-point `ppm` stays where it is.
 

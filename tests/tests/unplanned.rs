@@ -1,4 +1,4 @@
-//! Moves nobody planned (ALGORITHM.md 3c): any object, any rigid move, at any time, none of
+//! Moves nobody planned (docs/algorithm.md 3c): any object, any rigid move, at any time, none of
 //! it declared in the scene. Local mode resets the slots that may see the change and keeps
 //! the others, on both backends alike; a path of such moves converges to the truth of its
 //! final pose; and whatever iteration a move lands on, no mode blows a pixel up.

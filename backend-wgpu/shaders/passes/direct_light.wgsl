@@ -1,5 +1,5 @@
 // #import layout rng qmc sampling geometry bvh lights tables scene materials
-// Direct light (ALGORITHM.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
+// Direct light (docs/algorithm.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
 // shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
 
 @group(0) @binding(0) var<uniform> params: DirectLightParams;

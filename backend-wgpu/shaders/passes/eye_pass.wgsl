@@ -1,5 +1,5 @@
 // #import layout rng qmc sampling geometry bvh tables scene materials
-// Eye pass (ALGORITHM.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
+// Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;

@@ -1,5 +1,5 @@
 // #import layout rng qmc geometry sampling update grid tables scene materials
-// Gather pass (ALGORITHM.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
+// Gather pass (docs/algorithm.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
 // each gathering hit point's radius to its accumulator: power and count, and path weight. Then

@@ -1,5 +1,5 @@
 // #import layout
-// Hit-point update (ALGORITHM.md 2.4): the twin of backend-cpu's hit_point_update.rs. The eye
+// Hit-point update (docs/algorithm.md 2.4): the twin of backend-cpu's hit_point_update.rs. The eye
 // pass has written `fresh` for the new pose; slots whose visible point changed take it,
 // reset; every slot's direct sum restarts.
 

@@ -1,5 +1,5 @@
 // #import layout rng qmc geometry grid
-// Testing photons (ALGORITHM.md 2.6): flags the paths of the current map's photons that lie
+// Testing photons (docs/algorithm.md 2.6): flags the paths of the current map's photons that lie
 // within the radius of an updated hit point (every writer stores the same 1: no atomics).
 
 @group(0) @binding(0) var<storage, read> photons: array<Photon>;

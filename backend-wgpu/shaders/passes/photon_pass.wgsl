@@ -1,5 +1,5 @@
 // #import layout rng sampling geometry bvh lights emission movers tables scene materials
-// Photon pass (ALGORITHM.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
+// Photon pass (docs/algorithm.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
 // deposit's rank `(path - first_path) * max_depth + bounce` beside it: the append order

@@ -1,5 +1,5 @@
 // #import layout sampling update
-// Resolve (ALGORITHM.md 1.5): the twin of backend-cpu's resolve.rs.
+// Resolve (docs/algorithm.md 1.5): the twin of backend-cpu's resolve.rs.
 
 @group(0) @binding(0) var<uniform> params: ResolveParams;
 @group(0) @binding(1) var<storage, read> hit_points: array<HitPoint>;

@@ -1,4 +1,4 @@
-//! Local mode (ours; ALGORITHM.md 3b and 3c): a move keeps everything it did not change,
+//! Local mode (ours; docs/algorithm.md 3b and 3c): a move keeps everything it did not change,
 //! whatever the move. Nothing about it is known before it happens: which objects move, where
 //! to, or when.
 //!
@@ -218,7 +218,7 @@ impl Renderer<'_> {
         self.run_direct_light(&params)
     }
 
-    /// Weighs each corrected direct sum against its correction (ALGORITHM.md 3c): the
+    /// Weighs each corrected direct sum against its correction (docs/algorithm.md 3c): the
     /// paired samples estimate the change at one visible point of the pixel, so a change of
     /// size `d` is known only to about `d`; against the slot's mean `D` over `N` iterations
     /// (relative noise about `1 / N`) its history is then worth

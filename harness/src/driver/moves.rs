@@ -1,10 +1,10 @@
-//! Moves (ALGORITHM.md 2 and 3): the scene changes pose and the render keeps what the mode
+//! Moves (docs/algorithm.md 2 and 3): the scene changes pose and the render keeps what the mode
 //! lets it keep.
 //!
 //! Thesis and area modes remove light through the emitting rectangle with negative photons in
 //! pose A and re-add it with positive ones in pose B; difference mode traces ordinary photons
 //! in both poses with the same random numbers, so their deferred sum is exactly the change of
-//! every path (ALGORITHM.md 3, "Convergence", names the gap it closes). After the
+//! every path (docs/algorithm.md 3, "Convergence", names the gap it closes). After the
 //! compensation, testing photons record the emissions that reach the reset slots, and guided
 //! passes alternate with ordinary ones. Restart starts over on the new pose.
 
@@ -190,7 +190,7 @@ impl Renderer<'_> {
         self.report.rays.eye += update.rays;
         report.updated = update.updated;
         report.kept = update.kept;
-        // Direct light is recomputed for all (ALGORITHM.md 2.4): the update restarted every
+        // Direct light is recomputed for all (docs/algorithm.md 2.4): the update restarted every
         // direct sum; `ppm` draws the frame's estimate, `sppm` a first sample at the updated
         // visible points.
         match self.params.estimator {
