@@ -107,8 +107,19 @@ pub fn run_from_scratch(
 pub fn fitted_slope(points: &[Point], from_seconds: f64) -> Option<f64> {
     let xy: Vec<(f64, f64)> = points
         .iter()
-        .filter(|p| p.seconds >= from_seconds && p.seconds > 0.0 && p.rel_rmse > 0.0)
-        .map(|p| (p.seconds.ln(), p.rel_rmse.ln()))
+        .filter(|p| p.seconds >= from_seconds)
+        .map(|p| (p.seconds, p.rel_rmse))
+        .collect();
+    log_log_slope(&xy)
+}
+
+/// Least-squares slope of `log(y)` against `log(x)` over the points where both are positive;
+/// `None` with fewer than three of them.
+pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let xy: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+        .map(|p| (p.0.ln(), p.1.ln()))
         .collect();
     if xy.len() < 3 {
         return None;

@@ -2,6 +2,7 @@
 //! truth of the new pose (a path-traced reference, or another renderer's image).
 
 use crate::chart::{ChartError, Series, write_loglog_chart};
+use crate::convergence::log_log_slope;
 use crate::driver::{
     Budget, MoveReport, Observer, ObserverResult, PhotonCounts, Progress, Renderer, RunError,
     Schedule, Stoppable, run,
@@ -13,6 +14,7 @@ use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
+use ppm_core::update::luminance;
 use serde::Serialize;
 use std::path::Path;
 
@@ -60,6 +62,16 @@ pub struct ModeRun {
     pub r2_initial: f32,
     /// Measurements over time.
     pub measurements: Vec<Measurement>,
+    /// Slope of the kept pixels' error against the whole rendering time (before the last
+    /// move and since), from a second after it on: -0.5 where they go on converging as a
+    /// consistent estimator, 0 where they stopped.
+    pub kept_slope: Option<f64>,
+    /// The brightest pixel right after the last move, over the truth's brightest.
+    pub brightest_after_move: Option<f32>,
+    /// The brightest pixel at the end, over the truth's brightest.
+    pub brightest_final: Option<f32>,
+    /// Milliseconds an iteration took after the last move, on average.
+    pub iteration_ms: Option<f64>,
 }
 
 /// The pixels whose slots some move of the path resets (any of their slots), including slots
@@ -128,11 +140,18 @@ struct AfterMove<'a> {
     move_seconds: f64,
     moves: Vec<MoveReport>,
     measurements: Vec<Measurement>,
+    /// The brightest pixel right after the last move and at the last measurement.
+    brightest: (Option<f32>, Option<f32>),
 }
 
 impl AfterMove<'_> {
     fn measure(&mut self, r: &mut Renderer, seconds: f64, passes: u32) -> ObserverResult {
         let image = r.resolve()?;
+        let brightest = Some(brightest(&image) / brightest(self.truth));
+        if passes == 0 {
+            self.brightest.0 = brightest;
+        }
+        self.brightest.1 = brightest;
         let (kept, reset) = relative_rmse_parts(&image, self.truth, self.reset);
         self.measurements.push(Measurement {
             mode: self.mode,
@@ -199,6 +218,7 @@ pub fn run_mode(
         move_seconds: 0.0,
         moves: Vec::new(),
         measurements: Vec::new(),
+        brightest: (None, None),
     };
     let outcome = run(
         backend,
@@ -214,13 +234,43 @@ pub fn run_mode(
     if let Some(e) = outcome.error {
         return Err(e.into());
     }
+    // Restart keeps nothing from before the last move: its history is its own.
+    let before = match mode {
+        MoveMode::Restart => 0.0,
+        _ => settings.path.before_last().1,
+    };
+    let m = &observer.measurements;
+    let kept: Vec<(f64, f64)> = m
+        .iter()
+        .filter(|m| m.seconds >= 1.0)
+        .map(|m| (before + m.seconds, m.kept))
+        .collect();
+    let iteration_ms = match (m.iter().find(|m| m.passes > 0), m.last()) {
+        (Some(a), Some(b)) if b.passes > a.passes => {
+            Some((b.seconds - a.seconds) * 1e3 / f64::from(b.passes - a.passes))
+        }
+        _ => None,
+    };
     Ok(ModeRun {
         mode,
         moves: observer.moves,
         counts: outcome.counts,
         r2_initial: settings.params.initial_radius * settings.params.initial_radius,
+        kept_slope: log_log_slope(&kept),
+        brightest_after_move: observer.brightest.0,
+        brightest_final: observer.brightest.1,
+        iteration_ms,
         measurements: observer.measurements,
     })
+}
+
+/// Largest pixel luminance of an image.
+fn brightest(image: &Image) -> f32 {
+    image
+        .pixels
+        .iter()
+        .map(|&p| luminance(p))
+        .fold(0.0, f32::max)
 }
 
 /// The error a perfect compensation that costs nothing would reach, over time: its kept

@@ -328,6 +328,21 @@ pub fn error_vs_time(args: ErrorArgs) -> Result<()> {
             ),
         }
     }
+    for r in &runs {
+        let fmt =
+            |v: Option<f64>, digits: usize| v.map_or("-".to_owned(), |v| format!("{v:.digits$}"));
+        let last_move = r.moves.last().map(|m| m.seconds * 1e3);
+        println!(
+            "{:<10} kept pixels' slope {} against the whole rendering time; brightest pixel {}x \
+             the truth's after the move, {}x at the end; last move {} ms, an iteration {} ms",
+            r.mode.name(),
+            fmt(r.kept_slope, 2),
+            fmt(r.brightest_after_move.map(f64::from), 2),
+            fmt(r.brightest_final.map(f64::from), 2),
+            fmt(last_move, 1),
+            fmt(r.iteration_ms, 1)
+        );
+    }
     println!("wrote {}", out.display());
     if interrupted {
         return Err(Interrupted(format!(
