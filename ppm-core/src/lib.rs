@@ -5,9 +5,11 @@
 //! - [`layout`]: the `#[repr(C)]` buffer elements, byte-for-byte what the GPU binds.
 //! - [`update`]: the progressive update formulas in their stable forms.
 //! - [`rng`], [`sampling`], [`geometry`]: math that exists once here and once in WGSL.
-//! - [`scene`], [`compile`]: the scene model, its file format, and its flattening into buffers.
+//! - [`scene`], [`compile`]: the scene model, its file format, path files of moves nobody
+//!   declared ([`scene::path`]), and the flattening into buffers.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping; [`screen_cover`]: the pixels a
-//!   mesh may cover, for local mode's resets.
+//!   mesh may cover, and [`reach`]: where a slot's paths and light may pass, for local mode's
+//!   resets and corrections.
 //! - [`params`], [`image`], [`metrics`]: render settings, images and their EXR/PNG files, and
 //!   the distances error reports measure; [`output`]: every file written whole or not at all;
 //!   [`limits`]: the sizes and magnitudes refused before anything is allocated or traced.
