@@ -5,6 +5,8 @@
 //! not depend on the number of threads: work items draw counter-based random numbers and write
 //! only their own slots, and photons are concatenated and filed in path order.
 
+#![warn(missing_docs)]
+
 mod direct_light;
 mod eye_pass;
 mod gather_pass;

@@ -8,6 +8,8 @@
 //! counters are read back after each pass (rays, deposits, the first non-finite slot); bulk
 //! buffers only when the harness asks ([`ReadBack`], [`Resolve`]).
 
+#![warn(missing_docs)]
+
 mod buffers;
 mod context;
 mod kernel;

@@ -58,7 +58,7 @@ pub fn measure(image: &Image, truth: &Truth, seconds: f64, passes: u32) -> Point
 
 /// Renders `scene` at `frame` from scratch on `backend` for `seconds` of rendering, measuring
 /// against `truth` after the first iteration, whenever rendering time has grown by
-/// [`CHECKPOINT_GROWTH`], and after the last; ends early, with the points measured so far,
+/// `CHECKPOINT_GROWTH`, and after the last; ends early, with the points measured so far,
 /// when `stop` says so (the report says `interrupted`).
 pub fn run_from_scratch(
     backend: &mut dyn DynamicBackend,

@@ -3,6 +3,8 @@
 //! backends, the conformance suite, the stress family, and scene lookup by name or file. The
 //! `ppm` command is built on it.
 
+#![warn(missing_docs)]
+
 pub mod chart;
 pub mod clock;
 pub mod conformance;

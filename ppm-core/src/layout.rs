@@ -298,11 +298,11 @@ pub mod eye_flags {
     /// without it one sample per pixel goes through the pixel's centre.
     pub const JITTER: u32 = 2;
     /// With `KEEP_STATISTICS`: slots whose direct sum already holds
-    /// [`EyePassParams::rest_at`] iterations rest, skipping the eye path and direct light
+    /// [`EyePassParams::rest_at`](super::EyePassParams::rest_at) iterations rest, skipping the eye path and direct light
     /// (local mode, after a move: that work goes to the slots the move reset until they catch
     /// up with the kept ones).
     pub const FOCUS: u32 = 4;
-    /// Extend each kept slot's [`SlotBounds`] by its eye path's vertices (started over where
+    /// Extend each kept slot's [`SlotBounds`](super::SlotBounds) by its eye path's vertices (started over where
     /// the slot's statistics start); without it the bounds are left alone (the probe of a
     /// local move, the hit-point update of the other modes).
     pub const RECORD_BOUNDS: u32 = 8;

@@ -14,6 +14,8 @@
 //!   the distances error reports measure; [`output`]: every file written whole or not at all;
 //!   [`limits`]: the sizes and magnitudes refused before anything is allocated or traced.
 
+#![warn(missing_docs)]
+
 pub mod check;
 pub mod compile;
 pub mod emission;

@@ -63,7 +63,7 @@ impl Aabb {
 /// A point `(1 - s) p + s q` of such a segment lies, for `s` in `[s0, s1]`, in the box
 /// spanned by the boxes `(1 - s0) from + s0 to` and `(1 - s1) from + s1 to` (the set is
 /// linear in `s`, so its extremes sit at the ends). The test checks that box for each of
-/// [`PIECES`] pieces of `[0, 1]`: never a wrong no, and a yes only within a piece's reach.
+/// `PIECES` (16) pieces of `[0, 1]`: never a wrong no, and a yes only within a piece's reach.
 pub fn segments_may_meet(from: &Aabb, to: &Aabb, target: &Aabb) -> bool {
     if from.is_empty() || to.is_empty() || target.is_empty() {
         return false;

@@ -1,6 +1,8 @@
 //! The built-in scenes: the canonical scenes of SCENES.md, shipped as scene files, and small
 //! analytic scenes whose exact answer tests can check.
 
+#![warn(missing_docs)]
+
 pub mod analytic;
 pub mod canonical;
 pub mod meshes;

@@ -1,5 +1,7 @@
 //! Helpers shared by the workspace-level integration tests in `tests/tests/`.
 
+#![warn(missing_docs)]
+
 use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Outcome, Schedule, run};
 use ppm_core::params::{MoveParams, RenderParams};

@@ -1,9 +1,9 @@
 //! The one driver: every command, report, suite and test renders through it.
 //!
 //! [`Renderer`] is the only code that knows how passes follow each other: it turns the render
-//! settings into each pass's parameter struct in one place ([`Renderer::eye_params`] and its
+//! settings into each pass's parameter struct in one place (`Renderer::eye_params` and its
 //! siblings), runs an iteration of either estimator, and moves the scene with any
-//! [`MoveMode`] ([`moves`]). Callers describe *what* to run as a [`Schedule`] (render for a
+//! [`MoveMode`](ppm_core::params::MoveMode) ([`moves`]). Callers describe *what* to run as a [`Schedule`] (render for a
 //! budget, move, render again, ...) and watch it through an [`Observer`]; [`run`] executes it
 //! ([`schedule`]).
 //!

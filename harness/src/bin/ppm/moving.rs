@@ -27,12 +27,12 @@ pub struct MovingArgs {
     options: RenderOptions,
     #[command(flatten)]
     moves: MoveOptions,
-    /// Path file of moves nobody declared in the scene ([[step]] after_seconds or
-    /// after_iterations, object, translate, rotate); the scene's [[moves]] are ignored.
+    /// Path file of moves nobody declared in the scene (`[[step]]` after_seconds or
+    /// after_iterations, object, translate, rotate); the scene's `[[moves]]` are ignored.
     #[arg(long, conflicts_with = "random_path")]
     path: Option<PathBuf>,
     /// This many random rigid moves of random objects that are not lights, kept inside the
-    /// scene's bounds and keyed by --seed, instead of the scene's [[moves]].
+    /// scene's bounds and keyed by --seed, instead of the scene's `[[moves]]`.
     #[arg(long)]
     random_path: Option<u32>,
 }
@@ -48,7 +48,7 @@ impl MovingArgs {
     }
 
     /// The moves nobody declared, if the options give them (a random path's first move
-    /// after `first`, the others after `then`); `None` means the scene's own [[moves]],
+    /// after `first`, the others after `then`); `None` means the scene's own `[[moves]]`,
     /// refused when it has none.
     fn unplanned(&self, scene: &Scene, first: After, then: After) -> Result<Option<MovePath>> {
         if let Some(file) = &self.path {
