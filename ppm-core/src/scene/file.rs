@@ -1,6 +1,6 @@
 //! The TOML scene format: parsing, and conversion to the [`Scene`] model with validation.
 //!
-//! The format is documented in the repository's README ("Scene files"). Every value is checked
+//! The format is documented in the repository's docs/scene-format.md. Every value is checked
 //! before anything is rendered, and a bad one is reported with the file, the dotted field path
 //! and the value.
 
