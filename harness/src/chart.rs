@@ -5,8 +5,8 @@
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use ppm_core::image::write_png_rgb;
-use ppm_core::output::write_bytes;
+use scenes::file::image::write_png_rgb;
+use scenes::file::output::write_bytes;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 use thiserror::Error;

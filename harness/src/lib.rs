@@ -17,7 +17,8 @@ pub mod report;
 pub mod stats;
 pub mod stress;
 
-use ppm_core::scene::{Scene, SceneError, load_scene_file};
+use ppm_core::scene::{Scene, SceneError};
+use scenes::file::load_scene_file;
 use std::path::Path;
 
 /// A built-in scene by name, or else a scene file by path: Mitsuba 3 (`.xml`), pbrt-v4
@@ -38,8 +39,8 @@ pub fn load_scene(name_or_path: &str) -> Result<Scene, SceneError> {
         });
     }
     match path.extension().and_then(|e| e.to_str()) {
-        Some("xml") => ppm_core::scene::mitsuba::load_mitsuba_file(path),
-        Some("pbrt") => ppm_core::scene::pbrt::load_pbrt_file(path),
+        Some("xml") => scenes::file::mitsuba::load_mitsuba_file(path),
+        Some("pbrt") => scenes::file::pbrt::load_pbrt_file(path),
         _ => load_scene_file(path),
     }
 }

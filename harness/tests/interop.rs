@@ -3,7 +3,8 @@
 //! same buffers bit for bit (triangles, BVH, materials, lights, camera).
 
 use ppm_core::compile::compile_scene;
-use ppm_core::scene::{Export, ExportOptions, MaterialKind, Scene, mitsuba, pbrt};
+use ppm_core::scene::{MaterialKind, Scene};
+use scenes::file::{Export, ExportOptions, mitsuba, pbrt};
 use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {

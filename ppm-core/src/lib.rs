@@ -5,14 +5,13 @@
 //! - [`layout`]: the `#[repr(C)]` buffer elements, byte-for-byte what the GPU binds.
 //! - [`update`]: the progressive update formulas in their stable forms.
 //! - [`rng`], [`sampling`], [`geometry`]: math that exists once here and once in WGSL.
-//! - [`scene`], [`compile`]: the scene model, its file format, path files of moves nobody
-//!   declared ([`scene::path`]), and the flattening into buffers.
+//! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
+//!   ([`scene::path`]), and the flattening into buffers. Files are the `scenes` crate's.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping; [`screen_cover`]: the pixels a
 //!   mesh may cover, and [`reach`]: where a slot's paths and light may pass, for local mode's
 //!   resets and corrections.
-//! - [`params`], [`image`], [`metrics`]: render settings, images and their EXR/PNG files, and
-//!   the distances error reports measure; [`output`]: every file written whole or not at all;
-//!   [`limits`]: the sizes and magnitudes refused before anything is allocated or traced.
+//! - [`params`], [`image`], [`metrics`]: render settings, images, and the distances error
+//!   reports measure; [`limits`]: the sizes refused before anything is allocated or traced.
 
 #![warn(missing_docs)]
 
@@ -25,7 +24,6 @@ pub mod image;
 pub mod layout;
 pub mod limits;
 pub mod metrics;
-pub mod output;
 pub mod params;
 pub mod passes;
 pub mod qmc;

@@ -1,12 +1,11 @@
-//! Sizes refused before anything is read, allocated or traced, each bound with its argument:
-//! an error says what was asked, what fits, and which option to change, instead of the
-//! process dying in an allocation or reading `/dev/zero` for ever.
+//! Sizes refused before anything is allocated or traced, each bound with its argument: an
+//! error says what was asked, what fits, and which option to change, instead of the process
+//! dying in an allocation. (The files a scene may be read from are bounded in
+//! `scenes::file::limits`.)
 
 use crate::layout::{HitPoint, Photon};
 use crate::params::RenderParams;
 use crate::scene::{MaterialKind, Scene, SceneError};
-use std::io::Read;
-use std::path::Path;
 
 /// Bytes of one hit-point slot: every slot lives for the whole render.
 pub const HIT_POINT_BYTES: u64 = size_of::<HitPoint>() as u64;
@@ -17,16 +16,6 @@ pub const PHOTON_BYTES: u64 = size_of::<Photon>() as u64;
 /// Bytes a pixel of a path-traced reference holds: eight batch sums of three `f64` (192), a
 /// round of eight RGB `f32` samples (96), the mean and variance images (24).
 pub const REFERENCE_PIXEL_BYTES: u64 = 192 + 96 + 24;
-
-/// Largest scene file (TOML, Mitsuba XML, pbrt): the parsers hold the text and a tree several
-/// times its size, and a scene of more than 64 MiB of text keeps its geometry where it
-/// belongs, in OBJ or PLY files.
-pub const SCENE_FILE_LIMIT: u64 = 64 << 20;
-
-/// Largest mesh file (OBJ, PLY): both readers hold the whole file, then its vertices and
-/// triangles, about three times its size; 2 GiB is some 80 million triangles, more than the
-/// BVH builder and a render of this tool handle in hours.
-pub const MESH_FILE_LIMIT: u64 = 2 << 30;
 
 /// Memory a render may plan to fill, checked before allocation.
 #[derive(Clone, Debug, PartialEq)]
@@ -185,81 +174,9 @@ pub fn check_reference_memory(
     )
 }
 
-/// Reads a file of at most `limit` bytes, refusing anything that is not a regular file (a
-/// device such as `/dev/zero`, a pipe, a folder) before reading a byte. The error says what is
-/// wrong, without the path (the caller names the file).
-pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
-    let mut file = std::fs::File::open(path).map_err(io_reason)?;
-    let size = regular_size(&file.metadata().map_err(io_reason)?, limit)?;
-    let mut bytes = Vec::with_capacity(size as usize);
-    file.by_ref()
-        .take(limit + 1)
-        .read_to_end(&mut bytes)
-        .map_err(io_reason)?;
-    if bytes.len() as u64 > limit {
-        return Err(too_large(bytes.len() as u64, limit));
-    }
-    Ok(bytes)
-}
-
-/// [`read_limited`] as UTF-8 text.
-pub fn read_text_limited(path: &Path, limit: u64) -> Result<String, String> {
-    String::from_utf8(read_limited(path, limit)?)
-        .map_err(|e| format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()))
-}
-
-/// Checks, before a reader that opens `path` itself (tobj), that it is a regular file of at
-/// most `limit` bytes.
-pub fn check_file_size(path: &Path, limit: u64) -> Result<(), String> {
-    let meta = std::fs::metadata(path).map_err(io_reason)?;
-    regular_size(&meta, limit).map(|_| ())
-}
-
-/// What the operating system said, with the commonest case in words.
-fn io_reason(e: std::io::Error) -> String {
-    match e.kind() {
-        std::io::ErrorKind::NotFound => "no such file".into(),
-        _ => e.to_string(),
-    }
-}
-
-fn regular_size(meta: &std::fs::Metadata, limit: u64) -> Result<u64, String> {
-    if !meta.is_file() {
-        return Err(if meta.is_dir() {
-            "is a folder, not a file".into()
-        } else {
-            "is not a regular file (a device or a pipe never ends)".into()
-        });
-    }
-    if meta.len() > limit {
-        return Err(too_large(meta.len(), limit));
-    }
-    Ok(meta.len())
-}
-
-fn too_large(size: u64, limit: u64) -> String {
-    format!("is {size} bytes; this kind of file may have at most {limit}")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tiny_budget() -> MemoryBudget {
-        MemoryBudget {
-            bytes: 1 << 20,
-            source: "a test's 1 MiB".into(),
-        }
-    }
-
-    fn cornell() -> Scene {
-        crate::scene::parse_scene(
-            include_str!("../../scenes/data/cornell-box.toml"),
-            "cornell-box.toml",
-            Path::new("."),
-        )
-        .unwrap()
-    }
 
     #[test]
     fn total_memory_is_read_from_meminfo() {
@@ -267,64 +184,5 @@ mod tests {
         assert_eq!(mem_total(text), Some(16_318_480 * 1024));
         assert_eq!(mem_total("garbage"), None);
         assert!(MemoryBudget::detect().bytes > 0);
-    }
-
-    #[test]
-    fn hit_points_beyond_the_budget_are_refused_naming_the_options() {
-        let scene = cornell();
-        let mut params = RenderParams::for_scene(&scene);
-        (params.width, params.height, params.photons_per_pass) = (100, 100, 100);
-        assert!(check_render_memory(&params, &scene, &tiny_budget()).is_ok());
-        params.width = 200;
-        let err = check_render_memory(&params, &scene, &tiny_budget())
-            .unwrap_err()
-            .to_string();
-        assert_eq!(
-            err,
-            "command line: width * height * spp = 200 * 100 * 1 = 20000: hit points of 96 \
-             bytes need 1.9 MB; 1.0 MB fits (a test's 1 MiB): lower --width, --height or --spp"
-        );
-    }
-
-    /// cornell-box's whitest albedo is 0.725: 3.6 deposits per path at most on average.
-    #[test]
-    fn deposits_are_bounded_by_the_largest_albedo() {
-        let scene = cornell();
-        let mut params = RenderParams::for_scene(&scene);
-        (params.width, params.height) = (8, 8);
-        params.photons_per_pass = 9_000;
-        assert!(check_render_memory(&params, &scene, &tiny_budget()).is_ok());
-        params.photons_per_pass = 10_000;
-        let err = check_render_memory(&params, &scene, &tiny_budget())
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.starts_with("command line: photons_per_pass = 10000: 36364 deposits of 32 bytes")
-                && err.ends_with("lower --photons-per-pass"),
-            "{err}"
-        );
-    }
-
-    #[test]
-    fn a_device_or_an_oversized_file_is_refused_before_reading() {
-        if cfg!(target_os = "linux") {
-            let err = read_limited(Path::new("/dev/zero"), SCENE_FILE_LIMIT).unwrap_err();
-            assert_eq!(err, "is not a regular file (a device or a pipe never ends)");
-        }
-        let dir = std::env::temp_dir();
-        assert_eq!(
-            check_file_size(&dir, MESH_FILE_LIMIT).unwrap_err(),
-            "is a folder, not a file"
-        );
-        let path = dir.join(format!("ppm-limits-{}.txt", std::process::id()));
-        std::fs::write(&path, "0123456789").unwrap();
-        let small = read_limited(&path, 10);
-        let large = read_limited(&path, 9);
-        std::fs::remove_file(&path).ok();
-        assert_eq!(small.unwrap().len(), 10);
-        assert_eq!(
-            large.unwrap_err(),
-            "is 10 bytes; this kind of file may have at most 9"
-        );
     }
 }

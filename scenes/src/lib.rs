@@ -1,14 +1,17 @@
 //! The built-in scenes: the canonical scenes of SCENES.md, shipped as scene files, and small
-//! analytic scenes whose exact answer tests can check.
+//! analytic scenes whose exact answer tests can check; and every file the project reads or
+//! writes ([`file`](mod@file): scenes, paths, meshes, images).
 
 #![warn(missing_docs)]
 
 pub mod analytic;
 pub mod canonical;
+pub mod file;
 pub mod meshes;
 pub mod stress;
 
-use ppm_core::scene::{Scene, SceneError, parse_scene};
+use file::parse_scene;
+use ppm_core::scene::{Scene, SceneError};
 use std::path::Path;
 
 /// A built-in scene.

@@ -9,13 +9,13 @@ use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::compile::compile_scene;
 use ppm_core::params::{MoveParams, RenderParams};
-use ppm_core::scene::mitsuba::{export_mitsuba, load_mitsuba_file};
-use ppm_core::scene::pbrt::{export_pbrt, load_pbrt_file};
-use ppm_core::scene::{
-    Export, ExportOptions, Scene, SceneError, load_scene_file, mesh_file::read_ply,
-};
+use ppm_core::scene::{Scene, SceneError};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
+use scenes::file::mesh::read_ply;
+use scenes::file::mitsuba::{export_mitsuba, load_mitsuba_file};
+use scenes::file::pbrt::{export_pbrt, load_pbrt_file};
+use scenes::file::{Export, ExportOptions, load_scene_file};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 

@@ -7,8 +7,8 @@
 
 use super::{ReferenceBudget, ReferenceImage, Truth, render_reference, variance_path};
 use ppm_core::compile::compile_scene;
-use ppm_core::image::ImageError;
 use ppm_core::scene::{MaterialKind, Scene};
+use scenes::file::image::ImageError;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use thiserror::Error;

@@ -11,10 +11,11 @@ use backend_cpu::trace::SceneData;
 use glam::Vec3;
 use path_tracer::PathTracer;
 use ppm_core::compile::CompiledScene;
-use ppm_core::image::{Image, ImageError};
+use ppm_core::image::Image;
 use ppm_core::metrics::reference_noise;
 use rayon::prelude::*;
 use sampler::BATCHES;
+use scenes::file::image::{ImageError, ImageFiles};
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -81,7 +82,7 @@ impl ReferenceImage {
         self.image.write_png(&path.with_extension("png"), 1.0)?;
         self.variance.write_exr(&variance_path(path))?;
         let json = serde_json::to_string_pretty(summary).expect("a summary serialises");
-        ppm_core::output::write_bytes(&path.with_extension("json"), json).map_err(|e| {
+        scenes::file::output::write_bytes(&path.with_extension("json"), json).map_err(|e| {
             ImageError::Write {
                 path: path.with_extension("json").display().to_string(),
                 reason: e.to_string(),
@@ -252,10 +253,10 @@ impl Truth {
     /// Reads a reference EXR from any renderer, refusing it unless it is `width` x `height`
     /// with R, G and B channels; a variance file beside it ([`variance_path`]) is read too.
     pub fn from_exr(path: &Path, width: u32, height: u32) -> Result<Self, ImageError> {
-        let image = Image::read_exr(path, width, height)?;
+        let image = scenes::file::image::read_exr(path, width, height)?;
         let var = variance_path(path);
         let variance = if var.is_file() {
-            Some(Image::read_exr(&var, width, height)?)
+            Some(scenes::file::image::read_exr(&var, width, height)?)
         } else {
             None
         };

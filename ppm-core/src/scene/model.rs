@@ -268,3 +268,13 @@ pub fn triangle_area(t: &[Vec3; 3]) -> f32 {
 pub fn quad_triangles(q: [Vec3; 4]) -> [[Vec3; 3]; 2] {
     [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
 }
+
+/// Whether any triangle of the scene has zero area (reported, not rejected: they are never hit).
+pub fn degenerate_triangle_count(scene: &Scene) -> usize {
+    scene
+        .objects
+        .iter()
+        .flat_map(|o| &o.triangles)
+        .filter(|t| triangle_area(t) == 0.0)
+        .count()
+}

@@ -10,8 +10,9 @@ use harness::diff::independent;
 use harness::diff::same_seed;
 use harness::diff::{OTHER_SEED_OFFSET, record, runs_of};
 use ppm_core::limits::{MemoryBudget, check_render_memory};
-use ppm_core::output::write_bytes;
 use ppm_core::params::{Estimator, RenderParams};
+use scenes::file::image::ImageFiles;
+use scenes::file::output::write_bytes;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

@@ -3,7 +3,7 @@
 use crate::options::check_frame;
 use anyhow::{Result, bail};
 use clap::ValueEnum;
-use ppm_core::scene::ExportOptions;
+use scenes::file::ExportOptions;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -59,8 +59,8 @@ pub fn export(args: ExportArgs) -> Result<()> {
         frame: args.frame,
     };
     let export = match args.format {
-        ExportFormat::Mitsuba => ppm_core::scene::mitsuba::export_mitsuba(&scene, &options),
-        ExportFormat::Pbrt => ppm_core::scene::pbrt::export_pbrt(&scene, &options),
+        ExportFormat::Mitsuba => scenes::file::mitsuba::export_mitsuba(&scene, &options),
+        ExportFormat::Pbrt => scenes::file::pbrt::export_pbrt(&scene, &options),
     };
     let path = export.write(&args.output)?;
     println!(

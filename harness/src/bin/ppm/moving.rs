@@ -8,10 +8,12 @@ use harness::driver::{
     Budget, MoveReport, Observer, ObserverResult, Progress, Renderer, Schedule, run,
 };
 use harness::error_report::{self, ErrorSettings};
-use ppm_core::output::write_bytes;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::scene::Scene;
-use ppm_core::scene::path::{After, MovePath, load_path_file};
+use ppm_core::scene::path::{After, MovePath};
+use scenes::file::image::ImageFiles;
+use scenes::file::output::write_bytes;
+use scenes::file::path::load_path_file;
 use std::path::PathBuf;
 
 /// Scene, backend and settings of a command on a moving scene.

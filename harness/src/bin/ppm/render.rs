@@ -9,10 +9,10 @@ use harness::driver::schedule::EachIteration;
 use harness::driver::{Budget, Progress, Renderer, Schedule, Stoppable, run};
 use harness::reference::{ReferenceBudget, Truth, render_reference, variance_path};
 use indicatif::{ProgressBar, ProgressStyle};
-use ppm_core::image::Image;
 use ppm_core::limits::{MemoryBudget, check_reference_memory};
-use ppm_core::output::{check_writable_folder, write_bytes};
 use ppm_core::params::{MoveParams, RenderParams};
+use scenes::file::image::ImageFiles;
+use scenes::file::output::{check_writable_folder, write_bytes};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -321,7 +321,7 @@ pub fn compare(args: CompareArgs) -> Result<()> {
         .with_context(|| format!("{}: no image layer", args.reference.display()))?;
     let (width, height) = (size.width() as u32, size.height() as u32);
     let truth = Truth::from_exr(&args.reference, width, height)?;
-    let image = Image::read_exr(&args.image, width, height)?;
+    let image = scenes::file::image::read_exr(&args.image, width, height)?;
     let p = convergence::measure(&image, &truth, 0.0, 0);
     if let Some(path) = &args.heatmap {
         let heat = harness::diff::same_seed::heat(&truth.image, &image);

@@ -5,7 +5,7 @@ use crate::options::{BackendChoice, RenderOptions, TruthOptions, check_frame};
 use crate::render::output_folder;
 use anyhow::{Result, bail};
 use harness::convergence;
-use ppm_core::output::write_bytes;
+use scenes::file::output::write_bytes;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

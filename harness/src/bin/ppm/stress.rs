@@ -4,7 +4,7 @@ use crate::options::BackendChoice;
 use crate::render::output_folder;
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
-use ppm_core::output::write_bytes;
+use scenes::file::output::write_bytes;
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, ValueEnum)]

@@ -1,0 +1,161 @@
+//! Writes a [`Scene`] as a Mitsuba 3 XML scene with PLY meshes beside it.
+
+use crate::file::interop::{Export, ExportOptions, clip_range, common_notes, list3, mesh_names};
+use ppm_core::scene::{MaterialKind, Scene};
+use std::fmt::Write;
+
+/// The scene in Mitsuba 3's XML format (`scene version="3.0.0"`), meshes as PLY files.
+///
+/// Diffuse and mirror surfaces are wrapped in `twosided` (Mitsuba's `diffuse` and `conductor`
+/// are black from behind, ours reflect on both sides); a mirror is a `conductor` with
+/// `material = "none"` (Fresnel factor 1) scaled by our reflectance, which is exact; a light is
+/// a `twosided` diffuse surface carrying an `area` emitter, which emits on the side of the
+/// face normal as ours does (`face_normals` keeps Mitsuba from smoothing the normals).
+pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
+    let names = mesh_names(scene);
+    let mut notes = common_notes(scene, options);
+    notes.push(
+        "Mitsuba's path tracer runs to unbounded depth with Russian roulette; ours stops eye \
+         paths after 16 specular bounces and photons after 16 bounces"
+            .into(),
+    );
+    let c = &scene.camera;
+    let (near, far) = clip_range(scene);
+    let mut x = String::new();
+    let w = &mut x;
+    let _ = writeln!(w, "<?xml version=\"1.0\" encoding=\"utf-8\"?>");
+    let _ = writeln!(
+        w,
+        "<!-- Written by ppm export: scene \"{}\", frame {}.",
+        xml_comment(&scene.name),
+        options.frame
+    );
+    let _ = writeln!(w, "     Not expressed exactly:");
+    for n in &notes {
+        let _ = writeln!(w, "     - {}", xml_comment(n));
+    }
+    let _ = writeln!(w, "-->");
+    let _ = writeln!(w, "<scene version=\"3.0.0\">");
+    let _ = writeln!(w, "    <integrator type=\"path\">");
+    let _ = writeln!(w, "        <integer name=\"max_depth\" value=\"-1\"/>");
+    let _ = writeln!(w, "    </integrator>");
+    let _ = writeln!(w, "    <sensor type=\"perspective\">");
+    let _ = writeln!(w, "        <string name=\"fov_axis\" value=\"y\"/>");
+    let _ = writeln!(w, "        <float name=\"fov\" value=\"{}\"/>", c.fov_deg);
+    let _ = writeln!(w, "        <float name=\"near_clip\" value=\"{near}\"/>");
+    let _ = writeln!(w, "        <float name=\"far_clip\" value=\"{far}\"/>");
+    let _ = writeln!(w, "        <transform name=\"to_world\">");
+    let _ = writeln!(
+        w,
+        "            <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>",
+        list3(c.eye, ", "),
+        list3(c.look_at, ", "),
+        list3(c.up, ", ")
+    );
+    let _ = writeln!(w, "        </transform>");
+    let _ = writeln!(w, "        <sampler type=\"independent\">");
+    let _ = writeln!(
+        w,
+        "            <integer name=\"sample_count\" value=\"{}\"/>",
+        options.samples_per_pixel
+    );
+    let _ = writeln!(w, "        </sampler>");
+    let _ = writeln!(w, "        <film type=\"hdrfilm\">");
+    let _ = writeln!(
+        w,
+        "            <integer name=\"width\" value=\"{}\"/>",
+        c.width
+    );
+    let _ = writeln!(
+        w,
+        "            <integer name=\"height\" value=\"{}\"/>",
+        c.height
+    );
+    let _ = writeln!(
+        w,
+        "            <string name=\"pixel_format\" value=\"rgb\"/>"
+    );
+    let _ = writeln!(w, "            <rfilter type=\"box\"/>");
+    let _ = writeln!(w, "        </film>");
+    let _ = writeln!(w, "    </sensor>");
+    for m in &scene.materials {
+        let id = xml_attr(&material_id(&m.name));
+        match &m.kind {
+            MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => {
+                let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
+                let _ = writeln!(w, "        <bsdf type=\"diffuse\">");
+                let _ = writeln!(
+                    w,
+                    "            <rgb name=\"reflectance\" value=\"{}\"/>",
+                    list3(*albedo, ", ")
+                );
+                let _ = writeln!(w, "        </bsdf>");
+                let _ = writeln!(w, "    </bsdf>");
+            }
+            MaterialKind::Mirror { reflectance } => {
+                let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
+                let _ = writeln!(w, "        <bsdf type=\"conductor\">");
+                let _ = writeln!(w, "            <string name=\"material\" value=\"none\"/>");
+                let _ = writeln!(
+                    w,
+                    "            <rgb name=\"specular_reflectance\" value=\"{}\"/>",
+                    list3(*reflectance, ", ")
+                );
+                let _ = writeln!(w, "        </bsdf>");
+                let _ = writeln!(w, "    </bsdf>");
+            }
+            MaterialKind::Glass { ior } => {
+                let _ = writeln!(w, "    <bsdf type=\"dielectric\" id=\"{id}\">");
+                let _ = writeln!(w, "        <float name=\"int_ior\" value=\"{ior}\"/>");
+                let _ = writeln!(w, "        <float name=\"ext_ior\" value=\"1\"/>");
+                let _ = writeln!(w, "    </bsdf>");
+            }
+        }
+    }
+    for (object, file) in scene.objects.iter().zip(&names) {
+        let material = &scene.materials[object.material];
+        let id = file.trim_end_matches(".ply");
+        let _ = writeln!(w, "    <shape type=\"ply\" id=\"{}\">", xml_attr(id));
+        let _ = writeln!(
+            w,
+            "        <string name=\"filename\" value=\"{}\"/>",
+            xml_attr(file)
+        );
+        let _ = writeln!(w, "        <boolean name=\"face_normals\" value=\"true\"/>");
+        let _ = writeln!(
+            w,
+            "        <ref id=\"{}\"/>",
+            xml_attr(&material_id(&material.name))
+        );
+        if let MaterialKind::Light { radiance, .. } = material.kind {
+            let _ = writeln!(w, "        <emitter type=\"area\">");
+            let _ = writeln!(
+                w,
+                "            <rgb name=\"radiance\" value=\"{}\"/>",
+                list3(radiance, ", ")
+            );
+            let _ = writeln!(w, "        </emitter>");
+        }
+        let _ = writeln!(w, "    </shape>");
+    }
+    let _ = writeln!(w, "</scene>");
+    Export::of(scene, "xml", x, names, notes)
+}
+
+/// Materials and shapes share Mitsuba's id space, and our scenes reuse names across them
+/// (an object and its material both called `light`): materials get a prefix.
+fn material_id(name: &str) -> String {
+    format!("mat-{name}")
+}
+
+fn xml_attr(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('"', "&quot;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// XML comments may not hold `--`.
+fn xml_comment(s: &str) -> String {
+    s.replace("--", "- -")
+}

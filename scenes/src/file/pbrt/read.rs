@@ -1,0 +1,827 @@
+//! Reads the subset of pbrt-v4's scene format that we can render.
+
+use super::lexer::{Param, Token, tokenize};
+use crate::file::interop::{SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness};
+use crate::file::mesh::{MeshData, read_ply};
+use crate::file::scene_file::SceneSource;
+use glam::{DMat4, DQuat, DVec3, Vec3};
+use ppm_core::scene::Scene;
+use ppm_core::scene::SceneError;
+use ppm_core::scene::{Camera, MaterialKind, Object};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Reads a pbrt-v4 scene file; PLY file names are relative to its folder.
+pub fn load_pbrt_file(path: &Path) -> std::result::Result<Scene, SceneError> {
+    let s = SceneSource::read(path)?;
+    parse_pbrt(&s.text, &s.file, &s.base, &s.name)
+}
+
+/// Parses pbrt-v4 scene text. `file` names the source in errors, `base` resolves PLY files,
+/// `name` names the scene.
+pub fn parse_pbrt(
+    text: &str,
+    file: &str,
+    base: &Path,
+    name: &str,
+) -> std::result::Result<Scene, SceneError> {
+    let tokens = tokenize(text).map_err(|(line, problem)| SceneError::At {
+        file: file.to_owned(),
+        line,
+        element: "string".into(),
+        problem,
+    })?;
+    let mut reader = Reader {
+        file,
+        base,
+        builder: SceneBuilder::new(file),
+        state: State::default(),
+        stack: Vec::new(),
+        named: HashMap::new(),
+        coordinate_systems: HashMap::new(),
+        default_material: None,
+        camera: None,
+        resolution: (1280, 720),
+    };
+    let mut i = 0;
+    while i < tokens.len() {
+        let (token, line) = &tokens[i];
+        let Token::Word(directive) = token else {
+            return Err(reader.at(*line, &format!("{token:?}"), "expected a directive here"));
+        };
+        let mut end = i + 1;
+        while end < tokens.len()
+            && !matches!(&tokens[end].0, Token::Word(w) if w != "true" && w != "false")
+        {
+            end += 1;
+        }
+        let args = &tokens[i + 1..end];
+        reader.directive(directive, *line, args)?;
+        i = end;
+    }
+    if let Some((line, _)) = reader.stack.last() {
+        return Err(reader.at(*line, "AttributeBegin", "has no AttributeEnd"));
+    }
+    let Some(camera) = reader.camera.take() else {
+        return Err(SceneError::invalid(
+            file,
+            "Camera",
+            "none",
+            "the scene has no Camera \"perspective\"",
+        ));
+    };
+    let (camera, mirrored) = reader.camera_model(camera)?;
+    reader.builder.finish(name, camera, mirrored)
+}
+
+/// How the current transform was built: pbrt's usual camera set-up (`Scale -1 1 1` and
+/// `LookAt`) is kept as written so the camera is read back exactly.
+#[derive(Clone, Copy, Default, PartialEq)]
+enum Built {
+    #[default]
+    Identity,
+    Flip,
+    LookAt {
+        flip: bool,
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+    },
+    Other,
+}
+
+#[derive(Clone, Default)]
+struct State {
+    ctm: DMat4,
+    built: Built,
+    material: Option<usize>,
+    emission: Option<Vec3>,
+    reverse: bool,
+}
+
+struct CameraDirective {
+    line: u32,
+    ctm: DMat4,
+    built: Built,
+    fov: f32,
+    window: Option<[f32; 4]>,
+}
+
+struct Reader<'a> {
+    file: &'a str,
+    base: &'a Path,
+    builder: SceneBuilder,
+    state: State,
+    /// Saved states with the line of their `AttributeBegin`.
+    stack: Vec<(u32, State)>,
+    named: HashMap<String, usize>,
+    coordinate_systems: HashMap<String, DMat4>,
+    default_material: Option<usize>,
+    camera: Option<CameraDirective>,
+    resolution: (u32, u32),
+}
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+const SUBSET: &str = "outside the subset ppm renders";
+
+fn word(t: &Token) -> String {
+    match t {
+        Token::Word(s) | Token::Number(s) => s.clone(),
+        Token::Str(s) => format!("\"{s}\""),
+        Token::Open => "[".into(),
+        Token::Close => "]".into(),
+    }
+}
+
+impl Reader<'_> {
+    fn at(&self, line: u32, element: &str, problem: impl Into<String>) -> SceneError {
+        SceneError::At {
+            file: self.file.to_owned(),
+            line,
+            element: element.to_owned(),
+            problem: problem.into(),
+        }
+    }
+
+    fn directive(&mut self, name: &str, line: u32, args: &[(Token, u32)]) -> Result<()> {
+        let first_string = args.iter().find_map(|(t, _)| match t {
+            Token::Str(s) => Some(s.clone()),
+            _ => None,
+        });
+        let element = match &first_string {
+            Some(s) => format!("{name} \"{s}\""),
+            None => name.to_owned(),
+        };
+        let d = Directive {
+            reader: self.file,
+            name: element,
+            line,
+            args,
+        };
+        match name {
+            "Identity" => self.set(DMat4::IDENTITY, Built::Identity),
+            "Translate" => {
+                let v = d.numbers(3)?;
+                self.apply(DMat4::from_translation(dvec(&v)), Built::Other);
+            }
+            "Scale" => {
+                let v = d.numbers(3)?;
+                let built = if v == [-1.0, 1.0, 1.0] && self.state.built == Built::Identity {
+                    Built::Flip
+                } else {
+                    Built::Other
+                };
+                self.apply(DMat4::from_scale(dvec(&v)), built);
+            }
+            "Rotate" => {
+                let v = d.numbers(4)?;
+                let axis = dvec(&v[1..])
+                    .try_normalize()
+                    .ok_or_else(|| d.err("the rotation axis is zero"))?;
+                let r = DQuat::from_axis_angle(axis, f64::from(v[0]).to_radians());
+                self.apply(DMat4::from_quat(r), Built::Other);
+            }
+            "LookAt" => {
+                let v = d.numbers(9)?;
+                let (eye, target, up) = (vec(&v[0..3]), vec(&v[3..6]), vec(&v[6..9]));
+                let world_from_camera = look_at(eye.as_dvec3(), target.as_dvec3(), up.as_dvec3())
+                    .ok_or_else(|| {
+                    d.err("the eye equals the look-at point, or up is parallel to the view")
+                })?;
+                let built = match self.state.built {
+                    Built::Identity => Built::LookAt {
+                        flip: false,
+                        eye,
+                        target,
+                        up,
+                    },
+                    Built::Flip => Built::LookAt {
+                        flip: true,
+                        eye,
+                        target,
+                        up,
+                    },
+                    _ => Built::Other,
+                };
+                self.apply(world_from_camera.inverse(), built);
+            }
+            "Transform" | "ConcatTransform" => {
+                let v = d.numbers(16)?;
+                let m: [f64; 16] = std::array::from_fn(|k| f64::from(v[k]));
+                let m = DMat4::from_cols_array(&m);
+                if name == "Transform" {
+                    self.set(m, Built::Other);
+                } else {
+                    self.apply(m, Built::Other);
+                }
+            }
+            "CoordinateSystem" => {
+                let n = d.string(0)?;
+                self.coordinate_systems.insert(n, self.state.ctm);
+            }
+            "CoordSysTransform" => {
+                let n = d.string(0)?;
+                let m = *self
+                    .coordinate_systems
+                    .get(&n)
+                    .ok_or_else(|| d.err(format!("no coordinate system \"{n}\"")))?;
+                self.set(m, Built::Other);
+            }
+            "ReverseOrientation" => self.state.reverse = !self.state.reverse,
+            "AttributeBegin" | "TransformBegin" => self.stack.push((line, self.state.clone())),
+            "AttributeEnd" | "TransformEnd" => {
+                let (_, saved) = self
+                    .stack
+                    .pop()
+                    .ok_or_else(|| d.err("has no AttributeBegin"))?;
+                if name == "AttributeEnd" {
+                    self.state = saved;
+                } else {
+                    (self.state.ctm, self.state.built) = (saved.ctm, saved.built);
+                }
+            }
+            "Camera" => self.camera_directive(&d)?,
+            "Film" => {
+                for p in d.params(1)? {
+                    match p.name.as_str() {
+                        "xresolution" => self.resolution.0 = d.positive(&p)?,
+                        "yresolution" => self.resolution.1 = d.positive(&p)?,
+                        "cropwindow" | "pixelbounds" => {
+                            return Err(d.param_err(&p, format!("a cropped film is {SUBSET}")));
+                        }
+                        // File name, sensor, white balance: how the image is stored.
+                        _ => {}
+                    }
+                }
+            }
+            "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" | "ColorSpace" | "Option" => {}
+            "WorldBegin" => self.set(DMat4::IDENTITY, Built::Identity),
+            "WorldEnd" => {}
+            "Material" => {
+                let ty = d.string(0)?;
+                let kind = self.material(&d, &ty, &d.params(1)?)?;
+                let index = self.builder.declare(&format!("material-{line}"), kind);
+                self.state.material = Some(index);
+            }
+            "MakeNamedMaterial" => {
+                let n = d.string(0)?;
+                let params = d.params(1)?;
+                let ty = params
+                    .iter()
+                    .find(|p| p.name == "type" && p.ty == "string")
+                    .ok_or_else(|| d.err("has no \"string type\""))?;
+                let ty = d.one_string(ty)?;
+                let rest: Vec<Param> = params.into_iter().filter(|p| p.name != "type").collect();
+                let kind = self.material(&d, &ty, &rest)?;
+                let index = self.builder.declare(&n, kind);
+                self.named.insert(n, index);
+            }
+            "NamedMaterial" => {
+                let n = d.string(0)?;
+                let index = *self
+                    .named
+                    .get(&n)
+                    .ok_or_else(|| d.err(format!("no MakeNamedMaterial \"{n}\" before it")))?;
+                self.state.material = Some(index);
+            }
+            "AreaLightSource" => self.area_light(&d)?,
+            "Shape" => self.shape(&d)?,
+            "LightSource" => {
+                return Err(d.err(format!(
+                    "{SUBSET}: light comes only from AreaLightSource \"diffuse\" on shapes"
+                )));
+            }
+            "Texture" | "MakeNamedMedium" | "MediumInterface" | "ObjectBegin" | "ObjectEnd"
+            | "ObjectInstance" | "Include" | "Import" | "Attribute" | "ActiveTransform"
+            | "TransformTimes" => return Err(d.err(SUBSET)),
+            _ => return Err(d.err("unknown directive")),
+        }
+        Ok(())
+    }
+
+    fn set(&mut self, m: DMat4, built: Built) {
+        self.state.ctm = m;
+        self.state.built = built;
+    }
+
+    /// pbrt post-multiplies: a directive acts on the object before those written above it.
+    fn apply(&mut self, m: DMat4, built: Built) {
+        self.state.ctm *= m;
+        self.state.built = built;
+    }
+
+    fn camera_directive(&mut self, d: &Directive) -> Result<()> {
+        let ty = d.string(0)?;
+        if ty != "perspective" {
+            return Err(d.err(format!("{SUBSET}: only a perspective (pinhole) camera")));
+        }
+        let mut fov = 90.0;
+        let mut window = None;
+        for p in d.params(1)? {
+            match p.name.as_str() {
+                "fov" => fov = d.float(&p)?,
+                "screenwindow" => {
+                    let v = d.floats(&p)?;
+                    window = Some(
+                        <[f32; 4]>::try_from(v.as_slice())
+                            .map_err(|_| d.param_err(&p, "must have 4 numbers"))?,
+                    );
+                }
+                "lensradius" if d.float(&p)? == 0.0 => {}
+                "focaldistance" | "shutteropen" | "shutterclose" | "frameaspectratio" => {}
+                _ => return Err(d.param_err(&p, "unknown parameter of a perspective camera, or one outside the subset ppm renders")),
+            }
+        }
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(d.err(format!(
+                "fov = {fov}: must lie strictly between 0 and 180 degrees"
+            )));
+        }
+        self.coordinate_systems
+            .insert("camera".into(), self.state.ctm.inverse());
+        self.camera = Some(CameraDirective {
+            line: d.line,
+            ctm: self.state.ctm,
+            built: self.state.built,
+            fov,
+            window,
+        });
+        Ok(())
+    }
+
+    /// Our camera from pbrt's: pbrt's `fov` spans the shorter image side (or the screen
+    /// window's unit extent); its camera space is left-handed, so a camera without a
+    /// mirroring transform sees the world mirrored relative to ours.
+    fn camera_model(&self, c: CameraDirective) -> Result<(Camera, bool)> {
+        let (width, height) = self.resolution;
+        let here = |p: &str| self.at(c.line, "Camera \"perspective\"", p.to_owned());
+        let aspect = width as f32 / height as f32;
+        let y1 = match c.window {
+            Some([x0, x1, y0, y1]) => {
+                if x0 != -x1 || y0 != -y1 || x1 <= 0.0 || y1 <= 0.0 {
+                    return Err(here(
+                        "an off-centre or empty screenwindow is outside the subset ppm renders",
+                    ));
+                }
+                if ((x1 / y1) / aspect - 1.0).abs() > 1e-4 {
+                    return Err(here(
+                        "a screenwindow whose shape is not the image's stretches the image: outside the subset ppm renders",
+                    ));
+                }
+                y1
+            }
+            None if aspect >= 1.0 => 1.0,
+            None => 1.0 / aspect,
+        };
+        let fov_deg = if y1 == 1.0 {
+            c.fov
+        } else {
+            let half = (f64::from(c.fov).to_radians() * 0.5).tan() * f64::from(y1);
+            (2.0 * half.atan()).to_degrees() as f32
+        };
+        let (eye, target, up, mirrored) = match c.built {
+            Built::LookAt {
+                flip,
+                eye,
+                target,
+                up,
+            } => (eye, target, up, !flip),
+            _ => camera_pose(c.ctm.inverse(), false)
+                .ok_or_else(|| here("the camera transform is singular"))?,
+        };
+        Ok((
+            Camera {
+                eye,
+                look_at: target,
+                up,
+                fov_deg,
+                width,
+                height,
+            },
+            mirrored,
+        ))
+    }
+
+    fn material(&mut self, d: &Directive, ty: &str, params: &[Param]) -> Result<MaterialKind> {
+        let smooth = |p: &Param| -> Result<()> {
+            if d.float(p)? != 0.0 {
+                return Err(d.param_err(p, format!("a rough surface is {SUBSET}")));
+            }
+            Ok(())
+        };
+        let unknown = |p: &Param| {
+            d.param_err(
+                p,
+                format!(
+                    "unknown parameter of a {ty} material, or one outside the subset ppm renders"
+                ),
+            )
+        };
+        match ty {
+            "diffuse" => {
+                let mut albedo = Vec3::splat(0.5);
+                for p in params {
+                    match p.name.as_str() {
+                        "reflectance" => albedo = d.colour(p, Some(1.0))?,
+                        _ => return Err(unknown(p)),
+                    }
+                }
+                Ok(MaterialKind::Diffuse { albedo })
+            }
+            "conductor" => {
+                let mut reflectance = None;
+                for p in params {
+                    match p.name.as_str() {
+                        "reflectance" => reflectance = Some(d.colour(p, Some(1.0))?),
+                        "roughness" | "uroughness" | "vroughness" => smooth(p)?,
+                        "remaproughness" => {}
+                        "eta" | "k" => {
+                            return Err(d.param_err(p, format!("a conductor given by eta and k is {SUBSET}: give \"rgb reflectance\"")));
+                        }
+                        _ => return Err(unknown(p)),
+                    }
+                }
+                let reflectance = reflectance.ok_or_else(|| {
+                    d.err(format!("a conductor without \"rgb reflectance\" (pbrt's default is copper's eta and k) is {SUBSET}"))
+                })?;
+                Ok(MaterialKind::Mirror { reflectance })
+            }
+            "dielectric" => {
+                let mut ior = 1.5;
+                for p in params {
+                    match p.name.as_str() {
+                        "eta" if p.ty == "float" => {
+                            ior = d.float(p)?;
+                            if ior <= 0.0 {
+                                return Err(d.param_err(p, "must be a positive number"));
+                            }
+                        }
+                        "eta" => {
+                            return Err(
+                                d.param_err(p, format!("a dispersive (spectral) eta is {SUBSET}"))
+                            );
+                        }
+                        "roughness" | "uroughness" | "vroughness" => smooth(p)?,
+                        "remaproughness" => {}
+                        _ => return Err(unknown(p)),
+                    }
+                }
+                Ok(MaterialKind::Glass { ior })
+            }
+            _ => Err(d.err(format!(
+                "material \"{ty}\" is {SUBSET} (diffuse, conductor, dielectric)"
+            ))),
+        }
+    }
+
+    fn area_light(&mut self, d: &Directive) -> Result<()> {
+        let ty = d.string(0)?;
+        if ty != "diffuse" {
+            return Err(d.err(format!("{SUBSET}: only \"diffuse\" area lights")));
+        }
+        let (mut radiance, mut scale) = (Vec3::ONE, 1.0f32);
+        for p in d.params(1)? {
+            match p.name.as_str() {
+                "L" => radiance = d.colour(&p, None)?,
+                "scale" => scale = d.float(&p)?,
+                "twosided" => {
+                    if d.boolean(&p)? {
+                        return Err(d.param_err(&p, format!("a two-sided light is {SUBSET}: ours emit on one side")));
+                    }
+                }
+                _ => return Err(d.param_err(&p, "unknown parameter of a diffuse area light, or one outside the subset ppm renders")),
+            }
+        }
+        if scale < 0.0 {
+            return Err(d.err(format!("scale = {scale}: must not be negative")));
+        }
+        self.state.emission = Some(if scale == 1.0 {
+            radiance
+        } else {
+            radiance * scale
+        });
+        Ok(())
+    }
+
+    fn shape(&mut self, d: &Directive) -> Result<()> {
+        let ty = d.string(0)?;
+        let params = d.params(1)?;
+        let mesh = match ty.as_str() {
+            "trianglemesh" => {
+                let mut mesh = MeshData::default();
+                let mut indices = None;
+                for p in &params {
+                    match p.name.as_str() {
+                        "P" => mesh.positions = d.points(p)?,
+                        "N" => mesh.normals = Some(d.points(p)?),
+                        "indices" => indices = Some(d.integers(p)?),
+                        "uv" | "st" | "S" | "faceIndices" => {}
+                        _ => return Err(d.param_err(p, "unknown parameter of a triangle mesh, or one outside the subset ppm renders")),
+                    }
+                }
+                let indices = match indices {
+                    Some(i) => i,
+                    None if mesh.positions.len() == 3 => vec![0, 1, 2],
+                    None => return Err(d.err("has no \"integer indices\"")),
+                };
+                if indices.len() % 3 != 0 {
+                    return Err(d.err(format!("{} indices: not a multiple of 3", indices.len())));
+                }
+                let count = mesh.positions.len() as u32;
+                if let Some(i) = indices.iter().find(|&&i| i >= count) {
+                    return Err(d.err(format!("index {i} is beyond the {count} points")));
+                }
+                if mesh
+                    .normals
+                    .as_ref()
+                    .is_some_and(|n| n.len() != mesh.positions.len())
+                {
+                    return Err(d.err("\"N\" does not have one normal per point"));
+                }
+                mesh.triangles = indices
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect();
+                mesh
+            }
+            "plymesh" => {
+                let mut filename = None;
+                for p in &params {
+                    match p.name.as_str() {
+                        "filename" => filename = Some((d.one_string(p)?, p.line)),
+                        "edgelength" => {}
+                        _ => return Err(d.param_err(
+                            p,
+                            "unknown parameter of a plymesh, or one outside the subset ppm renders",
+                        )),
+                    }
+                }
+                let (name, _) = filename.ok_or_else(|| d.err("has no \"string filename\""))?;
+                read_ply(&self.base.join(&name)).map_err(|e| d.err(e))?
+            }
+            _ => {
+                return Err(d.err(format!("{SUBSET} (trianglemesh, plymesh)")));
+            }
+        };
+        let to_world = Some(self.state.ctm).filter(|m| *m != DMat4::IDENTITY);
+        let flip = self.state.reverse ^ swaps_handedness(to_world);
+        // pbrt negates the normals under ReverseOrientation (not for a mirroring transform).
+        let triangles = mesh_triangles(&mesh, to_world, flip, self.state.reverse);
+        if triangles.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(d.err("a vertex is not finite"));
+        }
+        let surface = match self.state.material {
+            Some(s) => s,
+            None => *self.default_material.get_or_insert_with(|| {
+                self.builder.declare(
+                    "default",
+                    MaterialKind::Diffuse {
+                        albedo: Vec3::splat(0.5),
+                    },
+                )
+            }),
+        };
+        let material = self
+            .builder
+            .material_for(surface, self.state.emission)
+            .map_err(|problem| d.err(problem))?;
+        let name = params
+            .iter()
+            .find(|p| p.name == "filename")
+            .and_then(|p| d.one_string(p).ok())
+            .and_then(|f| {
+                Path::new(&f)
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+            })
+            .unwrap_or_else(|| format!("shape-{}", d.line));
+        self.builder.objects.push(Object {
+            name,
+            material,
+            triangles,
+        });
+        Ok(())
+    }
+}
+
+fn dvec(v: &[f32]) -> DVec3 {
+    DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
+}
+
+fn vec(v: &[f32]) -> Vec3 {
+    Vec3::new(v[0], v[1], v[2])
+}
+
+/// A directive and its arguments, with the helpers that read them and name it in errors.
+struct Directive<'a> {
+    reader: &'a str,
+    name: String,
+    line: u32,
+    args: &'a [(Token, u32)],
+}
+
+impl Directive<'_> {
+    fn err(&self, problem: impl Into<String>) -> SceneError {
+        SceneError::At {
+            file: self.reader.to_owned(),
+            line: self.line,
+            element: self.name.clone(),
+            problem: problem.into(),
+        }
+    }
+
+    fn param_err(&self, p: &Param, problem: impl Into<String>) -> SceneError {
+        SceneError::At {
+            file: self.reader.to_owned(),
+            line: p.line,
+            element: format!("{} \"{} {}\"", self.name, p.ty, p.name),
+            problem: problem.into(),
+        }
+    }
+
+    fn parse_number(&self, line: u32, t: &Token) -> Result<f32> {
+        match t {
+            Token::Number(s) => s
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| SceneError::At {
+                    file: self.reader.to_owned(),
+                    line,
+                    element: self.name.clone(),
+                    problem: format!("\"{s}\" is not a finite number"),
+                }),
+            other => Err(SceneError::At {
+                file: self.reader.to_owned(),
+                line,
+                element: self.name.clone(),
+                problem: format!("{} is not a number", word(other)),
+            }),
+        }
+    }
+
+    /// Exactly `n` numbers, bare or in one bracket.
+    fn numbers(&self, n: usize) -> Result<Vec<f32>> {
+        let values: Vec<&(Token, u32)> = self
+            .args
+            .iter()
+            .filter(|(t, _)| !matches!(t, Token::Open | Token::Close))
+            .collect();
+        if values.len() != n {
+            return Err(self.err(format!("takes {n} numbers, has {}", values.len())));
+        }
+        values
+            .iter()
+            .map(|(t, l)| self.parse_number(*l, t))
+            .collect()
+    }
+
+    /// The `k`-th positional string.
+    fn string(&self, k: usize) -> Result<String> {
+        match self.args.get(k) {
+            Some((Token::Str(s), _)) => Ok(s.clone()),
+            _ => Err(self.err("a quoted name is missing")),
+        }
+    }
+
+    /// The parameter list after `skip` positional strings.
+    fn params(&self, skip: usize) -> Result<Vec<Param>> {
+        let mut out = Vec::new();
+        let mut i = skip;
+        while i < self.args.len() {
+            let (t, line) = &self.args[i];
+            let Token::Str(decl) = t else {
+                return Err(SceneError::At {
+                    file: self.reader.to_owned(),
+                    line: *line,
+                    element: self.name.clone(),
+                    problem: format!("expected a \"type name\" parameter, found {}", word(t)),
+                });
+            };
+            let mut parts = decl.split_whitespace();
+            let (Some(ty), Some(name), None) = (parts.next(), parts.next(), parts.next()) else {
+                return Err(SceneError::At {
+                    file: self.reader.to_owned(),
+                    line: *line,
+                    element: self.name.clone(),
+                    problem: format!("\"{decl}\" is not a \"type name\" parameter"),
+                });
+            };
+            i += 1;
+            let mut values = Vec::new();
+            match self.args.get(i) {
+                Some((Token::Open, _)) => {
+                    i += 1;
+                    while let Some((t, _)) = self.args.get(i) {
+                        i += 1;
+                        if *t == Token::Close {
+                            break;
+                        }
+                        values.push(t.clone());
+                    }
+                }
+                Some((t, _)) => {
+                    values.push(t.clone());
+                    i += 1;
+                }
+                None => {}
+            }
+            out.push(Param {
+                ty: ty.to_owned(),
+                name: name.to_owned(),
+                values,
+                line: *line,
+            });
+        }
+        Ok(out)
+    }
+
+    fn floats(&self, p: &Param) -> Result<Vec<f32>> {
+        p.values
+            .iter()
+            .map(|t| {
+                self.parse_number(p.line, t).map_err(|e| match e {
+                    SceneError::At { problem, .. } => self.param_err(p, problem),
+                    other => other,
+                })
+            })
+            .collect()
+    }
+
+    fn float(&self, p: &Param) -> Result<f32> {
+        match self.floats(p)?.as_slice() {
+            [v] => Ok(*v),
+            v => Err(self.param_err(p, format!("{} values: expected one number", v.len()))),
+        }
+    }
+
+    fn positive(&self, p: &Param) -> Result<u32> {
+        let v = self.float(p)?;
+        if v >= 1.0 && v.fract() == 0.0 && v <= u32::MAX as f32 {
+            Ok(v as u32)
+        } else {
+            Err(self.param_err(p, format!("{v} is not a positive integer")))
+        }
+    }
+
+    fn integers(&self, p: &Param) -> Result<Vec<u32>> {
+        p.values
+            .iter()
+            .map(|t| match t {
+                Token::Number(s) => s
+                    .parse::<u32>()
+                    .map_err(|_| self.param_err(p, format!("\"{s}\" is not an index"))),
+                other => Err(self.param_err(p, format!("{} is not an index", word(other)))),
+            })
+            .collect()
+    }
+
+    fn points(&self, p: &Param) -> Result<Vec<Vec3>> {
+        let v = self.floats(p)?;
+        if v.len() % 3 != 0 {
+            return Err(self.param_err(p, format!("{} numbers: not a multiple of 3", v.len())));
+        }
+        Ok(v.chunks_exact(3).map(vec).collect())
+    }
+
+    fn one_string(&self, p: &Param) -> Result<String> {
+        match p.values.as_slice() {
+            [Token::Str(s)] => Ok(s.clone()),
+            _ => Err(self.param_err(p, "expected one quoted string")),
+        }
+    }
+
+    fn boolean(&self, p: &Param) -> Result<bool> {
+        match p.values.as_slice() {
+            [Token::Word(w) | Token::Str(w)] if w == "true" => Ok(true),
+            [Token::Word(w) | Token::Str(w)] if w == "false" => Ok(false),
+            _ => Err(self.param_err(p, "expected true or false")),
+        }
+    }
+
+    /// An `rgb` colour (or a `float` grey), in [0, max] when `max` is given.
+    fn colour(&self, p: &Param, max: Option<f32>) -> Result<Vec3> {
+        let c = match p.ty.as_str() {
+            "rgb" | "color" => match self.floats(p)?.as_slice() {
+                [r, g, b] => Vec3::new(*r, *g, *b),
+                v => return Err(self.param_err(p, format!("{} values: an rgb has 3", v.len()))),
+            },
+            "float" => Vec3::splat(self.float(p)?),
+            "texture" => return Err(self.param_err(p, format!("a textured parameter is {SUBSET}"))),
+            _ => return Err(self.param_err(p, format!("a {} value is {SUBSET} (rgb only)", p.ty))),
+        };
+        for v in c.to_array() {
+            if v < 0.0 {
+                return Err(self.param_err(p, format!("{v} is negative")));
+            }
+            if let Some(max) = max.filter(|m| v > *m) {
+                return Err(self.param_err(
+                    p,
+                    format!("{v} is above {max} (a surface cannot reflect more than it receives)"),
+                ));
+            }
+        }
+        Ok(c)
+    }
+}

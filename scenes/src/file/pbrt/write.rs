@@ -1,0 +1,139 @@
+//! Writes a [`Scene`] as a pbrt-v4 scene file with PLY meshes beside it.
+
+use crate::file::interop::{Export, ExportOptions, common_notes, list3, mesh_names, scene_stem};
+use ppm_core::scene::{MaterialKind, Scene};
+use std::fmt::Write;
+
+/// Path depth given to pbrt's path tracer: beyond the 16 + 16 bounces our eye and photon
+/// paths may take together, and Russian roulette ends paths long before it.
+pub const PBRT_MAX_DEPTH: u32 = 100;
+
+/// The scene in pbrt-v4's format, meshes as `plymesh` shapes.
+///
+/// `Scale -1 1 1` before `LookAt` turns pbrt's left-handed camera space into our image
+/// orientation; `WorldBegin` resets the transform, so shapes are in world space. Diffuse and
+/// dielectric surfaces are exact; a mirror is pbrt's `conductor` given `reflectance`, which
+/// pbrt treats as the Fresnel reflectance at normal incidence (listed in the notes).
+pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
+    let names = mesh_names(scene);
+    let mut notes = common_notes(scene, options);
+    notes.push(
+        "pbrt-v4 renders spectrally: RGB reflectances and radiances are turned into spectra \
+         and back, so colours match ours closely but not bit for bit"
+            .into(),
+    );
+    if scene
+        .materials
+        .iter()
+        .any(|m| matches!(m.kind, MaterialKind::Mirror { .. }))
+    {
+        notes.push(
+            "pbrt-v4 has no constant-reflectance mirror: a mirror is a conductor whose \
+             reflectance is ours at normal incidence (clamped to 0.9999) and rises towards 1 at \
+             grazing angles"
+                .into(),
+        );
+    }
+    notes.push(format!(
+        "pbrt's path tracer stops at depth {PBRT_MAX_DEPTH} with Russian roulette; ours stops \
+         eye paths after 16 specular bounces and photons after 16 bounces"
+    ));
+    let c = &scene.camera;
+    let mut t = String::new();
+    let w = &mut t;
+    let _ = writeln!(
+        w,
+        "# Written by ppm export: scene \"{}\", frame {}.",
+        scene.name.replace('\n', " "),
+        options.frame
+    );
+    let _ = writeln!(w, "# Not expressed exactly:");
+    for n in &notes {
+        let _ = writeln!(w, "# - {n}");
+    }
+    let _ = writeln!(w, "Scale -1 1 1");
+    let _ = writeln!(
+        w,
+        "LookAt {}  {}  {}",
+        list3(c.eye, " "),
+        list3(c.look_at, " "),
+        list3(c.up, " ")
+    );
+    // pbrt's fov spans the shorter image side; a taller-than-wide image names the vertical
+    // extent of the screen window so that fov stays vertical.
+    let window = if c.width < c.height {
+        format!(
+            " \"float screenwindow\" [ {} {} -1 1 ]",
+            -(c.width as f32 / c.height as f32),
+            c.width as f32 / c.height as f32
+        )
+    } else {
+        String::new()
+    };
+    let _ = writeln!(
+        w,
+        "Camera \"perspective\" \"float fov\" [ {} ]{window}",
+        c.fov_deg
+    );
+    let _ = writeln!(
+        w,
+        "Sampler \"independent\" \"integer pixelsamples\" [ {} ]",
+        options.samples_per_pixel
+    );
+    let _ = writeln!(
+        w,
+        "Integrator \"path\" \"integer maxdepth\" [ {PBRT_MAX_DEPTH} ]"
+    );
+    let _ = writeln!(w, "PixelFilter \"box\"");
+    let _ = writeln!(
+        w,
+        "Film \"rgb\" \"integer xresolution\" [ {} ] \"integer yresolution\" [ {} ] \"string filename\" [ \"{}.exr\" ]",
+        c.width,
+        c.height,
+        scene_stem(scene)
+    );
+    let _ = writeln!(w, "WorldBegin");
+    for m in &scene.materials {
+        let name = quoted(&m.name);
+        let _ = match &m.kind {
+            MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => writeln!(
+                w,
+                "MakeNamedMaterial {name} \"string type\" [ \"diffuse\" ] \"rgb reflectance\" [ {} ]",
+                list3(*albedo, " ")
+            ),
+            MaterialKind::Mirror { reflectance } => writeln!(
+                w,
+                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] \"rgb reflectance\" [ {} ] \"float roughness\" [ 0 ]",
+                list3(*reflectance, " ")
+            ),
+            MaterialKind::Glass { ior } => writeln!(
+                w,
+                "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] \"float roughness\" [ 0 ]"
+            ),
+        };
+    }
+    for (object, file) in scene.objects.iter().zip(&names) {
+        let material = &scene.materials[object.material];
+        let _ = writeln!(w, "AttributeBegin");
+        let _ = writeln!(w, "  NamedMaterial {}", quoted(&material.name));
+        if let MaterialKind::Light { radiance, .. } = material.kind {
+            let _ = writeln!(
+                w,
+                "  AreaLightSource \"diffuse\" \"rgb L\" [ {} ]",
+                list3(radiance, " ")
+            );
+        }
+        let _ = writeln!(
+            w,
+            "  Shape \"plymesh\" \"string filename\" [ {} ]",
+            quoted(file)
+        );
+        let _ = writeln!(w, "AttributeEnd");
+    }
+    Export::of(scene, "pbrt", t, names, notes)
+}
+
+/// A pbrt string literal (pbrt strings cannot hold a double quote or a line break).
+fn quoted(s: &str) -> String {
+    format!("\"{}\"", s.replace(['"', '\n'], "_"))
+}

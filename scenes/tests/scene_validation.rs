@@ -1,0 +1,184 @@
+//! Bad scene files are rejected before rendering with a message naming the file, the field and
+//! the value. Each message is pinned by an insta snapshot, so a change in wording is reviewed.
+
+use ppm_core::params::RenderParams;
+use scenes::file::parse_scene;
+use std::path::Path;
+
+/// A small valid scene: a lit floor seen from above.
+const VALID: &str = r#"
+name = "probe"
+
+[camera]
+eye = [0.0, 5.0, 0.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, 1.0]
+fov = 40.0
+width = 8
+height = 8
+
+[materials]
+white = { type = "diffuse", albedo = [0.5, 0.5, 0.5] }
+lamp = { type = "light", radiance = [1.0, 1.0, 1.0] }
+
+[[objects]]
+name = "floor"
+material = "white"
+quads = [[[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]]]
+
+[[objects]]
+name = "lamp"
+material = "lamp"
+quads = [[[-0.1, 2.0, -0.1], [-0.1, 2.0, 0.1], [0.1, 2.0, 0.1], [0.1, 2.0, -0.1]]]
+"#;
+
+/// The error message for `VALID` with `from` replaced by `to`.
+fn error_for(from: &str, to: &str) -> String {
+    assert!(VALID.contains(from), "probe text lacks {from:?}");
+    let text = VALID.replacen(from, to, 1);
+    match parse_scene(&text, "probe.toml", Path::new("scenes")) {
+        Ok(_) => panic!("accepted {to:?}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn the_probe_scene_is_valid() {
+    let scene = parse_scene(VALID, "probe.toml", Path::new(".")).unwrap();
+    assert_eq!(scene.triangle_count(), 4);
+    RenderParams::for_scene(&scene)
+        .validate("probe.toml")
+        .unwrap();
+}
+
+#[test]
+fn nan_vertex() {
+    insta::assert_snapshot!(error_for("[1.0, 0.0, -1.0]", "[1.0, nan, -1.0]"));
+}
+
+#[test]
+fn infinite_camera_position() {
+    insta::assert_snapshot!(error_for("eye = [0.0, 5.0, 0.0]", "eye = [0.0, inf, 0.0]"));
+}
+
+#[test]
+fn negative_albedo() {
+    insta::assert_snapshot!(error_for(
+        "albedo = [0.5, 0.5, 0.5]",
+        "albedo = [0.5, -0.1, 0.5]"
+    ));
+}
+
+#[test]
+fn albedo_above_one() {
+    insta::assert_snapshot!(error_for(
+        "albedo = [0.5, 0.5, 0.5]",
+        "albedo = [0.5, 1.3, 0.5]"
+    ));
+}
+
+#[test]
+fn negative_radiance() {
+    insta::assert_snapshot!(error_for(
+        "radiance = [1.0, 1.0, 1.0]",
+        "radiance = [1.0, 1.0, -2.0]"
+    ));
+}
+
+#[test]
+fn zero_area_light() {
+    insta::assert_snapshot!(error_for(
+        "[[-0.1, 2.0, -0.1], [-0.1, 2.0, 0.1], [0.1, 2.0, 0.1], [0.1, 2.0, -0.1]]",
+        "[[-0.1, 2.0, -0.1], [-0.1, 2.0, -0.1], [-0.1, 2.0, -0.1], [-0.1, 2.0, -0.1]]"
+    ));
+}
+
+#[test]
+fn camera_looking_at_itself() {
+    insta::assert_snapshot!(error_for(
+        "look_at = [0.0, 0.0, 0.0]",
+        "look_at = [0.0, 5.0, 0.0]"
+    ));
+}
+
+#[test]
+fn camera_up_along_the_view() {
+    insta::assert_snapshot!(error_for("up = [0.0, 0.0, 1.0]", "up = [0.0, 1.0, 0.0]"));
+}
+
+#[test]
+fn zero_field_of_view() {
+    insta::assert_snapshot!(error_for("fov = 40.0", "fov = 0.0"));
+}
+
+#[test]
+fn zero_width() {
+    insta::assert_snapshot!(error_for("width = 8", "width = 0"));
+}
+
+#[test]
+fn missing_obj() {
+    insta::assert_snapshot!(error_for(
+        "quads = [[[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [1.0, 0.0, 1.0], [-1.0, 0.0, 1.0]]]",
+        "obj = \"no-such-mesh.obj\""
+    ));
+}
+
+#[test]
+fn empty_scene() {
+    let text = VALID.split("[[objects]]").next().unwrap();
+    let err = parse_scene(text, "probe.toml", Path::new(".")).unwrap_err();
+    insta::assert_snapshot!(err.to_string());
+}
+
+#[test]
+fn unknown_material_name() {
+    insta::assert_snapshot!(error_for("material = \"white\"", "material = \"whte\""));
+}
+
+#[test]
+fn unknown_material_type() {
+    insta::assert_snapshot!(error_for("type = \"diffuse\"", "type = \"velvet\""));
+}
+
+#[test]
+fn misspelt_field() {
+    insta::assert_snapshot!(error_for("fov = 40.0", "fov = 40.0\nfocal = 3.0"));
+}
+
+#[test]
+fn scene_without_light() {
+    insta::assert_snapshot!(error_for("material = \"lamp\"", "material = \"white\""));
+}
+
+#[test]
+fn glass_with_negative_ior() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "glass = { type = \"glass\", ior = -1.5 }\nlamp = { type"
+    ));
+}
+
+#[test]
+fn move_of_unknown_object() {
+    insta::assert_snapshot!(error_for(
+        "[[objects]]\nname = \"floor\"",
+        "[[moves]]\nobject = \"flor\"\ntranslate = [1.0, 0.0, 0.0]\n\n[[objects]]\nname = \"floor\""
+    ));
+}
+
+#[test]
+fn alpha_out_of_range() {
+    insta::assert_snapshot!(error_for(
+        "[materials]",
+        "[render]\nalpha = 1.5\n\n[materials]"
+    ));
+}
+
+#[test]
+fn command_line_overrides_are_checked_too() {
+    let scene = parse_scene(VALID, "probe.toml", Path::new(".")).unwrap();
+    let mut params = RenderParams::for_scene(&scene);
+    params.initial_radius = f32::NAN;
+    insta::assert_snapshot!(params.validate("command line").unwrap_err().to_string());
+}
