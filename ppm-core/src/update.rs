@@ -54,7 +54,8 @@ pub fn ppm_update(s: Statistics, m: f32, dtau: [f32; 3], alpha: f32) -> Statisti
 /// is computed directly. Clamps: once the negative photons reach the count (`m >= n`, which
 /// includes `n - alpha*m <= 0`) the hit point is emptied (`n = 0`, `tau = 0`,
 /// `r2 = r2_initial`) rather than divided by zero or a negative number; `r2` never exceeds
-/// `r2_initial`; every `tau` channel is clamped at zero.
+/// `r2_initial`, and `tau` grows by the same factor as `r2`, so the flux density never
+/// rises by removing photons; every `tau` channel is clamped at zero.
 #[inline]
 pub fn compensation_update(
     s: Statistics,
@@ -74,13 +75,18 @@ pub fn compensation_update(
         };
     }
     let ratio = 1.0 + (1.0 - alpha) * (m / (s.n - m));
+    // The flux grows with the disc it now stands for: where the cap stops the disc, the flux
+    // stops with it, so the density `tau / r2` never grows by what the cap cut off (with `m`
+    // near `n` the ratio is unbounded, and a flux scaled by it alone blew kept slots up).
+    let r2 = (s.r2 * ratio).min(r2_initial);
+    let grown = if s.r2 > 0.0 { r2 / s.r2 } else { ratio };
     Statistics {
         n: s.n - alpha * m,
-        r2: (s.r2 * ratio).min(r2_initial),
+        r2,
         tau: [
-            ((s.tau[0] + dtau[0]) * ratio).max(0.0),
-            ((s.tau[1] + dtau[1]) * ratio).max(0.0),
-            ((s.tau[2] + dtau[2]) * ratio).max(0.0),
+            ((s.tau[0] + dtau[0]) * grown).max(0.0),
+            ((s.tau[1] + dtau[1]) * grown).max(0.0),
+            ((s.tau[2] + dtau[2]) * grown).max(0.0),
         ],
     }
 }
@@ -142,6 +148,21 @@ mod tests {
             n,
             r2,
             tau: [tau; 3],
+        }
+    }
+
+    /// Negative photons nearly as many as the count, on a converged disc: the ratio is huge,
+    /// the radius stops at its initial value, and the radiance must not rise (the photons
+    /// removed carried flux); scaling the flux by the ratio alone made it 300 times brighter.
+    #[test]
+    fn removing_photons_never_raises_the_radiance() {
+        let s = stats(100.0, 1.0, 50.0);
+        let before = radiance(s.tau, s.r2, 1e4)[0];
+        for (m, removed) in [(99.9, -0.5), (50.0, -20.0), (1.0, -0.4), (99.999, 0.0)] {
+            let after = compensation_update(s, m, [removed; 3], 0.7, 4.0);
+            assert!(after.r2 <= 4.0 && after.r2 >= s.r2, "{after:?}");
+            let r = radiance(after.tau, after.r2, 1e4)[0];
+            assert!(r <= before * (1.0 + 1e-5), "m {m}: radiance {before} -> {r}");
         }
     }
 

@@ -34,7 +34,10 @@ fn compensation_update(s: Statistics, m: f32, dtau: vec3<f32>, alpha: f32, r2_in
         return Statistics(0.0, r2_initial, vec3<f32>(0.0));
     }
     let ratio = 1.0 + (1.0 - alpha) * (m / (s.n - m));
-    return Statistics(s.n - alpha * m, min(s.r2 * ratio, r2_initial), max((s.tau + dtau) * ratio, vec3<f32>(0.0)));
+    // The flux grows with the disc, capped alike (ppm_core::update::compensation_update).
+    let r2 = min(s.r2 * ratio, r2_initial);
+    let grown = select(ratio, r2 / s.r2, s.r2 > 0.0);
+    return Statistics(s.n - alpha * m, r2, max((s.tau + dtau) * grown, vec3<f32>(0.0)));
 }
 
 fn luminance(c: vec3<f32>) -> f32 {
