@@ -58,8 +58,12 @@ pub struct CompiledScene {
     pub extent: f32,
     /// Total emitted power `sum(pi * A * Le)`.
     pub light_power: Vec3,
-    /// Time obvhs spent building the BVH.
+    /// Time obvhs spent building the BVH (or [`recompile_moved`](crate::refit::recompile_moved)
+    /// refitting it).
     pub bvh_build_time: Duration,
+    /// [`tree_cost`] of the BVH when obvhs last built it from scratch: the bar a refitted tree
+    /// is held to.
+    pub bvh_built_cost: f32,
     /// Levels of the deepest leaf (the root is level 1): bounds a traversal stack.
     pub bvh_depth: usize,
     /// The boxes of the objects a local move moves, in both poses: its photon passes store
@@ -133,17 +137,9 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         })
         .collect();
     let light_power = assign_light_distribution(&mut lights, &materials);
-    let nodes: Vec<BvhNode> = bvh
-        .nodes
-        .iter()
-        .map(|n| BvhNode {
-            min: n.aabb.min.into(),
-            first: n.first_index,
-            max: n.aabb.max.into(),
-            count: n.prim_count,
-        })
-        .collect();
+    let nodes = flat_nodes(&bvh);
     let bvh_depth = tree_depth(&nodes);
+    let bvh_built_cost = tree_cost(&bvh);
     let (lo, hi) = bounds(&triangles);
     let extent = (hi - lo).length();
     CompiledScene {
@@ -167,6 +163,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         extent,
         light_power,
         bvh_build_time,
+        bvh_built_cost,
         bvh_depth,
         movers: Vec::new(),
     }
@@ -187,6 +184,25 @@ pub fn mover_boxes(
         .flat_map(|scene| objects.iter().map(move |&o| scene.objects[o].bounds()))
         .map(|(lo, hi)| GpuBounds::new(lo - margin, hi + margin))
         .collect()
+}
+
+/// obvhs's nodes as the backends read them.
+pub(crate) fn flat_nodes(bvh: &Bvh2) -> Vec<BvhNode> {
+    bvh.nodes
+        .iter()
+        .map(|n| BvhNode {
+            min: n.aabb.min.into(),
+            first: n.first_index,
+            max: n.aabb.max.into(),
+            count: n.prim_count,
+        })
+        .collect()
+}
+
+/// The summed half surface areas of a BVH's nodes: in proportion to the nodes a ray crossing
+/// the scene visits, which is what a refit lets grow.
+pub(crate) fn tree_cost(bvh: &Bvh2) -> f32 {
+    bvh.nodes.iter().map(|n| n.aabb.half_area()).sum()
 }
 
 /// Depth of the flattened tree, walked iteratively (the deepest tree must not overflow this).
@@ -254,7 +270,7 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
     }
 }
 
-fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
+pub(crate) fn gpu_triangle(t: &[Vec3; 3], material: u32, object: u32) -> GpuTriangle {
     let e1 = t[1] - t[0];
     let e2 = t[2] - t[0];
     GpuTriangle {
@@ -321,7 +337,7 @@ pub fn gpu_camera(c: &Camera, width: u32, height: u32) -> GpuCamera {
     }
 }
 
-fn bounds(triangles: &[GpuTriangle]) -> (Vec3, Vec3) {
+pub(crate) fn bounds(triangles: &[GpuTriangle]) -> (Vec3, Vec3) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
     for t in triangles {

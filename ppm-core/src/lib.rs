@@ -28,6 +28,7 @@ pub mod params;
 pub mod passes;
 pub mod qmc;
 pub mod reach;
+pub mod refit;
 pub mod region;
 pub mod rng;
 pub mod sampling;

@@ -162,7 +162,10 @@ mod tests {
             let after = compensation_update(s, m, [removed; 3], 0.7, 4.0);
             assert!(after.r2 <= 4.0 && after.r2 >= s.r2, "{after:?}");
             let r = radiance(after.tau, after.r2, 1e4)[0];
-            assert!(r <= before * (1.0 + 1e-5), "m {m}: radiance {before} -> {r}");
+            assert!(
+                r <= before * (1.0 + 1e-5),
+                "m {m}: radiance {before} -> {r}"
+            );
         }
     }
 

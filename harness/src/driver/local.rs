@@ -51,6 +51,7 @@ use ppm_core::layout::{
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
 use ppm_core::reach::{Aabb, segments_may_meet};
+use ppm_core::refit::recompile_moved;
 use ppm_core::scene::{MaterialKind, Scene};
 use ppm_core::screen_cover::covered_pixels;
 use ppm_core::update::{history_kept, luminance};
@@ -149,7 +150,8 @@ impl Renderer<'_> {
         // The passes of both poses test the moved objects' boxes in both poses: a path is the
         // same in A and B until it crosses one.
         let movers = mover_boxes(&self.scene, &next, changed, self.extent);
-        let mut compiled = self.compile(&next);
+        // Pose A's tree refitted to pose B, rebuilt only once it has grown (ppm_core::refit).
+        let mut compiled = recompile_moved(&self.compiled, &next, changed);
         compiled.movers = movers.clone();
         self.compiled.movers = movers;
         let moved = Moved {
