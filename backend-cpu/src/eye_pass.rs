@@ -96,6 +96,15 @@ fn trace_eye_path(
         out.flags |= hit_flags::RESTING;
         return 0;
     }
+    // Kept slots continue their own sequence (see direct_light::sequence_start); a re-trace
+    // repeats the stratum it last used.
+    let start = if keep {
+        out.iterations
+    } else if params.flags & eye_flags::RETRACE != 0 {
+        out.iterations.saturating_sub(1)
+    } else {
+        params.iteration
+    };
     *out = if keep {
         HitPoint {
             position: [0.0; 3],
@@ -120,12 +129,6 @@ fn trace_eye_path(
     let (jx, jy) = if params.spp == 1 && params.flags & eye_flags::JITTER == 0 {
         (0.5, 0.5)
     } else {
-        // Kept slots continue their own sequence (see direct_light::sequence_start).
-        let start = if keep {
-            out.iterations
-        } else {
-            params.iteration
-        };
         let sample = start * params.spp + slot % params.spp;
         stratified_pair(params.seed, PassKind::Eye, pixel, 0, sample)
     };

@@ -24,9 +24,11 @@ pub fn update_hit_points_main(
     hit_points: &mut [HitPoint],
     pending: &mut [Pending],
 ) -> UpdateStats {
-    let mut fresh = vec![HitPoint::default(); hit_points.len()];
+    // Each slot's last sample again: the re-trace reads the stratum from the slot's copy.
+    let mut fresh = hit_points.to_vec();
     let fresh_params = EyePassParams {
-        flags: params.flags & !(eye_flags::KEEP_STATISTICS | eye_flags::RECORD_BOUNDS),
+        flags: params.flags & !(eye_flags::KEEP_STATISTICS | eye_flags::RECORD_BOUNDS)
+            | eye_flags::RETRACE,
         ..*params
     };
     let eye = eye_pass_main(&fresh_params, camera, scene, &mut fresh, None);

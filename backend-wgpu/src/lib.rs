@@ -615,11 +615,8 @@ impl HitPointUpdate for WgpuBackend {
         let scene = self.scene("hit-point update")?;
         let (hit_points, slots) = self.hit_points("hit-point update")?;
         let (_, pending, _) = self.gather_state("hit-point update")?;
-        let fresh = storage_zeroed(
-            &self.ctx,
-            "fresh hit points",
-            u64::from(*slots) * size_of::<HitPoint>() as u64,
-        )?;
+        let bytes = u64::from(*slots) * size_of::<HitPoint>() as u64;
+        let fresh = storage_zeroed(&self.ctx, "fresh hit points", bytes)?;
         let eye_targets = Slots {
             hit_points: &fresh,
             counters: &self.counters,
@@ -631,7 +628,8 @@ impl HitPointUpdate for WgpuBackend {
             count: *slots,
         };
         let fresh_params = EyePassParams {
-            flags: params.flags & !(eye_flags::KEEP_STATISTICS | eye_flags::RECORD_BOUNDS),
+            flags: params.flags & !(eye_flags::KEEP_STATISTICS | eye_flags::RECORD_BOUNDS)
+                | eye_flags::RETRACE,
             ..*params
         };
         let bounds = self.slot_bounds.as_ref().ok_or(BackendError::OutOfOrder {
@@ -639,6 +637,8 @@ impl HitPointUpdate for WgpuBackend {
             needs: "an eye pass",
         })?;
         let eye = self.run("hit-point update eye", |encoder| {
+            // Each slot's last sample again: the re-trace reads the stratum from the copy.
+            encoder.copy_buffer_to_buffer(hit_points, 0, &fresh, 0, bytes);
             self.kernels.eye.record(
                 &self.ctx,
                 encoder,

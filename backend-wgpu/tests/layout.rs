@@ -267,6 +267,7 @@ fn shared_constants_agree() {
         ("EYE_JITTER", eye_flags::JITTER),
         ("EYE_FOCUS", eye_flags::FOCUS),
         ("EYE_RECORD_BOUNDS", eye_flags::RECORD_BOUNDS),
+        ("EYE_RETRACE", eye_flags::RETRACE),
         ("PHOTON_CHANGED_ONLY", photon_flags::CHANGED_ONLY),
         ("PHOTON_RECORD_CROSSED", photon_flags::RECORD_CROSSED),
         ("PHOTON_CULL_UNCROSSED", photon_flags::CULL_UNCROSSED),

@@ -306,6 +306,13 @@ pub mod eye_flags {
     /// the slot's statistics start); without it the bounds are left alone (the probe of a
     /// local move, the hit-point update of the other modes).
     pub const RECORD_BOUNDS: u32 = 8;
+    /// Without `KEEP_STATISTICS`: trace each slot's last sample again, the jitter stratum its
+    /// own sequence last used (its `iterations` less one), read from the slot before it is
+    /// overwritten; the hit-point update of the thesis's modes. Without this flag a fresh
+    /// slot draws stratum `iteration`, which a slot whose direct sum a move restarted no
+    /// longer follows: every move after the first then found nearly every visible point
+    /// moved and reset it.
+    pub const RETRACE: u32 = 16;
 }
 
 /// Parameters of one eye pass. 32 bytes.

@@ -48,10 +48,13 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     let key = StreamKey(params.seed, PASS_EYE, params.iteration, slot);
     var jitter = vec2<f32>(0.5);
     if params.spp != 1u || (params.flags & EYE_JITTER) != 0u {
-        // Kept slots continue their own sequence (backend-cpu's eye_pass.rs).
+        // Kept slots continue their own sequence, a re-trace repeats the stratum it last used
+        // (backend-cpu's eye_pass.rs).
         var start = params.iteration;
         if (params.flags & EYE_KEEP_STATISTICS) != 0u {
             start = hit_points[slot].iterations;
+        } else if (params.flags & EYE_RETRACE) != 0u {
+            start = max(hit_points[slot].iterations, 1u) - 1u;
         }
         let sample = start * params.spp + slot % params.spp;
         jitter = stratified_pair(params.seed, PASS_EYE, pixel, 0u, sample);

@@ -101,6 +101,7 @@ const EYE_KEEP_STATISTICS: u32 = 1u;
 const EYE_JITTER: u32 = 2u;
 const EYE_FOCUS: u32 = 4u;
 const EYE_RECORD_BOUNDS: u32 = 8u;
+const EYE_RETRACE: u32 = 16u;
 
 struct EyePassParams {
     seed: u32,

@@ -178,7 +178,8 @@ impl Renderer<'_> {
         self.adopt(next, compiled);
         self.frame += 1;
         // Each slot traces its last sample again in the new pose: the frame's for `ppm`, the
-        // last iteration's (same jitter) for `sppm`.
+        // last iteration's for `sppm` (its random numbers; the jitter stratum the slot's own
+        // count last drew, `eye_flags::RETRACE`).
         let key = match self.params.estimator {
             Estimator::Ppm => self.frame,
             Estimator::Sppm => self.iteration - 1,
