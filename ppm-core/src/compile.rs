@@ -201,7 +201,7 @@ pub(crate) fn flat_nodes(bvh: &Bvh2) -> Vec<BvhNode> {
 
 /// The summed half surface areas of a BVH's nodes: in proportion to the nodes a ray crossing
 /// the scene visits, which is what a refit lets grow.
-pub(crate) fn tree_cost(bvh: &Bvh2) -> f32 {
+pub fn tree_cost(bvh: &Bvh2) -> f32 {
     bvh.nodes.iter().map(|n| n.aabb.half_area()).sum()
 }
 
