@@ -20,8 +20,8 @@
 //!   sum is corrected by [`CORRECTION_SAMPLES`] shadow-ray samples traced at its visible point
 //!   in both poses with the same random numbers (an unbiased estimate of the change, exactly
 //!   zero where the move blocks or frees none of them);
-//! - the kept slots' indirect light is corrected by difference passes: ordinary photons
-//!   traced in both poses with the same random numbers, whose deferred net sum is the change
+//! - the kept slots' indirect light is corrected by a difference pass per pose: ordinary
+//!   photons traced in both poses with the same random numbers, whose deferred net sum is the change
 //!   of every photon path the move changed. A path is the same in both poses until it
 //!   crosses a moved object's box in pose A or in pose B, so only deposits made after that
 //!   are stored (in both poses): the gathers cost in proportion to the light the objects

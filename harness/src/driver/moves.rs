@@ -319,11 +319,15 @@ impl Renderer<'_> {
             } => {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
-                let n = self.params.photons_per_pass;
-                let passes = if *changed_only {
-                    self.moves.correction_passes
+                // Local mode's correction is one pass per pose: a gather per pass over every
+                // kept slot cost more than the photons (MoveParams::correction_passes).
+                let (n, passes) = if *changed_only {
+                    (
+                        self.params.photons_per_pass * self.moves.correction_passes,
+                        1,
+                    )
                 } else {
-                    self.moves.difference_passes
+                    (self.params.photons_per_pass, self.moves.difference_passes)
                 };
                 let total = (n * passes) as f32;
                 // Storing only what follows a box crossing, pose A also records which paths

@@ -137,7 +137,8 @@ pub struct MoveOptions {
     /// of the ordinary photon count).
     #[arg(long, default_value_t = 8)]
     pub difference_passes: u32,
-    /// Difference passes per move in local mode.
+    /// Local mode's correction photons per pose, in ordinary passes' worth (traced as one
+    /// pass).
     #[arg(long, default_value_t = 2)]
     pub correction_passes: u32,
     /// Local mode gathers its correction within at least this many initial radii (0: each
