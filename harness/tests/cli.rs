@@ -710,3 +710,72 @@ fn a_bad_path_file_names_its_step_field_and_value() {
     assert!(!dir.join("frames").exists(), "nothing rendered");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `ppm diff` follows a path file's moves on any pair of backends: the CPU backend against
+/// itself agrees on every field of every slot after each of the 10 iterations and 2 moves; a
+/// path timed in seconds, which would move the two backends at different iterations, is
+/// refused naming the file and the step.
+#[test]
+fn diff_follows_a_path_on_any_pair_of_backends() {
+    let dir = scratch("diff-path");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("path.toml");
+    let step = |after: &str, object: &str, by: &str| {
+        format!("[[step]]\n{after}\nobject = \"{object}\"\ntranslate = {by}\n")
+    };
+    std::fs::write(
+        &path,
+        step("after_iterations = 4", "tall-block", "[-50.0, 0.0, 60.0]")
+            + &step("after_iterations = 3", "short-block", "[60.0, 0.0, 40.0]"),
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let args = |path: &std::path::Path| {
+        [
+            "diff",
+            "cornell-box",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--passes",
+            "3",
+            "--photons-per-pass",
+            "5000",
+            "--backends",
+            "cpu,cpu",
+            "--path",
+            path.to_str().unwrap(),
+            "-o",
+            out_dir.to_str().unwrap(),
+        ]
+        .map(str::to_owned)
+    };
+    let a = args(&path);
+    let out = ppm(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = json(&out_dir.join("diff.json"));
+    assert_eq!(report["all_fields_share"], 1.0, "{report}");
+    assert_eq!(report["image_relative_rmse"], 0.0, "{report}");
+    let steps: Vec<&str> = report["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    assert_eq!(steps.len(), 12, "{steps:?}");
+    assert_eq!(steps.iter().filter(|&&s| s == "move").count(), 2);
+    assert_eq!((steps[4], steps[8]), ("move", "move"), "{steps:?}");
+
+    let timed = dir.join("timed.toml");
+    std::fs::write(
+        &timed,
+        step("after_seconds = 1.0", "tall-block", "[-50.0, 0.0, 60.0]"),
+    )
+    .unwrap();
+    let a = args(&timed);
+    let out = ppm(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains("timed.toml: step 1 waits seconds"), "{err}");
+}

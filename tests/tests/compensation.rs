@@ -337,6 +337,7 @@ fn both_backends_agree_on_a_compensated_frame() {
             harness::diff::Recording {
                 backend: name,
                 passes: vec![hit_points],
+                steps: vec!["iteration"],
                 image,
             },
             moved,

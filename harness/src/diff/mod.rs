@@ -6,8 +6,8 @@ pub mod history;
 pub mod independent;
 pub mod same_seed;
 
-use crate::driver::schedule::EachIteration;
-use crate::driver::{Budget, RunError, Schedule, run};
+use crate::driver::schedule::{Observer, ObserverResult, Progress};
+use crate::driver::{Budget, MoveReport, Renderer, RunError, Schedule, run};
 use independent::{TileMeans, tile_means};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
@@ -15,12 +15,14 @@ use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
 
-/// A render with the slot buffer read back after every iteration.
+/// A render with the slot buffer read back after every iteration and every move.
 pub struct Recording {
     /// Backend name.
     pub backend: String,
-    /// `passes[k]` after iteration `k + 1`.
+    /// The slots after each of the render's steps, in order: `passes[k]` after step `k + 1`.
     pub passes: Vec<Vec<HitPoint>>,
+    /// What each step of `passes` was: `iteration` or `move`.
+    pub steps: Vec<&'static str>,
     /// The resolved image.
     pub image: Image,
 }
@@ -33,26 +35,48 @@ pub fn record(
     frame: u32,
     params: &RenderParams,
 ) -> Result<Recording, RunError> {
-    let mut passes = Vec::new();
-    let mut observer = EachIteration(|_: &_, r: &mut crate::driver::Renderer| {
-        passes.push(r.backend().read_hit_points()?);
-        Ok(())
-    });
     let schedule = Schedule::frame(frame, Budget::iterations(params.passes));
-    let outcome = run(
-        backend,
-        scene,
-        params,
-        &MoveParams::default(),
-        &schedule,
-        &mut observer,
-    )?;
+    record_schedule(backend, scene, params, &MoveParams::default(), &schedule)
+}
+
+/// Runs `schedule` on `backend`, keeping the slots after every iteration and every move:
+/// two backends that move alike can be compared step by step, moves included.
+pub fn record_schedule(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    moves: &MoveParams,
+    schedule: &Schedule,
+) -> Result<Recording, RunError> {
+    /// Reads the slots back after each iteration and move.
+    struct Keep {
+        passes: Vec<Vec<HitPoint>>,
+        steps: Vec<&'static str>,
+    }
+    impl Observer for Keep {
+        fn iteration(&mut self, _: &Progress, r: &mut Renderer) -> ObserverResult {
+            self.passes.push(r.backend().read_hit_points()?);
+            self.steps.push("iteration");
+            Ok(())
+        }
+        fn moved(&mut self, _: &Progress, _: &MoveReport, r: &mut Renderer) -> ObserverResult {
+            self.passes.push(r.backend().read_hit_points()?);
+            self.steps.push("move");
+            Ok(())
+        }
+    }
+    let mut keep = Keep {
+        passes: Vec::new(),
+        steps: Vec::new(),
+    };
+    let outcome = run(backend, scene, params, moves, schedule, &mut keep)?;
     if let Some(e) = outcome.error {
         return Err(e.into());
     }
     Ok(Recording {
         backend: backend.name().to_owned(),
-        passes,
+        passes: keep.passes,
+        steps: keep.steps,
         image: outcome.image,
     })
 }
@@ -70,19 +94,34 @@ pub fn runs_of(
     runs: u32,
     offset: u32,
 ) -> Result<Vec<TileMeans>, RunError> {
+    let schedule = Schedule::frame(0, Budget::iterations(params.passes));
+    runs_of_schedule(
+        backend,
+        scene,
+        params,
+        &MoveParams::default(),
+        &schedule,
+        runs,
+        offset,
+    )
+}
+
+/// `runs` runs of `schedule` with seeds `params.seed + offset + k`, reduced to tile means
+/// of the last pose.
+pub fn runs_of_schedule(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    moves: &MoveParams,
+    schedule: &Schedule,
+    runs: u32,
+    offset: u32,
+) -> Result<Vec<TileMeans>, RunError> {
     let mut out = Vec::new();
     for k in 0..runs {
         let mut p = params.clone();
         p.seed = params.seed.wrapping_add(offset + k);
-        let schedule = Schedule::frame(0, Budget::iterations(p.passes));
-        let outcome = run(
-            backend,
-            scene,
-            &p,
-            &MoveParams::default(),
-            &schedule,
-            &mut (),
-        )?;
+        let outcome = run(backend, scene, &p, moves, schedule, &mut ())?;
         if let Some(e) = outcome.error {
             return Err(e.into());
         }

@@ -53,15 +53,17 @@ pub struct Divergence {
     pub other: f64,
     /// Relative difference.
     pub relative: f64,
-    /// First iteration (from 1) after which any field left tolerance.
+    /// First step (an iteration or a move, from 1) after which any field left tolerance.
     pub first_pass: u32,
 }
 
-/// How many hit points first diverged at an iteration.
+/// How many hit points first diverged at a step.
 #[derive(Clone, Debug, Serialize)]
 pub struct PassCount {
-    /// Iteration (from 1).
+    /// Step (an iteration or a move, from 1).
     pub pass: u32,
+    /// What the step was: `iteration` or `move`.
+    pub step: &'static str,
     /// Hit points that first diverged there.
     pub hit_points: usize,
 }
@@ -75,6 +77,8 @@ pub struct SameSeedReport {
     pub other: String,
     /// Slots compared.
     pub slots: usize,
+    /// The steps compared, in order: `iteration` or `move`.
+    pub steps: Vec<&'static str>,
     /// Relative tolerance per field.
     pub relative_tolerance: f64,
     /// Share required per field.
@@ -205,6 +209,11 @@ pub fn compare(
             Some(p) => p.hit_points += 1,
             None => histogram.push(PassCount {
                 pass: d.first_pass,
+                step: reference
+                    .steps
+                    .get(d.first_pass as usize - 1)
+                    .copied()
+                    .unwrap_or("end"),
                 hit_points: 1,
             }),
         }
@@ -227,6 +236,7 @@ pub fn compare(
         reference: reference.backend.clone(),
         other: other.backend.clone(),
         slots,
+        steps: reference.steps.clone(),
         relative_tolerance: RELATIVE_TOLERANCE,
         required_share: REQUIRED_SHARE,
         fields,
@@ -264,10 +274,14 @@ pub fn heat(reference: &Image, other: &Image) -> Image {
 /// The same-seed table.
 pub fn format(r: &SameSeedReport) -> String {
     let mut s = String::new();
+    let moves = r.steps.iter().filter(|&&s| s == "move").count();
     let _ = writeln!(
         s,
-        "same seed: {} (reference) vs {}, {} hit-point slots",
-        r.reference, r.other, r.slots
+        "same seed: {} (reference) vs {}, {} hit-point slots, compared after {} iterations and {moves} moves",
+        r.reference,
+        r.other,
+        r.slots,
+        r.steps.len() - moves
     );
     let _ = writeln!(
         s,
@@ -299,7 +313,7 @@ pub fn format(r: &SameSeedReport) -> String {
         let passes: Vec<String> = r
             .first_divergence
             .iter()
-            .map(|p| format!("pass {}: {}", p.pass, p.hit_points))
+            .map(|p| format!("step {} ({}): {}", p.pass, p.step, p.hit_points))
             .collect();
         let _ = writeln!(s, "first divergence: {}", passes.join(", "));
     }

@@ -1,18 +1,22 @@
-//! `ppm diff`: renders one seeded scene on the CPU (reference) and wgpu backends, prints the
-//! comparison as a table, writes `diff.json` and a heat map, and fails when they disagree.
+//! `ppm diff`: renders one seeded scene on two backends (the first is the reference), still
+//! or through moves, prints the comparison as a table, writes `diff.json` and a heat map, and
+//! fails when they disagree.
 
+use crate::options::BackendChoice;
 use crate::render::output_folder;
-use anyhow::{Context, Result, bail};
-use backend_cpu::CpuBackend;
-use backend_wgpu::WgpuBackend;
+use anyhow::{Result, bail};
 use harness::diff::history::{self, pixel_history};
 use harness::diff::independent;
 use harness::diff::same_seed;
-use harness::diff::{OTHER_SEED_OFFSET, record, runs_of};
+use harness::diff::{OTHER_SEED_OFFSET, record_schedule, runs_of_schedule};
+use harness::driver::{Budget, Schedule};
 use ppm_core::limits::{MemoryBudget, check_render_memory};
-use ppm_core::params::{Estimator, RenderParams};
+use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
+use ppm_core::scene::Scene;
+use ppm_core::scene::path::After;
 use scenes::file::image::ImageFiles;
 use scenes::file::output::write_bytes;
+use scenes::file::path::load_path_file;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -37,6 +41,28 @@ pub struct DiffArgs {
     /// Seed (independent mode: the first of each backend's seeds).
     #[arg(long, default_value_t = 0)]
     seed: u32,
+    /// Fraction of new photons kept per pass, in (0, 1) (default: the scene's).
+    #[arg(long)]
+    alpha: Option<f32>,
+    /// Initial gather radius in scene units, not squared (default: the scene's).
+    #[arg(long)]
+    radius: Option<f32>,
+    /// Eye samples (slots) per pixel.
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// The two backends compared, the reference first (`cpu,cpu` checks one backend against
+    /// itself).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu,wgpu")]
+    backends: Vec<BackendChoice>,
+    /// Compare through the scene's move in this mode: `--passes` iterations on frame 0, the
+    /// move, `--passes` more; the slots are compared after every iteration and the move.
+    #[arg(long, value_parser = clap::value_parser!(MoveMode))]
+    mode: Option<MoveMode>,
+    /// Compare along a path file's moves instead (`local` unless --mode says otherwise),
+    /// `--passes` iterations after the last; its steps must wait iterations, not seconds,
+    /// so that both backends move at the same iteration.
+    #[arg(long)]
+    path: Option<PathBuf>,
     /// Compare slot by slot with one seed (the default).
     #[arg(long, conflicts_with = "independent")]
     same_seed: bool,
@@ -79,7 +105,17 @@ pub fn run(args: DiffArgs) -> Result<()> {
     params.width = args.width;
     params.height = args.height;
     params.seed = args.seed;
+    params.alpha = args.alpha.unwrap_or(params.alpha);
+    params.initial_radius = args.radius.unwrap_or(params.initial_radius);
+    params.spp = args.spp;
     params.validate("command line")?;
+    let [first, second] = args.backends[..] else {
+        bail!(
+            "--backends: expected two backends, A,B (got {})",
+            args.backends.len()
+        );
+    };
+    let schedule = schedule(&args, &scene)?;
     check_render_memory(&params, &scene, &MemoryBudget::detect())?;
     if args.independent && args.runs < 2 {
         bail!(
@@ -97,12 +133,15 @@ pub fn run(args: DiffArgs) -> Result<()> {
         );
     }
     output_folder(&args.output, &format!("-o {}", args.output.display()))?;
-    let mut cpu = CpuBackend::new();
-    let mut gpu = WgpuBackend::new().context("the wgpu backend cannot start")?;
-    eprintln!("wgpu adapter: {}", gpu.adapter_name());
+    let (mut a_backend, mut b_backend) = (first.start()?, second.start()?);
+    let (a_name, b_name) = (a_backend.name().to_owned(), b_backend.name().to_owned());
+    let moves = MoveParams::default();
+    let record = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+        record_schedule(backend, &scene, &params, &moves, &schedule)
+    };
     if let Some((x, y)) = args.pixel {
-        let a = record(&mut cpu, &scene, 0, &params)?;
-        let b = record(&mut gpu, &scene, 0, &params)?;
+        let a = record(a_backend.as_mut())?;
+        let b = record(b_backend.as_mut())?;
         let rows = pixel_history(&[&a, &b], &params, x, y);
         print!("{}", history::format(&rows));
         write_bytes(
@@ -110,17 +149,22 @@ pub fn run(args: DiffArgs) -> Result<()> {
             serde_json::to_string_pretty(&rows)?,
         )?;
     } else if args.independent {
-        let a = runs_of(&mut cpu, &scene, &params, args.runs, 0)?;
-        let b = runs_of(&mut gpu, &scene, &params, args.runs, OTHER_SEED_OFFSET)?;
-        let report = independent::compare(("cpu", &a), ("wgpu", &b), &params, 10);
+        let runs = |backend: &mut dyn ppm_core::passes::DynamicBackend, offset| {
+            runs_of_schedule(
+                backend, &scene, &params, &moves, &schedule, args.runs, offset,
+            )
+        };
+        let a = runs(a_backend.as_mut(), 0)?;
+        let b = runs(b_backend.as_mut(), OTHER_SEED_OFFSET)?;
+        let report = independent::compare((&a_name, &a), (&b_name, &b), &params, 10);
         print!("{}", independent::format(&report));
         write_outputs(&args, &report, &independent::heat(&a, &b, &params))?;
         if !report.agree {
             bail!("the backends disagree (independent seeds)");
         }
     } else {
-        let a = record(&mut cpu, &scene, 0, &params)?;
-        let b = record(&mut gpu, &scene, 0, &params)?;
+        let a = record(a_backend.as_mut())?;
+        let b = record(b_backend.as_mut())?;
         let report = same_seed::compare(&a, &b, &params, 10);
         print!("{}", same_seed::format(&report));
         write_outputs(&args, &report, &same_seed::heat(&a.image, &b.image))?;
@@ -129,6 +173,39 @@ pub fn run(args: DiffArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// What both backends run: frame 0, the scene's move in `--mode`, or a path file's moves.
+fn schedule(args: &DiffArgs, scene: &Scene) -> Result<Schedule> {
+    let budget = Budget::iterations(args.passes);
+    let mode = args.mode.unwrap_or(MoveMode::Local);
+    if let Some(file) = &args.path {
+        let path = load_path_file(file, scene)?;
+        if let Some(k) = path
+            .events
+            .iter()
+            .position(|e| matches!(e.after, After::Seconds(_)))
+        {
+            bail!(
+                "{}: step {} waits seconds; ppm diff needs after_iterations, so that both \
+                 backends move at the same iteration",
+                file.display(),
+                k + 1
+            );
+        }
+        return Ok(Schedule::path(&path, mode, budget));
+    }
+    if args.mode.is_some() {
+        if scene.moves.is_empty() {
+            bail!(
+                "--mode {}: {} declares no [[moves]]; give --path FILE",
+                mode.name(),
+                scene.name
+            );
+        }
+        return Ok(Schedule::after_move(budget, mode, budget));
+    }
+    Ok(Schedule::frame(0, budget))
 }
 
 fn write_outputs(
