@@ -277,11 +277,12 @@ pub fn format(r: &SameSeedReport) -> String {
     let moves = r.steps.iter().filter(|&&s| s == "move").count();
     let _ = writeln!(
         s,
-        "same seed: {} (reference) vs {}, {} hit-point slots, compared after {} iterations and {moves} moves",
+        "same seed: {} (reference) vs {}, {} hit-point slots, compared after {} iterations and {moves} {}",
         r.reference,
         r.other,
         r.slots,
-        r.steps.len() - moves
+        r.steps.len() - moves,
+        if moves == 1 { "move" } else { "moves" }
     );
     let _ = writeln!(
         s,
