@@ -3,7 +3,7 @@
 //! gets a verdict per check; no check knows which backend it tests. The CPU backend is the
 //! reference for the checks that compare.
 
-use crate::diff::{OTHER_SEED_OFFSET, independent, record, runs_of, same_seed};
+use crate::diff::{OTHER_SEED_OFFSET, independent, record, record_schedule, runs_of, same_seed};
 use crate::driver::{Budget, Schedule, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
@@ -12,11 +12,12 @@ use ppm_core::geometry::oct_faces;
 use ppm_core::layout::{
     EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
 };
-use ppm_core::params::{Estimator, MoveParams, RenderParams};
+use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError, DynamicBackend};
 use ppm_core::qmc;
 use ppm_core::rng::TEST_VECTORS;
 use ppm_core::scene::Scene;
+use ppm_core::scene::path::{After, MovePath};
 use ppm_core::update::{Statistics, ppm_update};
 use std::fmt;
 
@@ -116,6 +117,7 @@ pub const CHECKS: &[(&str, Check)] = &[
     ("determinism", check_determinism),
     ("agreement/same-seed", check_same_seed),
     ("agreement/independent", check_independent),
+    ("moves/same-seed", check_moves_same_seed),
     ("stress-family", check_stress_family),
 ];
 
@@ -454,6 +456,65 @@ fn check_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<Strin
             }
             details.push(line);
         }
+    }
+    Ok(details.join(", "))
+}
+
+/// Moves, same seed: through the declared move of every built-in scene that has one, in
+/// every mode, and along a random path of three unplanned moves in local mode, the slots agree
+/// with the CPU reference after every iteration and every move. Every dynamic pass runs
+/// here: region, guided, landing and difference photons, the hit-point update, local mode's
+/// resets, probe and corrections.
+fn check_moves_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let modes = [
+        MoveMode::Local,
+        MoveMode::Difference,
+        MoveMode::Area,
+        MoveMode::Thesis,
+    ];
+    let moves = MoveParams::default();
+    let mut cases = Vec::new();
+    for builtin in scenes::BUILTIN {
+        let scene = builtin.load().map_err(err)?;
+        if scene.moves.is_empty() {
+            continue;
+        }
+        let budget = Budget::iterations(o.passes);
+        for mode in modes {
+            let name = format!("{} {}", builtin.name, mode.name());
+            cases.push((
+                name,
+                scene.clone(),
+                Schedule::after_move(budget, mode, budget),
+            ));
+        }
+    }
+    let scene = cornell()?;
+    let first = After::Iterations(o.passes);
+    let path = MovePath::random(&scene, 3, 11, first, After::Iterations(2));
+    let after = Budget::iterations(o.passes);
+    cases.push((
+        "cornell-box, a random path".to_owned(),
+        scene,
+        Schedule::path(&path, MoveMode::Local, after),
+    ));
+    let mut details = Vec::new();
+    for (name, scene, schedule) in cases {
+        let p = params_for(&scene, o);
+        let render = |backend: &mut dyn DynamicBackend| {
+            record_schedule(backend, &scene, &p, &moves, &schedule).map_err(err)
+        };
+        let reference = render(&mut CpuBackend::new())?;
+        let other = render(make().map_err(err)?.as_mut())?;
+        let r = same_seed::compare(&reference, &other, &p, 3);
+        let line = format!("{name}: {:.3}% agree", 100.0 * r.all_fields_share);
+        if !r.agree {
+            return Err(format!(
+                "{line}; {}",
+                same_seed::format(&r).replace('\n', "; ")
+            ));
+        }
+        details.push(line);
     }
     Ok(details.join(", "))
 }

@@ -1,5 +1,6 @@
-//! Both backends pass the conformance suite; a deliberately broken backend is caught by the
-//! same-seed and the independent-seed comparison alike.
+//! Both backends pass the conformance suite; deliberately broken backends are caught: a gather
+//! that drops photons by the same-seed and the independent-seed comparison alike, compensation
+//! photons of the wrong sign by the moves check alone.
 
 use backend_cpu::CpuBackend;
 use harness::conformance::{ConformanceOptions, run_conformance};
@@ -34,46 +35,70 @@ fn wgpu_backend_passes_conformance() {
     assert!(verdict.passed(), "{verdict}");
 }
 
-/// The CPU backend with a faulty gather: one photon in ten (every tenth deposit) is never
-/// found, as if the gather skipped it. It moves those photons out of every disc's reach after
-/// the photon pass, so the grid still files them and only the gather misses them.
-struct DropsOneInTen(CpuBackend);
+/// The CPU backend with one fault.
+#[derive(Clone, Copy)]
+enum Fault {
+    /// A faulty gather: one photon in ten (every tenth deposit) is never found, as if the
+    /// gather skipped it. It moves those photons out of every disc's reach after the photon
+    /// pass, so the grid still files them and only the gather misses them.
+    DropsOneInTen,
+    /// Compensation photons traced with positive power: still frames are the CPU's exactly,
+    /// every move adds what it should remove.
+    MisSignsCompensation,
+}
 
-impl SceneUpload for DropsOneInTen {
+struct Broken(CpuBackend, Fault);
+
+impl Broken {
+    /// `p` as this backend misreads it.
+    fn misread(&self, p: &PhotonPassParams) -> PhotonPassParams {
+        match self.1 {
+            Fault::MisSignsCompensation => PhotonPassParams {
+                power_scale: p.power_scale.abs(),
+                ..*p
+            },
+            Fault::DropsOneInTen => *p,
+        }
+    }
+}
+
+impl SceneUpload for Broken {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.0.load_scene(scene)
     }
 }
-impl EyePass for DropsOneInTen {
+impl EyePass for Broken {
     fn eye_pass(&mut self, p: &EyePassParams) -> Result<EyeStats, BackendError> {
         self.0.eye_pass(p)
     }
 }
-impl DirectLight for DropsOneInTen {
+impl DirectLight for Broken {
     fn direct_light(&mut self, p: &DirectLightParams) -> Result<DirectStats, BackendError> {
         self.0.direct_light(p)
     }
 }
-impl PhotonPass for DropsOneInTen {
+impl PhotonPass for Broken {
     fn photon_pass(&mut self, p: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
-        let stats = self.0.photon_pass(p)?;
-        for photon in self.0.photons_mut().iter_mut().step_by(10) {
-            photon.position = [f32::MAX; 3];
+        let stats = self.0.photon_pass(&self.misread(p))?;
+        if let Fault::DropsOneInTen = self.1 {
+            for photon in self.0.photons_mut().iter_mut().step_by(10) {
+                photon.position = [f32::MAX; 3];
+            }
         }
         Ok(stats)
     }
 }
-impl GatherPass for DropsOneInTen {
+impl GatherPass for Broken {
     fn gather_pass(&mut self, p: &GatherParams) -> Result<GatherStats, BackendError> {
         self.0.gather_pass(p)
     }
 }
-impl Resolve for DropsOneInTen {
+impl Resolve for Broken {
     fn resolve(&mut self, p: &ResolveParams) -> Result<Image, BackendError> {
         self.0.resolve(p)
     }
 }
-impl ReadBack for DropsOneInTen {
+impl ReadBack for Broken {
     fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError> {
         self.0.read_hit_points()
     }
@@ -84,7 +109,7 @@ impl ReadBack for DropsOneInTen {
         self.0.write_hit_points(hit_points)
     }
 }
-impl RandomSource for DropsOneInTen {
+impl RandomSource for Broken {
     fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
         self.0.random_bits(keys)
     }
@@ -92,12 +117,12 @@ impl RandomSource for DropsOneInTen {
         self.0.stratified_bits(keys)
     }
 }
-impl Backend for DropsOneInTen {
+impl Backend for Broken {
     fn name(&self) -> &str {
         "broken"
     }
 }
-impl SceneUpdate for DropsOneInTen {
+impl SceneUpdate for Broken {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.0.update_scene(scene)
     }
@@ -105,7 +130,7 @@ impl SceneUpdate for DropsOneInTen {
         self.0.read_slot_bounds()
     }
 }
-impl HitPointUpdate for DropsOneInTen {
+impl HitPointUpdate for Broken {
     fn update_hit_points(
         &mut self,
         p: &EyePassParams,
@@ -114,16 +139,16 @@ impl HitPointUpdate for DropsOneInTen {
         self.0.update_hit_points(p, epsilon)
     }
 }
-impl RegionPhotonPass for DropsOneInTen {
+impl RegionPhotonPass for Broken {
     fn region_photon_pass(
         &mut self,
         p: &PhotonPassParams,
         region: &EmissionRegion,
     ) -> Result<PhotonStats, BackendError> {
-        self.0.region_photon_pass(p, region)
+        self.0.region_photon_pass(&self.misread(p), region)
     }
 }
-impl GuidedPhotonPass for DropsOneInTen {
+impl GuidedPhotonPass for Broken {
     fn guided_photon_pass(
         &mut self,
         p: &PhotonPassParams,
@@ -133,7 +158,7 @@ impl GuidedPhotonPass for DropsOneInTen {
         self.0.guided_photon_pass(p, guide, paths)
     }
 }
-impl LandingPaths for DropsOneInTen {
+impl LandingPaths for Broken {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         self.0.landing_paths()
     }
@@ -157,7 +182,13 @@ fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let (scene, p) = cornell_params();
     let reference = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
     let honest = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
-    let broken = record(&mut DropsOneInTen(CpuBackend::new()), &scene, 0, &p).unwrap();
+    let broken = record(
+        &mut Broken(CpuBackend::new(), Fault::DropsOneInTen),
+        &scene,
+        0,
+        &p,
+    )
+    .unwrap();
     let good = same_seed::compare(&reference, &honest, &p, 5);
     let bad = same_seed::compare(&reference, &broken, &p, 5);
     println!("{}", harness::diff::same_seed::format(&bad));
@@ -190,7 +221,7 @@ fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let reference = runs_of(&mut CpuBackend::new(), &scene, &p, 4, 0).unwrap();
     let honest = runs_of(&mut CpuBackend::new(), &scene, &p, 4, OTHER_SEED_OFFSET).unwrap();
     let broken = runs_of(
-        &mut DropsOneInTen(CpuBackend::new()),
+        &mut Broken(CpuBackend::new(), Fault::DropsOneInTen),
         &scene,
         &p,
         4,
@@ -211,7 +242,7 @@ fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
 #[test]
 fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
     let verdict = run_conformance(
-        &mut || Ok(Box::new(DropsOneInTen(CpuBackend::new()))),
+        &mut || Ok(Box::new(Broken(CpuBackend::new(), Fault::DropsOneInTen))),
         &ConformanceOptions::quick(),
     );
     println!("{verdict}");
@@ -221,4 +252,29 @@ fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
     // generator is the CPU's: only the comparisons with the reference can see the fault.
     assert!(verdict.check("gather-formulas").unwrap().passed);
     assert!(verdict.check("rng-vectors").unwrap().passed);
+}
+
+/// A backend whose compensation photons carry positive power renders every still frame as
+/// the CPU does, so the still-frame checks pass it; the moves check fails it.
+#[test]
+fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
+    let verdict = run_conformance(
+        &mut || {
+            Ok(Box::new(Broken(
+                CpuBackend::new(),
+                Fault::MisSignsCompensation,
+            )))
+        },
+        &ConformanceOptions::quick(),
+    );
+    println!("{verdict}");
+    assert!(!verdict.check("moves/same-seed").unwrap().passed);
+    for still in [
+        "agreement/same-seed",
+        "agreement/independent",
+        "gather-formulas",
+        "determinism",
+    ] {
+        assert!(verdict.check(still).unwrap().passed, "{still}: {verdict}");
+    }
 }
