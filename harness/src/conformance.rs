@@ -3,7 +3,9 @@
 //! gets a verdict per check; no check knows which backend it tests. The CPU backend is the
 //! reference for the checks that compare.
 
-use crate::diff::{OTHER_SEED_OFFSET, independent, record, record_schedule, runs_of, same_seed};
+use crate::diff::{
+    OTHER_SEED_OFFSET, independent, record, record_schedule, runs_of, runs_of_schedule, same_seed,
+};
 use crate::driver::{Budget, Schedule, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
@@ -118,6 +120,7 @@ pub const CHECKS: &[(&str, Check)] = &[
     ("agreement/same-seed", check_same_seed),
     ("agreement/independent", check_independent),
     ("moves/same-seed", check_moves_same_seed),
+    ("moves/independent", check_moves_independent),
     ("stress-family", check_stress_family),
 ];
 
@@ -460,6 +463,40 @@ fn check_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<Strin
     Ok(details.join(", "))
 }
 
+/// The moves the `moves/` checks follow: each built-in scene's declared move in each of
+/// `modes`, `passes` iterations before and after it, and a random path of three unplanned
+/// moves of cornell-box in local mode.
+fn move_cases(
+    o: &ConformanceOptions,
+    modes: &[MoveMode],
+) -> Result<Vec<(String, Scene, Schedule)>, String> {
+    let budget = Budget::iterations(o.passes);
+    let mut cases = Vec::new();
+    for builtin in scenes::BUILTIN {
+        let scene = builtin.load().map_err(err)?;
+        if scene.moves.is_empty() {
+            continue;
+        }
+        for &mode in modes {
+            let name = format!("{} {}", builtin.name, mode.name());
+            cases.push((
+                name,
+                scene.clone(),
+                Schedule::after_move(budget, mode, budget),
+            ));
+        }
+    }
+    let scene = cornell()?;
+    let first = After::Iterations(o.passes);
+    let path = MovePath::random(&scene, 3, 11, first, After::Iterations(2));
+    cases.push((
+        "cornell-box, a random path".to_owned(),
+        scene,
+        Schedule::path(&path, MoveMode::Local, budget),
+    ));
+    Ok(cases)
+}
+
 /// Moves, same seed: through the declared move of every built-in scene that has one, in
 /// every mode, and along a random path of three unplanned moves in local mode, the slots agree
 /// with the CPU reference after every iteration and every move. Every dynamic pass runs
@@ -473,33 +510,8 @@ fn check_moves_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result
         MoveMode::Thesis,
     ];
     let moves = MoveParams::default();
-    let mut cases = Vec::new();
-    for builtin in scenes::BUILTIN {
-        let scene = builtin.load().map_err(err)?;
-        if scene.moves.is_empty() {
-            continue;
-        }
-        let budget = Budget::iterations(o.passes);
-        for mode in modes {
-            let name = format!("{} {}", builtin.name, mode.name());
-            cases.push((
-                name,
-                scene.clone(),
-                Schedule::after_move(budget, mode, budget),
-            ));
-        }
-    }
-    let scene = cornell()?;
-    let first = After::Iterations(o.passes);
-    let path = MovePath::random(&scene, 3, 11, first, After::Iterations(2));
-    let after = Budget::iterations(o.passes);
-    cases.push((
-        "cornell-box, a random path".to_owned(),
-        scene,
-        Schedule::path(&path, MoveMode::Local, after),
-    ));
     let mut details = Vec::new();
-    for (name, scene, schedule) in cases {
+    for (name, scene, schedule) in move_cases(o, &modes)? {
         let p = params_for(&scene, o);
         let render = |backend: &mut dyn DynamicBackend| {
             record_schedule(backend, &scene, &p, &moves, &schedule).map_err(err)
@@ -513,6 +525,31 @@ fn check_moves_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result
                 "{line}; {}",
                 same_seed::format(&r).replace('\n', "; ")
             ));
+        }
+        details.push(line);
+    }
+    Ok(details.join(", "))
+}
+
+/// Moves, independent seeds: after each built-in scene's declared move in local mode, and
+/// after a random path of unplanned moves, no tile differs significantly from the CPU's.
+fn check_moves_independent(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    let moves = MoveParams::default();
+    let mut details = Vec::new();
+    for (name, scene, schedule) in move_cases(o, &[MoveMode::Local])? {
+        let p = params_for(&scene, o);
+        let runs = |backend: &mut dyn DynamicBackend, offset| {
+            runs_of_schedule(backend, &scene, &p, &moves, &schedule, o.runs, offset).map_err(err)
+        };
+        let reference = runs(&mut CpuBackend::new(), 0)?;
+        let other = runs(make().map_err(err)?.as_mut(), OTHER_SEED_OFFSET)?;
+        let r = independent::compare(("cpu", &reference), ("other", &other), &p, 3);
+        let line = format!(
+            "{name}: {} of {} tests rejected, min p {:.2e}",
+            r.rejected, r.tests, r.min_p
+        );
+        if !r.agree {
+            return Err(line);
         }
         details.push(line);
     }

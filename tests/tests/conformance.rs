@@ -255,7 +255,7 @@ fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
 }
 
 /// A backend whose compensation photons carry positive power renders every still frame as
-/// the CPU does, so the still-frame checks pass it; the moves check fails it.
+/// the CPU does, so the still-frame checks pass it; both moves checks fail it.
 #[test]
 fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     let verdict = run_conformance(
@@ -269,6 +269,7 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     );
     println!("{verdict}");
     assert!(!verdict.check("moves/same-seed").unwrap().passed);
+    assert!(!verdict.check("moves/independent").unwrap().passed);
     for still in [
         "agreement/same-seed",
         "agreement/independent",
