@@ -17,6 +17,7 @@ use ppm_core::layout::{
 };
 use ppm_core::params::{Estimator, MoveMode};
 use ppm_core::passes::{BackendError, PhotonStats};
+use ppm_core::refit::recompile_moved;
 use ppm_core::region::{RegionError, emitting_region};
 use ppm_core::rng::{DIFFERENCE_PASS_BASE, PassKind, StreamKey};
 use ppm_core::scene::{Move, Scene};
@@ -172,7 +173,7 @@ impl Renderer<'_> {
         // Negative photons in pose A, then (same random numbers) positive ones in pose B:
         // where nothing changed their paths coincide and the two cancel almost exactly.
         self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
-        let compiled = self.compile(&next);
+        let compiled = recompile_moved(&self.compiled, &next, &changed);
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
