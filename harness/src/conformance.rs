@@ -4,7 +4,8 @@
 //! reference for the checks that compare.
 
 use crate::diff::{
-    OTHER_SEED_OFFSET, independent, record, record_schedule, runs_of, runs_of_schedule, same_seed,
+    OTHER_SEED_OFFSET, Recording, independent, record, record_schedule, runs_of, runs_of_schedule,
+    same_seed,
 };
 use crate::driver::{Budget, Schedule, run};
 use backend_cpu::CpuBackend;
@@ -444,23 +445,30 @@ fn check_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<Strin
             p.direct_samples = estimator.default_direct_samples();
             let reference = record(&mut CpuBackend::new(), &scene, 0, &p).map_err(err)?;
             let other = record(make().map_err(err)?.as_mut(), &scene, 0, &p).map_err(err)?;
-            let r = same_seed::compare(&reference, &other, &p, 3);
-            let line = format!(
-                "{} ({}): {:.3}% agree",
-                builtin.name,
-                estimator.name(),
-                100.0 * r.all_fields_share
-            );
-            if !r.agree {
-                return Err(format!(
-                    "{line}; {}",
-                    same_seed::format(&r).replace('\n', "; ")
-                ));
-            }
-            details.push(line);
+            let name = format!("{} ({})", builtin.name, estimator.name());
+            details.push(agreement_line(&name, &reference, &other, &p)?);
         }
     }
     Ok(details.join(", "))
+}
+
+/// `name: share% agree` when `other` agrees with `reference` slot by slot, else the whole
+/// comparison on one line.
+fn agreement_line(
+    name: &str,
+    reference: &Recording,
+    other: &Recording,
+    p: &RenderParams,
+) -> Result<String, String> {
+    let r = same_seed::compare(reference, other, p, 3);
+    let line = format!("{name}: {:.3}% agree", 100.0 * r.all_fields_share);
+    if !r.agree {
+        return Err(format!(
+            "{line}; {}",
+            same_seed::format(&r).replace('\n', "; ")
+        ));
+    }
+    Ok(line)
 }
 
 /// The moves the `moves/` checks follow: each built-in scene's declared move in each of
@@ -518,15 +526,7 @@ fn check_moves_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result
         };
         let reference = render(&mut CpuBackend::new())?;
         let other = render(make().map_err(err)?.as_mut())?;
-        let r = same_seed::compare(&reference, &other, &p, 3);
-        let line = format!("{name}: {:.3}% agree", 100.0 * r.all_fields_share);
-        if !r.agree {
-            return Err(format!(
-                "{line}; {}",
-                same_seed::format(&r).replace('\n', "; ")
-            ));
-        }
-        details.push(line);
+        details.push(agreement_line(&name, &reference, &other, &p)?);
     }
     Ok(details.join(", "))
 }

@@ -104,12 +104,13 @@ fn refit(before: &CompiledScene, after: &Scene, changed: &[usize]) -> Option<Com
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Camera, Material, Move, Object, RenderDefaults, quad_triangles};
+    use crate::scene::testing::{object, room};
+    use crate::scene::{Move, quad_triangles};
     use glam::{Quat, Vec3, Vec3A};
     use obvhs::triangle::Triangle;
 
     /// A floor of 20x20 tiles, a cube on it and a lamp above.
-    fn room() -> Scene {
+    fn drag_room() -> Scene {
         let quad = |lo: Vec3, hi: Vec3| {
             quad_triangles([
                 lo,
@@ -138,48 +139,15 @@ mod tests {
                 quad_triangles([at(-0.5, -0.5), at(-0.5, 0.5), at(0.5, 0.5), at(0.5, -0.5)])
             })
             .collect();
-        let object = |name: &str, material, triangles| Object {
-            name: name.into(),
-            material,
-            triangles,
-        };
-        Scene {
-            name: "room".into(),
-            camera: Camera {
-                eye: Vec3::new(0.0, 5.0, -15.0),
-                look_at: Vec3::ZERO,
-                up: Vec3::Y,
-                fov_deg: 40.0,
-                width: 8,
-                height: 8,
-            },
-            materials: vec![
-                Material {
-                    name: "white".into(),
-                    kind: MaterialKind::Diffuse {
-                        albedo: Vec3::splat(0.5),
-                    },
-                },
-                Material {
-                    name: "lamp".into(),
-                    kind: MaterialKind::Light {
-                        radiance: Vec3::ONE,
-                        albedo: Vec3::ZERO,
-                    },
-                },
-            ],
-            objects: vec![
-                object("floor", 0, floor),
-                object("cube", 0, cube),
-                object(
-                    "lamp",
-                    1,
-                    quad(Vec3::new(-1.0, 6.0, -1.0), Vec3::new(1.0, 6.0, 1.0)).to_vec(),
-                ),
-            ],
-            render: RenderDefaults::default(),
-            moves: Vec::new(),
-        }
+        room(vec![
+            object("floor", 0, floor),
+            object("cube", 0, cube),
+            object(
+                "lamp",
+                1,
+                quad(Vec3::new(-1.0, 6.0, -1.0), Vec3::new(1.0, 6.0, 1.0)).to_vec(),
+            ),
+        ])
     }
 
     fn step(object: usize, translation: Vec3, degrees: f32) -> Move {
@@ -222,7 +190,7 @@ mod tests {
     /// small steps mostly refit.
     #[test]
     fn a_drag_refits_tight_trees_and_rebuilds_when_they_grow() {
-        let mut scene = room();
+        let mut scene = drag_room();
         let mut compiled = compile_scene(&scene, 8, 8);
         let (mut refits, mut rebuilds) = (0, 0);
         for i in 0..60 {
@@ -255,7 +223,7 @@ mod tests {
     /// A moved light changes what compile_scene derives from the lights: a full compile.
     #[test]
     fn a_moved_light_is_compiled_anew() {
-        let mut scene = room();
+        let mut scene = drag_room();
         let compiled = compile_scene(&scene, 8, 8);
         scene.apply(&step(2, Vec3::new(0.0, -1.0, 0.0), 0.0));
         let next = recompile_moved(&compiled, &scene, &[2]);

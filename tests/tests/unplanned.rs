@@ -260,7 +260,7 @@ fn both_backends_follow_a_path_alike() {
 /// differs significantly (Welch's t over 6 runs each, Holm-corrected at 1%).
 #[test]
 fn both_backends_agree_on_a_path_with_independent_seeds() {
-    use harness::diff::independent;
+    use harness::diff::{OTHER_SEED_OFFSET, independent, runs_of_schedule};
     const RUNS: u32 = 6;
     let Some(mut gpu) = backend_or_skip("both_backends_agree_on_a_path_with_independent_seeds")
     else {
@@ -268,27 +268,12 @@ fn both_backends_agree_on_a_path_with_independent_seeds() {
     };
     let (scene, p) = cornell(32, 10_000);
     let schedule = Schedule::path(&path(&scene), MoveMode::Local, Budget::iterations(4));
-    let runs = |backend: &mut dyn DynamicBackend, first_seed: u32| {
-        (first_seed..first_seed + RUNS)
-            .map(|seed| {
-                let p = RenderParams { seed, ..p.clone() };
-                let outcome = run(
-                    backend,
-                    &scene,
-                    &p,
-                    &MoveParams::default(),
-                    &schedule,
-                    &mut (),
-                )
-                .unwrap();
-                assert_eq!(outcome.moves.len(), 3, "seed {seed}");
-                let slots = backend.read_hit_points().unwrap();
-                independent::tile_means(&outcome.image, &slots, &p)
-            })
-            .collect::<Vec<_>>()
+    let runs = |backend: &mut dyn DynamicBackend, offset: u32| {
+        let moves = MoveParams::default();
+        runs_of_schedule(backend, &scene, &p, &moves, &schedule, RUNS, offset).unwrap()
     };
     let cpu = runs(&mut CpuBackend::new(), 0);
-    let wgpu = runs(&mut gpu, 1000);
+    let wgpu = runs(&mut gpu, OTHER_SEED_OFFSET);
     let report = independent::compare(("cpu", &cpu), ("wgpu", &wgpu), &p, 3);
     println!("{}", independent::format(&report));
     assert!(report.agree, "{}", independent::format(&report));

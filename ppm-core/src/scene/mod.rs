@@ -5,6 +5,8 @@ mod error;
 mod magnitude;
 mod model;
 pub mod path;
+#[cfg(test)]
+pub(crate) mod testing;
 
 pub use error::SceneError;
 pub use magnitude::{MAX_COORDINATE, MAX_LIGHT_POWER, MIN_EXTENT, check_magnitudes, number};

@@ -144,7 +144,8 @@ impl MovePath {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Camera, Material, Object, RenderDefaults, quad_triangles};
+    use crate::scene::quad_triangles;
+    use crate::scene::testing::{object, room as room_of};
 
     fn room() -> Scene {
         let q = |y: f32, s: f32| {
@@ -156,51 +157,11 @@ mod tests {
             ])
             .to_vec()
         };
-        Scene {
-            name: "room".into(),
-            camera: Camera {
-                eye: Vec3::new(0.0, 1.0, -5.0),
-                look_at: Vec3::ZERO,
-                up: Vec3::Y,
-                fov_deg: 40.0,
-                width: 8,
-                height: 8,
-            },
-            materials: vec![
-                Material {
-                    name: "white".into(),
-                    kind: MaterialKind::Diffuse {
-                        albedo: Vec3::splat(0.5),
-                    },
-                },
-                Material {
-                    name: "lamp".into(),
-                    kind: MaterialKind::Light {
-                        radiance: Vec3::ONE,
-                        albedo: Vec3::ZERO,
-                    },
-                },
-            ],
-            objects: vec![
-                Object {
-                    name: "floor".into(),
-                    material: 0,
-                    triangles: q(0.0, 4.0),
-                },
-                Object {
-                    name: "tile".into(),
-                    material: 0,
-                    triangles: q(0.5, 0.5),
-                },
-                Object {
-                    name: "lamp".into(),
-                    material: 1,
-                    triangles: q(3.0, 0.5),
-                },
-            ],
-            render: RenderDefaults::default(),
-            moves: Vec::new(),
-        }
+        room_of(vec![
+            object("floor", 0, q(0.0, 4.0)),
+            object("tile", 0, q(0.5, 0.5)),
+            object("lamp", 1, q(3.0, 0.5)),
+        ])
     }
 
     #[test]
