@@ -4,6 +4,7 @@
 
 use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Outcome, Schedule, run};
+use ppm_core::compile::{camera_ray, compile_scene};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Scene;
@@ -52,4 +53,36 @@ pub fn render_on(
 /// Luminance (Rec. 709 weights) of a linear RGB value.
 pub fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Per pixel of a `size` x `size` image, the object an eye ray through its centre meets
+/// first in `scene`.
+pub fn objects_seen(scene: &Scene, size: u32) -> Vec<Option<u32>> {
+    let compiled = compile_scene(scene, size, size);
+    let data = backend_cpu::trace::SceneData::new(&compiled);
+    (0..size * size)
+        .map(|i| {
+            let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
+            let dir = camera_ray(&compiled.camera, x, y);
+            data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
+                .map(|h| data.triangles[h.triangle as usize].object)
+        })
+        .collect()
+}
+
+/// Whether `f` holds for pixel `i` of a `size`-wide image and its eight neighbours (clipped
+/// to the image): a pixel whose neighbours' centre rays agree has jittered rays that agree
+/// too.
+pub fn around(i: usize, size: u32, f: impl Fn(usize) -> bool) -> bool {
+    let (x, y, size) = (
+        (i as u32 % size) as i64,
+        (i as u32 / size) as i64,
+        size as i64,
+    );
+    (-1..=1).all(|dy| {
+        (-1..=1).all(|dx| {
+            let (nx, ny) = (x + dx, y + dy);
+            !(0..size).contains(&nx) || !(0..size).contains(&ny) || f((ny * size + nx) as usize)
+        })
+    })
 }

@@ -16,7 +16,7 @@ use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::region::emitting_region;
 use ppm_core::scene::Scene;
 use std::ops::ControlFlow;
-use tests::luminance;
+use tests::{around, luminance, objects_seen};
 
 fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
@@ -376,21 +376,6 @@ fn both_backends_agree_on_a_compensated_frame() {
     }
 }
 
-/// Per pixel of a `size` x `size` image, the object an eye ray through its centre meets
-/// first in `scene`.
-fn objects_seen(scene: &Scene, size: u32) -> Vec<Option<u32>> {
-    let compiled = compile_scene(scene, size, size);
-    let data = backend_cpu::trace::SceneData::new(&compiled);
-    (0..size * size)
-        .map(|i| {
-            let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
-            let dir = camera_ray(&compiled.camera, x, y);
-            data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
-                .map(|h| data.triangles[h.triangle as usize].object)
-        })
-        .collect()
-}
-
 /// Local mode resets every pixel the tall block newly covers (no eye path met the block there
 /// before the move: the box that holds it in every pose finds them), keeps most others, and
 /// keeps the direct light of those whose rays stayed clear of the box as it was.
@@ -658,22 +643,6 @@ fn both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds() {
     let report = independent::compare(("cpu", &cpu), ("wgpu", &wgpu), &p, 3);
     println!("{}", independent::format(&report));
     assert!(report.agree, "{}", independent::format(&report));
-}
-
-/// Whether pixel `i`'s 3x3 neighbourhood (clipped to the image) all satisfies `f`: a pixel
-/// whose neighbours' centre rays agree has jittered rays that agree too.
-fn around(i: usize, size: u32, f: impl Fn(usize) -> bool) -> bool {
-    let (x, y, size) = (
-        (i as u32 % size) as i64,
-        (i as u32 / size) as i64,
-        size as i64,
-    );
-    (-1..=1).all(|dy| {
-        (-1..=1).all(|dx| {
-            let (nx, ny) = (x + dx, y + dy);
-            !(0..size).contains(&nx) || !(0..size).contains(&ny) || f((ny * size + nx) as usize)
-        })
-    })
 }
 
 /// Local mode keeps the pixels whose eye rays crossed the box the tall block sweeps but met

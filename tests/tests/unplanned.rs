@@ -9,7 +9,7 @@ use backend_wgpu::backend_or_skip;
 use glam::{Quat, Vec3};
 use harness::driver::{Budget, Renderer, Schedule, run};
 use harness::reference::{ReferenceBudget, render_reference};
-use ppm_core::compile::{camera_ray, compile_scene};
+use ppm_core::compile::compile_scene;
 use ppm_core::image::Image;
 use ppm_core::layout::hit_flags;
 use ppm_core::metrics::{block_relative_rmse, relative_rmse};
@@ -18,7 +18,7 @@ use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{Move, Scene};
 use std::ops::ControlFlow;
-use tests::luminance;
+use tests::{around, luminance, objects_seen};
 
 fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
@@ -35,35 +35,6 @@ fn rigid(scene: &Scene, name: &str, degrees: f32, by: [f32; 3]) -> Move {
         translation: Vec3::from(by),
         rotation: Quat::from_rotation_y(degrees.to_radians()),
     }
-}
-
-/// The object each pixel's centre ray meets first.
-fn objects_seen(scene: &Scene, size: u32) -> Vec<Option<u32>> {
-    let compiled = compile_scene(scene, size, size);
-    let data = backend_cpu::trace::SceneData::new(&compiled);
-    (0..size * size)
-        .map(|i| {
-            let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
-            let dir = camera_ray(&compiled.camera, x, y);
-            data.closest_hit(compiled.camera.eye.into(), dir, f32::INFINITY)
-                .map(|h| data.triangles[h.triangle as usize].object)
-        })
-        .collect()
-}
-
-/// Whether `f` holds for pixel `i` and its eight neighbours (clipped to the image).
-fn around(i: usize, size: u32, f: impl Fn(usize) -> bool) -> bool {
-    let (x, y, size) = (
-        (i as u32 % size) as i64,
-        (i as u32 / size) as i64,
-        size as i64,
-    );
-    (-1..=1).all(|dy| {
-        (-1..=1).all(|dx| {
-            let (nx, ny) = (x + dx, y + dy);
-            !(0..size).contains(&nx) || !(0..size).contains(&ny) || f((ny * size + nx) as usize)
-        })
-    })
 }
 
 fn truth(scene: &Scene, size: u32, spp: u32) -> Image {
