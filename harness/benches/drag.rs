@@ -9,36 +9,24 @@
 //! corrected on average. Figures only, no threshold: machines are noisy, compare rows of one
 //! run. `PPM_BENCH_BACKENDS` (default `cpu,wgpu`) and `PPM_BENCH_SCENES` choose the rows.
 
+mod common;
+
 use backend_cpu::CpuBackend;
-use backend_wgpu::WgpuBackend;
+use common::{backends, setting, wgpu_if_wanted};
 use harness::driver::Renderer;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::Move;
 use std::time::Instant;
 
-fn setting<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
 fn main() {
     let warmup: u32 = setting("PPM_BENCH_WARMUP", 30);
     let moves: u32 = setting("PPM_BENCH_MOVES", 30);
     let size: u32 = setting("PPM_BENCH_SIZE", 256);
-    let backends = std::env::var("PPM_BENCH_BACKENDS").unwrap_or_else(|_| "cpu,wgpu".into());
+    let backends = backends();
     let scenes = std::env::var("PPM_BENCH_SCENES")
         .unwrap_or_else(|_| "cornell-box,cornell-bunny,wedding-band".into());
-    let mut gpu = match WgpuBackend::new() {
-        _ if !backends.contains("wgpu") => None,
-        Ok(b) => Some(b),
-        Err(e) => {
-            println!("no wgpu rows: {e}");
-            None
-        }
-    };
+    let mut gpu = wgpu_if_wanted(&backends);
     println!(
         "local mode, {size}x{size}, {warmup} iterations of warm-up, then {moves} moves of a \
          thirtieth of the scene's move, one iteration after each"

@@ -11,18 +11,13 @@
 //! 200,000), `PPM_BENCH_RADIUS` (default: the scene's), `PPM_BENCH_SIZES` (default
 //! `256,768`), and `PPM_BENCH_BACKENDS` (default `cpu,wgpu`).
 
+mod common;
+
 use backend_cpu::CpuBackend;
-use backend_wgpu::WgpuBackend;
+use common::{backends, setting, wgpu_if_wanted};
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
-
-fn setting<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
 
 fn main() {
     let scene = scenes::builtin("cornell-box")
@@ -35,16 +30,9 @@ fn main() {
         .split(',')
         .filter_map(|s| s.trim().parse().ok())
         .collect();
-    let backends = std::env::var("PPM_BENCH_BACKENDS").unwrap_or_else(|_| "cpu,wgpu".into());
+    let backends = backends();
     let threads = rayon::current_num_threads();
-    let mut gpu = match WgpuBackend::new() {
-        _ if !backends.contains("wgpu") => None,
-        Ok(b) => Some(b),
-        Err(e) => {
-            println!("no wgpu rows: {e}");
-            None
-        }
-    };
+    let mut gpu = wgpu_if_wanted(&backends);
     let radius: f32 = setting("PPM_BENCH_RADIUS", scene.render.initial_radius);
     println!(
         "cornell-box, sppm, {iterations} iterations x {photons} photons from scratch, initial radius {radius}; cpu on {threads} threads"
