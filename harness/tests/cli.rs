@@ -779,3 +779,33 @@ fn diff_follows_a_path_on_any_pair_of_backends() {
     let err = stderr(&out);
     assert!(err.contains("timed.toml: step 1 waits seconds"), "{err}");
 }
+
+/// A local-mode correction too large for one pass, or for this machine's memory, is refused
+/// naming the option before anything renders (the memory figures vary by machine).
+#[test]
+fn an_oversized_correction_is_refused_naming_the_option() {
+    let args = |passes: &'static str| {
+        [
+            "animate",
+            "cornell-box",
+            "--correction-passes",
+            passes,
+            "--photons-per-pass",
+            "1000000",
+            "-o",
+            "unused",
+        ]
+    };
+    assert_eq!(
+        refusal(&args("100000")),
+        "error: --correction-passes = 100000: 100000 passes' worth of 1000000 photons exceed \
+         2^32 photons in one pass"
+    );
+    let memory = refusal(&args("2000"));
+    assert!(
+        memory.starts_with(
+            "error: command line: photons_per_pass * correction_passes = 2000000000: "
+        ) && memory.ends_with("lower --correction-passes"),
+        "{memory}"
+    );
+}

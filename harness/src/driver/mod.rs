@@ -3,9 +3,9 @@
 //! [`Renderer`] is the only code that knows how passes follow each other: it turns the render
 //! settings into each pass's parameter struct in one place (`Renderer::eye_params` and its
 //! siblings), runs an iteration of either estimator, and moves the scene with any
-//! [`MoveMode`](ppm_core::params::MoveMode) ([`moves`]). Callers describe *what* to run as a [`Schedule`] (render for a
-//! budget, move, render again, ...) and watch it through an [`Observer`]; [`run`] executes it
-//! ([`schedule`]).
+//! [`MoveMode`](ppm_core::params::MoveMode) ([`moves`]). Callers describe *what* to run as a
+//! [`Schedule`] (render for a budget, move, render again, ...) and watch it through an
+//! [`Observer`]; [`run`] executes it ([`schedule`]).
 //!
 //! An iteration of `sppm` traces a fresh jittered eye sample per slot, adds its direct light
 //! to the slot's sum, then traces and gathers one photon pass; `ppm` traces its hit points

@@ -323,10 +323,17 @@ impl Renderer<'_> {
                 // Local mode's correction is one pass per pose: a gather per pass over every
                 // kept slot cost more than the photons (MoveParams::correction_passes).
                 let (n, passes) = if *changed_only {
-                    (
-                        self.params.photons_per_pass * self.moves.correction_passes,
-                        1,
-                    )
+                    let n = self
+                        .params
+                        .photons_per_pass
+                        .checked_mul(self.moves.correction_passes)
+                        .ok_or_else(|| {
+                            BackendError::Limit(format!(
+                                "correction_passes: {} passes of {} photons exceed 2^32 photons",
+                                self.moves.correction_passes, self.params.photons_per_pass
+                            ))
+                        })?;
+                    (n, 1)
                 } else {
                     (self.params.photons_per_pass, self.moves.difference_passes)
                 };

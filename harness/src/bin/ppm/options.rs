@@ -160,13 +160,32 @@ impl MoveOptions {
             ..MoveParams::default()
         };
         p.validate("command line")?;
+        let budget = MemoryBudget::detect();
         check_deposits(
             p.region_photons,
             "region_photons",
             "--region-photons",
             render,
             scene,
-            &MemoryBudget::detect(),
+            &budget,
+        )?;
+        // Local mode traces its correction as one pass of this many photons per pose.
+        let correction = u64::from(render.photons_per_pass) * u64::from(p.correction_passes);
+        let Ok(correction) = u32::try_from(correction) else {
+            bail!(
+                "--correction-passes = {}: {} passes' worth of {} photons exceed 2^32 photons in one pass",
+                p.correction_passes,
+                p.correction_passes,
+                render.photons_per_pass
+            );
+        };
+        check_deposits(
+            correction,
+            "photons_per_pass * correction_passes",
+            "--correction-passes",
+            render,
+            scene,
+            &budget,
         )?;
         Ok(p)
     }
