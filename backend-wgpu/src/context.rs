@@ -3,7 +3,9 @@
 use ppm_core::passes::BackendError;
 use std::sync::{Arc, Mutex};
 
-/// A wgpu device and queue, with the adapter's description and error capture.
+/// A wgpu device and queue, with the adapter's description and error capture. Clones share
+/// the device and what it reports (two backends on one device, as the viewer's comparison).
+#[derive(Clone)]
 pub struct GpuContext {
     /// The device.
     pub device: wgpu::Device,
@@ -53,6 +55,14 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| BackendError::Device(format!("cannot open the device: {e}")))?;
+        Ok(Self::adopt(device, queue, adapter.get_info()))
+    }
+
+    /// Runs the passes on a device and queue someone else opened (a viewer's, which also
+    /// presents to a window). The device must have been requested with at least WebGPU's
+    /// baseline limits; this context takes over its lost-device and uncaptured-error
+    /// callbacks, so that the passes report what goes wrong.
+    pub fn adopt(device: wgpu::Device, queue: wgpu::Queue, adapter: wgpu::AdapterInfo) -> Self {
         let lost = Arc::new(Mutex::new(None));
         let lost_in_callback = lost.clone();
         device.set_device_lost_callback(move |reason, message| {
@@ -67,13 +77,13 @@ impl GpuContext {
                 .unwrap_or_else(|p| p.into_inner())
                 .get_or_insert(e.to_string());
         }));
-        Ok(Self {
+        Self {
             device,
             queue,
-            adapter: adapter.get_info(),
+            adapter,
             lost,
             uncaptured,
-        })
+        }
     }
 
     /// Runs `work` inside validation and out-of-memory error scopes and waits for the GPU;

@@ -184,6 +184,38 @@ impl WgpuBackend {
         format!("{} ({:?})", a.name, a.backend)
     }
 
+    /// The device the passes run on (a viewer draws on it too).
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// Resolves the image into `target` on the device, with no read-back: `width * height`
+    /// RGB triples of f32, rows from the top, as [`Resolve::resolve`] returns them. `target`
+    /// must be a storage buffer of this backend's device at least that large.
+    pub fn resolve_into(
+        &mut self,
+        params: &ResolveParams,
+        target: &wgpu::Buffer,
+    ) -> Result<(), BackendError> {
+        let needed = u64::from(params.width) * u64::from(params.height) * 12;
+        if target.size() < needed {
+            return Err(BackendError::Limit(format!(
+                "resolve target holds {} bytes, the {}x{} image needs {needed}",
+                target.size(),
+                params.width,
+                params.height
+            )));
+        }
+        let (hit_points, _) = self.hit_points("resolve")?;
+        self.run("resolve", |encoder| {
+            self.kernels
+                .resolve
+                .record(&self.ctx, encoder, params, hit_points, target);
+            Ok(())
+        })
+        .map(|_| ())
+    }
+
     fn scene(&self, pass: &'static str) -> Result<&SceneBuffers, BackendError> {
         self.scene.as_ref().ok_or(BackendError::OutOfOrder {
             pass,
@@ -743,15 +775,9 @@ impl GatherPass for WgpuBackend {
 
 impl Resolve for WgpuBackend {
     fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError> {
-        let (hit_points, _) = self.hit_points("resolve")?;
         let pixels = params.width as usize * params.height as usize;
         let image = storage_zeroed(&self.ctx, "image", pixels as u64 * 12)?;
-        self.run("resolve", |encoder| {
-            self.kernels
-                .resolve
-                .record(&self.ctx, encoder, params, hit_points, &image);
-            Ok(())
-        })?;
+        self.resolve_into(params, &image)?;
         let rgb = read_back::<[f32; 3]>(&self.ctx, &image, pixels)?;
         Ok(Image {
             width: params.width,
@@ -846,6 +872,11 @@ impl WgpuBackend {
 impl Backend for WgpuBackend {
     fn name(&self) -> &str {
         "wgpu"
+    }
+
+    /// The viewer reaches [`WgpuBackend::resolve_into`] through it.
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(self)
     }
 }
 

@@ -12,6 +12,7 @@ pub mod convergence;
 pub mod diff;
 pub mod driver;
 pub mod error_report;
+pub mod pick;
 pub mod reference;
 pub mod report;
 pub mod stats;

@@ -211,6 +211,13 @@ pub trait Backend:
 {
     /// Short name for reports (`cpu`, `wgpu`).
     fn name(&self) -> &str;
+
+    /// The backend as its own type, for callers that use what it offers beyond this contract
+    /// (the viewer draws the wgpu backend's image on its device, with no read-back). `None`
+    /// unless the backend opts in.
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        None
+    }
 }
 
 /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3).

@@ -204,16 +204,11 @@ impl<'a> Renderer<'a> {
     /// The image of the current statistics (black before `sppm`'s first iteration, which has
     /// traced no slot yet).
     pub fn resolve(&mut self) -> Result<Image, BackendError> {
-        if self.fresh && self.params.estimator == Estimator::Sppm {
+        if !self.has_image() {
             return Ok(Image::new(self.params.width, self.params.height));
         }
         let t = Instant::now();
-        let image = self.backend.resolve(&ResolveParams {
-            width: self.params.width,
-            height: self.params.height,
-            spp: self.params.spp,
-            _pad0: 0,
-        })?;
+        let image = self.backend.resolve(&self.resolve_params())?;
         self.report.times.resolve += t.elapsed().as_secs_f64();
         Ok(image)
     }
@@ -226,6 +221,50 @@ impl<'a> Renderer<'a> {
     /// The render's settings.
     pub fn params(&self) -> &RenderParams {
         &self.params
+    }
+
+    /// The current pose.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// What [`Renderer::resolve`] asks the backend for.
+    pub fn resolve_params(&self) -> ResolveParams {
+        ResolveParams {
+            width: self.params.width,
+            height: self.params.height,
+            spp: self.params.spp,
+            _pad0: 0,
+        }
+    }
+
+    /// Whether the slots hold statistics to show (`sppm` has none before its first
+    /// iteration after a load).
+    pub fn has_image(&self) -> bool {
+        !(self.fresh && self.params.estimator == Estimator::Sppm)
+    }
+
+    /// Starts over from `camera`: every slot sees something else, so nothing is kept.
+    pub fn look_from(&mut self, camera: ppm_core::scene::Camera) -> Result<(), BackendError> {
+        let mut scene = self.scene.clone();
+        scene.camera = camera;
+        self.frame += 1;
+        let compiled = self.compile(&scene);
+        self.load(scene, compiled)
+    }
+
+    /// Changes the photons of each later pass and the fraction `alpha` each later gather
+    /// keeps, between iterations: the statistics gathered so far stay valid, since every
+    /// gather normalises by the photons it counted. Refused (nothing changed) when the
+    /// settings would not validate, with the field named.
+    pub fn retune(&mut self, photons_per_pass: u32, alpha: f32) -> Result<(), BackendError> {
+        let mut next = self.params.clone();
+        next.photons_per_pass = photons_per_pass;
+        next.alpha = alpha;
+        next.validate("retune")
+            .map_err(|e| BackendError::Unsupported(e.to_string()))?;
+        self.params = next;
+        Ok(())
     }
 
     /// What ran so far: counters and time per pass kind.

@@ -13,6 +13,10 @@
 //!
 //! A step without `after_seconds` or `after_iterations` (or with zero) moves together with the
 //! step before it. Errors name the file, the step, the field and the value.
+//!
+//! The viewer's scripts (`ppm view --script`) are path files whose steps may also, instead of
+//! an object, name a camera (`camera = { eye = [...], look_at = [...] }`) or only ask for a
+//! screenshot (`screenshot = true`, allowed on any step: taken after what the step does).
 
 use crate::file::scene_file::{SceneSource, euler_degrees};
 use glam::Vec3;
@@ -33,11 +37,50 @@ struct PathFile {
 struct StepFile {
     after_seconds: Option<f64>,
     after_iterations: Option<u32>,
-    object: String,
+    object: Option<String>,
     #[serde(default)]
     translate: [f32; 3],
     #[serde(default)]
     rotate: [f32; 3],
+    camera: Option<CameraFile>,
+    #[serde(default)]
+    screenshot: bool,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraFile {
+    eye: [f32; 3],
+    look_at: [f32; 3],
+}
+
+/// Where a script step puts the camera (its up vector and field of view stay).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraStep {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub look_at: Vec3,
+}
+
+/// What a viewer script does at one time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScriptEvent {
+    /// Rendering before it, since the previous event (or the start).
+    pub after: After,
+    /// Rigid moves, applied in order, all in one move of the render.
+    pub moves: Vec<Move>,
+    /// A new camera, after the moves (the render starts over).
+    pub camera: Option<CameraStep>,
+    /// Write the presented frame once the rest is done.
+    pub screenshot: bool,
+}
+
+/// A viewer script: a path file whose steps may also move the camera or ask for screenshots.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Script {
+    /// The events, in order.
+    pub events: Vec<ScriptEvent>,
 }
 
 /// Reads and checks a path file against `scene` (frame 0, the pose a render starts in).
@@ -46,8 +89,59 @@ pub fn load_path_file(path: &Path, scene: &Scene) -> Result<MovePath, SceneError
     parse_path(&source.text, &source.file, scene)
 }
 
-/// Parses and checks path text against `scene`; `file` names the source in errors.
+/// Reads and checks a viewer script against `scene`.
+pub fn load_script_file(path: &Path, scene: &Scene) -> Result<Script, SceneError> {
+    let source = SceneSource::read(path)?;
+    parse_script(&source.text, &source.file, scene)
+}
+
+/// Parses and checks path text against `scene`; `file` names the source in errors. Camera
+/// and screenshot steps are the viewer's and refused here.
 pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, SceneError> {
+    let (script, steps) = parse_steps(text, file, scene)?;
+    if let Some((i, field)) = steps.iter().enumerate().find_map(|(i, s)| {
+        let field = match (s.object.is_none(), s.camera.is_some(), s.screenshot) {
+            (_, true, _) => "camera",
+            (_, _, true) => "screenshot",
+            (true, _, _) => "object",
+            _ => return None,
+        };
+        Some((i, field))
+    }) {
+        return Err(SceneError::invalid(
+            file,
+            format!("step[{i}].{field}"),
+            if field == "object" {
+                "missing"
+            } else {
+                "given"
+            },
+            "a path moves objects: every step names one; camera and screenshot steps are \
+             for `ppm view --script`",
+        ));
+    }
+    Ok(MovePath {
+        events: script
+            .events
+            .into_iter()
+            .map(|e| PathEvent {
+                after: e.after,
+                moves: e.moves,
+            })
+            .collect(),
+    })
+}
+
+/// Parses and checks a viewer script against `scene`; `file` names the source in errors.
+pub fn parse_script(text: &str, file: &str, scene: &Scene) -> Result<Script, SceneError> {
+    parse_steps(text, file, scene).map(|(script, _)| script)
+}
+
+fn parse_steps(
+    text: &str,
+    file: &str,
+    scene: &Scene,
+) -> Result<(Script, Vec<StepFile>), SceneError> {
     let raw: PathFile = toml::from_str(text).map_err(|e| SceneError::Syntax {
         file: file.to_owned(),
         reason: e.to_string().trim_end().replace('\n', "\n  "),
@@ -60,7 +154,8 @@ pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, Sce
             "a path needs at least one [[step]]",
         ));
     }
-    let mut path = MovePath::default();
+    let mut script = Script::default();
+    let (bounds, mut posed) = (scene.bounds(), scene.clone());
     for (i, step) in raw.step.iter().enumerate() {
         let err = |field: &str, value: String, problem: &str| {
             SceneError::invalid(file, format!("step[{i}].{field}"), value, problem)
@@ -84,13 +179,6 @@ pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, Sce
             (None, Some(n)) => After::Iterations(n),
             (None, None) => After::Iterations(0),
         };
-        let object = scene.object_index(&step.object).ok_or_else(|| {
-            err(
-                "object",
-                format!("\"{}\"", step.object),
-                "no object has this name",
-            )
-        })?;
         let finite = |field: &str, v: [f32; 3]| match v.iter().position(|c| !c.is_finite()) {
             Some(k) => Err(err(
                 &format!("{field}[{k}]"),
@@ -99,47 +187,101 @@ pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, Sce
             )),
             None => Ok(Vec3::from(v)),
         };
-        let m = Move {
-            object,
-            translation: finite("translate", step.translate)?,
-            rotation: euler_degrees(finite("rotate", step.rotate)?),
-        };
-        match path.events.last_mut() {
-            Some(event) if after.is_zero() => event.moves.push(m),
-            _ => path.events.push(PathEvent {
-                after,
-                moves: vec![m],
-            }),
-        }
-    }
-    check_inside(&path, scene, file)?;
-    Ok(path)
-}
-
-/// Every moved object stays inside the box of the whole scene as loaded (a path that takes
-/// an object elsewhere is more likely a typo than a wish).
-fn check_inside(path: &MovePath, scene: &Scene, file: &str) -> Result<(), SceneError> {
-    let (lo, hi) = scene.bounds();
-    let slack = (hi - lo) * 1e-4;
-    let mut posed = scene.clone();
-    let mut step = 0;
-    for event in &path.events {
-        for m in &event.moves {
-            posed.apply(m);
-            let (a, b) = posed.objects[m.object].bounds();
-            let far = a.abs().max(b.abs()).max_element() > MAX_COORDINATE;
-            if far || a.cmplt(lo - slack).any() || b.cmpgt(hi + slack).any() {
-                return Err(SceneError::invalid(
-                    file,
-                    format!("step[{step}]"),
-                    format!("\"{}\"", posed.objects[m.object].name),
-                    format!(
-                        "moves the object to [{a}, {b}], outside the scene's bounds [{lo}, {hi}]"
-                    ),
+        let moved = match (&step.object, &step.camera) {
+            (Some(_), Some(_)) => {
+                return Err(err(
+                    "camera",
+                    "given".to_owned(),
+                    "a step moves an object or the camera, not both",
                 ));
             }
-            step += 1;
+            (Some(name), None) => {
+                let object = scene.object_index(name).ok_or_else(|| {
+                    err("object", format!("\"{name}\""), "no object has this name")
+                })?;
+                Some(Move {
+                    object,
+                    translation: finite("translate", step.translate)?,
+                    rotation: euler_degrees(finite("rotate", step.rotate)?),
+                })
+            }
+            (None, camera) => {
+                if step.translate != [0.0; 3] || step.rotate != [0.0; 3] {
+                    return Err(err(
+                        "object",
+                        "missing".to_owned(),
+                        "translate and rotate need the object they move",
+                    ));
+                }
+                if camera.is_none() && !step.screenshot {
+                    return Err(err(
+                        "object",
+                        "missing".to_owned(),
+                        "a step names an object to move (or, in a viewer script, a camera \
+                         or screenshot = true)",
+                    ));
+                }
+                None
+            }
+        };
+        let camera = match &step.camera {
+            Some(c) => {
+                let eye = finite("camera.eye", c.eye)?;
+                let look_at = finite("camera.look_at", c.look_at)?;
+                if (look_at - eye).length() <= f32::EPSILON * eye.abs().max_element().max(1.0) {
+                    return Err(err(
+                        "camera.look_at",
+                        format!("{look_at}"),
+                        "the camera looks at its own eye",
+                    ));
+                }
+                Some(CameraStep { eye, look_at })
+            }
+            None => None,
+        };
+        let event = match script.events.last_mut() {
+            Some(event) if after.is_zero() => event,
+            _ => {
+                script.events.push(ScriptEvent {
+                    after,
+                    moves: Vec::new(),
+                    camera: None,
+                    screenshot: false,
+                });
+                script.events.last_mut().expect("pushed above")
+            }
+        };
+        if let Some(m) = &moved {
+            check_inside(&mut posed, m, bounds, format!("step[{i}]"), file)?;
         }
+        event.moves.extend(moved);
+        event.camera = camera.or(event.camera);
+        event.screenshot |= step.screenshot;
+    }
+    Ok((script, raw.step))
+}
+
+/// Every moved object stays inside the box of the whole scene as loaded, `bounds` (a path
+/// that takes an object elsewhere is more likely a typo than a wish); `posed` is the pose
+/// before `m`, and after it on return.
+fn check_inside(
+    posed: &mut Scene,
+    m: &Move,
+    (lo, hi): (Vec3, Vec3),
+    field: String,
+    file: &str,
+) -> Result<(), SceneError> {
+    let slack = (hi - lo) * 1e-4;
+    posed.apply(m);
+    let (a, b) = posed.objects[m.object].bounds();
+    let far = a.abs().max(b.abs()).max_element() > MAX_COORDINATE;
+    if far || a.cmplt(lo - slack).any() || b.cmpgt(hi + slack).any() {
+        return Err(SceneError::invalid(
+            file,
+            field,
+            format!("\"{}\"", posed.objects[m.object].name),
+            format!("moves the object to [{a}, {b}], outside the scene's bounds [{lo}, {hi}]"),
+        ));
     }
     Ok(())
 }
@@ -212,5 +354,55 @@ mod tests {
         let typo = bad("[[step]]\nobject = \"short-block\"\ntranslation = [0.0, 1.0, 0.0]");
         assert!(typo.contains("unknown field"), "{typo}");
         assert!(bad("").contains("at least one"));
+    }
+
+    #[test]
+    fn scripts_take_cameras_and_screenshots_and_paths_refuse_them() {
+        let text = r#"
+            [[step]]
+            after_iterations = 3
+            screenshot = true
+            [[step]]
+            after_iterations = 2
+            object = "short-block"
+            translate = [10.0, 0.0, 0.0]
+            [[step]]
+            screenshot = true
+            [[step]]
+            after_seconds = 0.5
+            camera = { eye = [278.0, 273.0, -700.0], look_at = [278.0, 273.0, 0.0] }
+        "#;
+        let scene = cornell();
+        let script = parse_script(text, "s.toml", &scene).unwrap();
+        assert_eq!(script.events.len(), 3);
+        assert!(script.events[0].screenshot && script.events[0].moves.is_empty());
+        assert_eq!(script.events[1].moves.len(), 1);
+        assert!(
+            script.events[1].screenshot,
+            "a zero-time step joins the one before"
+        );
+        let camera = script.events[2].camera.unwrap();
+        assert_eq!(camera.eye, Vec3::new(278.0, 273.0, -700.0));
+        let refused = parse_path(text, "s.toml", &scene).unwrap_err().to_string();
+        assert!(
+            refused.starts_with("s.toml: step[0].screenshot"),
+            "{refused}"
+        );
+        let bad = |text: &str| {
+            parse_script(text, "s.toml", &scene)
+                .unwrap_err()
+                .to_string()
+        };
+        let both = bad(
+            "[[step]]\nobject = \"short-block\"\ncamera = { eye = [0.0, 0.0, 0.0], look_at = [0.0, 0.0, 1.0] }",
+        );
+        assert!(
+            both.contains("step[0].camera") && both.contains("not both"),
+            "{both}"
+        );
+        let blind = bad("[[step]]\ncamera = { eye = [1.0, 2.0, 3.0], look_at = [1.0, 2.0, 3.0] }");
+        assert!(blind.contains("step[0].camera.look_at"), "{blind}");
+        let nothing = bad("[[step]]\nafter_iterations = 2");
+        assert!(nothing.contains("step[0].object = missing"), "{nothing}");
     }
 }

@@ -26,6 +26,7 @@ mod options;
 mod render;
 mod reports;
 mod stress;
+mod view;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -61,6 +62,8 @@ enum Command {
     Report(ReportCommand),
     /// Run the stress family (extreme scales, powers, geometry) and check every invariant.
     Stress(stress::StressArgs),
+    /// Open a window on a progressive render: drag objects and watch the light follow.
+    View(view::ViewArgs),
     /// Write a scene for Mitsuba 3 or pbrt-v4 (scene file and PLY meshes), to check us
     /// against another renderer.
     Export(export::ExportArgs),
@@ -105,5 +108,6 @@ fn run(cli: Cli) -> Result<()> {
         Command::Report(ReportCommand::Convergence(args)) => reports::convergence(args),
         Command::Stress(args) => stress::run(args),
         Command::Export(args) => export::export(args),
+        Command::View(args) => view::view(args),
     }
 }

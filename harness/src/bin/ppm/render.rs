@@ -8,7 +8,9 @@ use harness::convergence;
 use harness::driver::schedule::EachIteration;
 use harness::driver::{Budget, Progress, Renderer, Schedule, Stoppable, run};
 use harness::reference::{ReferenceBudget, Truth, render_reference, variance_path};
+use harness::report::RenderReport;
 use indicatif::{ProgressBar, ProgressStyle};
+use ppm_core::image::Image;
 use ppm_core::limits::{MemoryBudget, check_reference_memory};
 use ppm_core::params::{MoveParams, RenderParams};
 use scenes::file::image::ImageFiles;
@@ -84,11 +86,12 @@ pub fn render(args: RenderArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
 
-    outcome.image.write_exr(&paths.exr)?;
-    outcome.image.write_png(&paths.png, args.exposure)?;
-    let json = serde_json::to_string_pretty(&outcome.report)?;
-    write_bytes(&paths.json, json)
-        .with_context(|| format!("{}: cannot write report", paths.json.display()))?;
+    write_render(
+        outcome.image.clone(),
+        outcome.report.clone(),
+        &paths,
+        args.exposure,
+    )?;
     let r = &outcome.report;
     println!(
         "{} ({}): {} iterations, {} photons emitted, {} deposited, {:.2}s -> {}, {}, {}",
@@ -114,6 +117,25 @@ pub fn render(args: RenderArgs) -> Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// Writes a render's three files: the EXR, its PNG preview at `exposure`, and the JSON report.
+/// Non-finite pixels are written as zero and counted in the report.
+pub fn write_render(
+    mut image: Image,
+    mut report: RenderReport,
+    paths: &OutputPaths,
+    exposure: f32,
+) -> Result<()> {
+    for p in image.pixels.iter_mut().flatten().filter(|v| !v.is_finite()) {
+        *p = 0.0;
+        report.non_finite_pixels_zeroed += 1;
+    }
+    image.write_exr(&paths.exr)?;
+    image.write_png(&paths.png, exposure)?;
+    let json = serde_json::to_string_pretty(&report)?;
+    write_bytes(&paths.json, json)
+        .with_context(|| format!("{}: cannot write report", paths.json.display()))
 }
 
 /// The three files a render writes, side by side.
@@ -175,7 +197,7 @@ pub fn output_folder(dir: &Path, option: &str) -> Result<()> {
 /// any machine this runs on, and a larger number is a typo, not a setting.
 const MAX_THREADS: usize = 1024;
 
-fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     match threads {
         Some(0) => bail!("--threads = 0: must be at least 1 (leave it out for one per core)"),
         Some(n) if n > MAX_THREADS => bail!(
