@@ -12,9 +12,11 @@ pub mod convergence;
 pub mod diff;
 pub mod driver;
 pub mod error_report;
+pub mod merge;
 pub mod pick;
 pub mod reference;
 pub mod report;
+pub mod shard;
 pub mod stats;
 pub mod stress;
 

@@ -4,10 +4,10 @@
 use ppm_core::compile::{CompiledScene, SceneFeatures};
 use ppm_core::params::{DirectMode, Estimator, RenderParams};
 use ppm_core::scene::{Scene, degenerate_triangle_count};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Seconds spent per pass kind, summed over the render.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PassTimes {
     /// Building the BVH (obvhs).
     pub bvh_build: f64,
@@ -30,7 +30,7 @@ pub struct PassTimes {
 }
 
 /// Rays traced per pass kind.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RayCounts {
     /// Camera rays and specular continuations.
     pub eye: u64,
@@ -41,7 +41,7 @@ pub struct RayCounts {
 }
 
 /// Everything a render reports.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RenderReport {
     /// Scene name.
     pub scene: String,
@@ -80,6 +80,10 @@ pub struct RenderReport {
     /// The render was asked to stop (Ctrl-C) before its budget was spent: the image holds
     /// the iterations completed.
     pub interrupted: bool,
+    /// This render is one of independent shards (`ppm render --shard I/N`, its own seed),
+    /// to be averaged by `ppm merge`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<crate::shard::Shard>,
 }
 
 impl RenderReport {
@@ -109,6 +113,7 @@ impl RenderReport {
             non_finite_pixels_zeroed: 0,
             error: None,
             interrupted: false,
+            shard: None,
         }
     }
 }

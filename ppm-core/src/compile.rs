@@ -11,7 +11,7 @@ use obvhs::{BvhBuildParams, triangle::Triangle};
 use std::time::{Duration, Instant};
 
 /// What a scene contains, so that passes and code paths it does not need are left out.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SceneFeatures {
     /// Some surface is a mirror.
     pub mirror: bool,

@@ -49,7 +49,7 @@ impl std::str::FromStr for Estimator {
 }
 
 /// Where direct light comes from (docs/algorithm.md 1.2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DirectMode {
     /// Shadow rays at each hit point; photons skip their first surface (the thesis).
@@ -59,7 +59,7 @@ pub enum DirectMode {
 }
 
 /// Everything a render needs besides the scene.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RenderParams {
     /// Image width.
     pub width: u32,

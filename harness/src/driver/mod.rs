@@ -11,13 +11,15 @@
 //! to the slot's sum, then traces and gathers one photon pass; `ppm` traces its hit points
 //! and direct light once per pose, and an iteration is a photon pass and its gather.
 
+pub mod checkpoint;
 mod local;
 pub mod moves;
 pub mod schedule;
 
 pub use moves::{MoveReport, PhotonCounts};
 pub use schedule::{
-    Budget, Observer, ObserverResult, Outcome, Progress, RunError, Schedule, Step, Stoppable, run,
+    Budget, Observer, ObserverResult, Outcome, Progress, Resume, RunError, Schedule, Step,
+    Stoppable, run, run_from,
 };
 
 use crate::report::{RenderReport, left_out};

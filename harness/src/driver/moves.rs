@@ -21,11 +21,11 @@ use ppm_core::refit::recompile_moved;
 use ppm_core::region::{RegionError, emitting_region};
 use ppm_core::rng::{DIFFERENCE_PASS_BASE, PassKind, StreamKey};
 use ppm_core::scene::{Move, Scene};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Photons of one kind: emitted and deposited.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct Tally {
     /// Photons emitted.
     pub emitted: u64,
@@ -42,7 +42,7 @@ impl Tally {
 }
 
 /// Photons emitted and deposited, per kind (the thesis's tables 4.1 and 4.2).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PhotonCounts {
     /// Ordinary photons.
     pub ordinary: Tally,

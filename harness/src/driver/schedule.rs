@@ -235,6 +235,17 @@ pub enum RunError {
     /// The observer failed.
     #[error("{0}")]
     Observer(Box<dyn std::error::Error + Send + Sync>),
+    /// The checkpoint to resume from does not fit this render.
+    #[error(transparent)]
+    Checkpoint(#[from] super::checkpoint::CheckpointError),
+}
+
+/// A checkpoint to continue from, and the folder it came from (named in errors).
+pub struct Resume<'a> {
+    /// The state.
+    pub state: &'a super::checkpoint::RenderState,
+    /// Its folder.
+    pub dir: &'a std::path::Path,
 }
 
 /// A finished (or stopped) run.
@@ -264,8 +275,30 @@ pub fn run(
     schedule: &Schedule,
     observer: &mut dyn Observer,
 ) -> Result<Outcome, RunError> {
+    run_from(backend, scene, params, moves, schedule, observer, None)
+}
+
+/// [`run`], continuing from a checkpoint when `resume` gives one: the schedule then runs on
+/// from the state it holds (its budgets count what this run adds), and the report's times
+/// include the seconds before it.
+pub fn run_from(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    moves: &MoveParams,
+    schedule: &Schedule,
+    observer: &mut dyn Observer,
+    resume: Option<Resume>,
+) -> Result<Outcome, RunError> {
     let total = Instant::now();
     let mut renderer = Renderer::start(backend, scene.at_time(schedule.start), params, moves)?;
+    let before = match &resume {
+        Some(r) => {
+            renderer.restore(r.state, r.dir)?;
+            r.state.seconds
+        }
+        None => 0.0,
+    };
     let mut clock = Stopwatch::start();
     let mut at = Progress {
         step: 0,
@@ -342,7 +375,7 @@ pub fn run(
         *p = 0.0;
         report.non_finite_pixels_zeroed += 1;
     }
-    report.times.total = total.elapsed().as_secs_f64();
+    report.times.total = before + total.elapsed().as_secs_f64();
     report.error = error.as_ref().map(ToString::to_string);
     report.interrupted = stopped;
     Ok(Outcome {

@@ -6,6 +6,7 @@
 //! file name holds only the hash: a scene's name never becomes part of a path.
 
 use super::{ReferenceBudget, ReferenceImage, Truth, render_reference, variance_path};
+use crate::shard::Shard;
 use ppm_core::compile::compile_scene;
 use ppm_core::scene::{MaterialKind, Scene};
 use scenes::file::image::ImageError;
@@ -137,7 +138,7 @@ pub fn cached_reference(
         path: cache.display().to_string(),
         reason: e.to_string(),
     })?;
-    let summary = reference.summary(&scene.name, request.frame, request.seed);
+    let summary = reference.summary(&scene.name, request.frame, request.seed, Shard::WHOLE);
     reference.write(&path, &summary)?;
     Ok(Truth::from((&reference, source)))
 }

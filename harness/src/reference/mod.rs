@@ -7,6 +7,7 @@ pub mod path_tracer;
 pub mod sampler;
 
 use crate::clock::Stopwatch;
+use crate::shard::Shard;
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
 use path_tracer::PathTracer;
@@ -55,9 +56,12 @@ impl ReferenceImage {
         reference_noise(&self.image, &self.variance)
     }
 
-    /// The summary written beside the image.
-    pub fn summary(&self, scene: &str, frame: u32, seed: u32) -> ReferenceSummary {
-        let samples = u64::from(self.spp) * self.image.pixels.len() as u64;
+    /// The summary written beside the image, of the rows of `shard`.
+    pub fn summary(&self, scene: &str, frame: u32, seed: u32, shard: Shard) -> ReferenceSummary {
+        let rows = (0..self.image.height)
+            .filter(|&y| shard.owns_row(y))
+            .count() as u64;
+        let samples = u64::from(self.spp) * u64::from(self.image.width) * rows;
         ReferenceSummary {
             renderer: "ppm reference (path tracer with next-event estimation and MIS)",
             scene: scene.to_owned(),
@@ -72,6 +76,8 @@ impl ReferenceImage {
             relative_noise: self.noise(),
             error: self.error.clone(),
             interrupted: self.interrupted,
+            shard: (!shard.is_whole()).then_some(shard),
+            merged_from: Vec::new(),
         }
     }
 
@@ -120,6 +126,13 @@ pub struct ReferenceSummary {
     pub error: Option<String>,
     /// It was stopped (Ctrl-C) before its budget was spent: it holds the rounds completed.
     pub interrupted: bool,
+    /// The rows it holds, when it is a shard (`ppm reference --shard I/N`): the others are
+    /// zero until `ppm merge` joins it with the rest.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    /// The shard files it was merged from, if it was.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub merged_from: Vec<String>,
 }
 
 /// Where the variance of the reference at `path` is stored: `NAME.var.exr` beside `NAME.exr`.
@@ -127,18 +140,30 @@ pub fn variance_path(path: &Path) -> PathBuf {
     path.with_extension("var.exr")
 }
 
-/// Renders `compiled` by path tracing until `budget` is spent, in rounds of one sample per
-/// batch ([`sampler::BATCHES`]) per pixel, so a sample count is rounded up to a multiple of
-/// it; `on_round(spp, seconds)` is called after each round, and ends the render there when
-/// it breaks (a Ctrl-C).
-///
-/// Each pixel sums its own samples in order, so the result does not depend on the thread
-/// count. A non-finite sample stops the render: the complete rounds before it are returned,
-/// with the pixel and sample named in `error`.
+/// [`render_reference_shard`] of the whole image.
 pub fn render_reference(
     compiled: &CompiledScene,
     seed: u32,
     budget: ReferenceBudget,
+    on_round: &mut dyn FnMut(u32, f64) -> ControlFlow<()>,
+) -> ReferenceImage {
+    render_reference_shard(compiled, seed, budget, Shard::WHOLE, on_round)
+}
+
+/// Renders the rows of `shard` of `compiled` by path tracing until `budget` is spent, in rounds of one sample per
+/// batch ([`sampler::BATCHES`]) per pixel, so a sample count is rounded up to a multiple of
+/// it; `on_round(spp, seconds)` is called after each round, and ends the render there when
+/// it breaks (a Ctrl-C).
+///
+/// Each pixel sums its own samples in order, so the result depends neither on the thread
+/// count nor on the shard: a shard's rows are those rows of the whole image, bit for bit, and
+/// the rows it does not own stay zero. A non-finite sample stops the render: the complete
+/// rounds before it are returned, with the pixel and sample named in `error`.
+pub fn render_reference_shard(
+    compiled: &CompiledScene,
+    seed: u32,
+    budget: ReferenceBudget,
+    shard: Shard,
     on_round: &mut dyn FnMut(u32, f64) -> ControlFlow<()>,
 ) -> ReferenceImage {
     let scene = SceneData::new(compiled);
@@ -160,7 +185,10 @@ pub fn render_reference(
             .with_min_len(16)
             .map(|pixel| {
                 let (x, y) = (pixel % width, pixel / width);
-                std::array::from_fn(|b| tracer.sample(seed, x, y, spp + b as u32))
+                match shard.owns_row(y) {
+                    true => std::array::from_fn(|b| tracer.sample(seed, x, y, spp + b as u32)),
+                    false => [Vec3::ZERO; BATCHES as usize],
+                }
             })
             .collect();
         let bad = round

@@ -21,6 +21,7 @@ macro_rules! print {
 mod diff;
 mod export;
 mod interrupt;
+mod merge;
 mod moving;
 mod options;
 mod render;
@@ -51,6 +52,8 @@ enum Command {
     Scenes,
     /// Render the ground truth with the unbiased reference path tracer (CPU).
     Reference(render::ReferenceArgs),
+    /// Join the shards of a reference (bit for bit one run) or of a render (averaged).
+    Merge(merge::MergeArgs),
     /// Measure an image against a reference image (EXR files from any renderer).
     Compare(render::CompareArgs),
     /// Render one seeded scene on the CPU and wgpu backends and compare them.
@@ -102,6 +105,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render::render(args),
         Command::Reference(args) => render::reference(args),
         Command::Compare(args) => render::compare(args),
+        Command::Merge(args) => merge::merge(args),
         Command::Diff(args) => diff::run(args),
         Command::Animate(args) => moving::animate(args),
         Command::Report(ReportCommand::ErrorVsTime(args)) => moving::error_vs_time(args),

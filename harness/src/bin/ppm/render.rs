@@ -5,10 +5,13 @@ use crate::interrupt::{self, Interrupted};
 use crate::options::{BackendChoice, RenderOptions, check_frame, spp_bar};
 use anyhow::{Context, Result, bail};
 use harness::convergence;
-use harness::driver::schedule::EachIteration;
-use harness::driver::{Budget, Progress, Renderer, Schedule, Stoppable, run};
-use harness::reference::{ReferenceBudget, Truth, render_reference, variance_path};
+use harness::driver::checkpoint::RenderState;
+use harness::driver::{
+    Budget, Observer, ObserverResult, Progress, Renderer, Resume, Schedule, Stoppable, run_from,
+};
+use harness::reference::{ReferenceBudget, Truth, render_reference_shard, variance_path};
 use harness::report::RenderReport;
+use harness::shard::Shard;
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::image::Image;
 use ppm_core::limits::{MemoryBudget, check_reference_memory};
@@ -30,6 +33,22 @@ pub struct RenderArgs {
     /// Frame: 0 before the scene's move, 1 after it.
     #[arg(long, default_value_t = 0)]
     frame: u32,
+    /// Render shard I of N (0-based): an independent run with its own seed (derived from
+    /// --seed and I), which `ppm merge` averages with the others by their iterations.
+    #[arg(long, value_parser = Shard::parse)]
+    shard: Option<Shard>,
+    /// Keep the render's whole state in this folder (every --checkpoint-every seconds, on
+    /// Ctrl-C or SIGTERM, and at the end), to continue it later with --resume.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Seconds of rendering between checkpoints.
+    #[arg(long, default_value_t = 60.0, requires = "checkpoint")]
+    checkpoint_every: f64,
+    /// Continue the render whose state this folder holds, bit for bit as if it had never
+    /// stopped (same scene, settings and backend; --passes and --time-budget count the whole
+    /// render, the part before included).
+    #[arg(long)]
+    resume: Option<PathBuf>,
     /// Worker threads (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
@@ -44,7 +63,10 @@ pub struct RenderArgs {
 pub fn render(args: RenderArgs) -> Result<()> {
     interrupt::install()?;
     let scene = harness::load_scene(&args.scene)?;
-    let params = args.options.params(&scene, None)?;
+    let mut params = args.options.params(&scene, None)?;
+    if let Some(shard) = args.shard {
+        params.seed = shard.seed(params.seed);
+    }
     check_frame(args.frame)?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("--exposure = {}: must be a positive number", args.exposure);
@@ -52,46 +74,75 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let paths = OutputPaths::new(&args.output)?;
     let pool = thread_pool(args.threads)?;
     let bar = progress_bar(&params);
-    let mut backend = args.backend.start()?;
-    let budget = Budget {
-        iterations: Some(params.passes),
-        seconds: params.time_budget,
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
+        bail!(
+            "--checkpoint-every = {}: must be a positive number of seconds",
+            args.checkpoint_every
+        );
+    }
+    if let Some(dir) = &args.checkpoint {
+        output_folder(dir, &format!("--checkpoint {}", dir.display()))?;
+    }
+    let resumed = match &args.resume {
+        Some(dir) => Some(RenderState::read(dir)?),
+        None => None,
     };
-    let mut progress = EachIteration(|at: &Progress, _: &mut Renderer| {
-        bar.set_position(u64::from(at.iterations));
-        bar.set_message(format!("{:.1}s", at.seconds));
-        Ok(())
-    });
+    let mut backend = args.backend.start()?;
+    let (done, before) = resumed
+        .as_ref()
+        .map_or((0, 0.0), |s| (s.report.passes, s.seconds));
+    let budget = Budget {
+        iterations: Some(match params.passes {
+            u32::MAX => u32::MAX,
+            n => n.saturating_sub(done),
+        }),
+        seconds: params.time_budget.map(|t| (t - before).max(0.0)),
+    };
+    let mut progress = Progressing {
+        bar: &bar,
+        checkpoint: args.checkpoint.clone().map(|dir| Checkpointing {
+            dir,
+            every: args.checkpoint_every,
+            last: 0.0,
+            before,
+        }),
+    };
     eprintln!(
-        "rendering {} ({}) on {}: {}x{}",
+        "rendering {} ({}) on {}: {}x{}{}",
         scene.name,
         params.estimator.name(),
         backend.name(),
         params.width,
-        params.height
+        params.height,
+        match &args.resume {
+            Some(dir) => format!(", resuming {} after {done} iterations", dir.display()),
+            None => String::new(),
+        }
     );
     let outcome = pool.install(|| {
         let mut observer = Stoppable {
             observer: &mut progress,
             stop: &interrupt::requested,
         };
-        run(
+        let resume = match (&resumed, &args.resume) {
+            (Some(state), Some(dir)) => Some(Resume { state, dir }),
+            _ => None,
+        };
+        run_from(
             backend.as_mut(),
             &scene,
             &params,
             &MoveParams::default(),
             &Schedule::frame(args.frame, budget),
             &mut observer,
+            resume,
         )
     })?;
     bar.finish_and_clear();
 
-    write_render(
-        outcome.image.clone(),
-        outcome.report.clone(),
-        &paths,
-        args.exposure,
-    )?;
+    let mut report = outcome.report.clone();
+    report.shard = args.shard;
+    write_render(outcome.image.clone(), report, &paths, args.exposure)?;
     let r = &outcome.report;
     println!(
         "{} ({}): {} iterations, {} photons emitted, {} deposited, {:.2}s -> {}, {}, {}",
@@ -117,6 +168,53 @@ pub fn render(args: RenderArgs) -> Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// The progress bar, and the checkpoints when asked for.
+struct Progressing<'a> {
+    bar: &'a ProgressBar,
+    checkpoint: Option<Checkpointing>,
+}
+
+/// Where and how often checkpoints are written.
+struct Checkpointing {
+    dir: PathBuf,
+    /// Seconds of rendering between two.
+    every: f64,
+    /// Seconds of this run at the last one.
+    last: f64,
+    /// Seconds rendered before this run (a resumed render's).
+    before: f64,
+}
+
+impl Checkpointing {
+    fn write(&mut self, renderer: &mut Renderer, seconds: f64) -> ObserverResult {
+        let state = renderer.snapshot(self.before + seconds)?;
+        state.write(&self.dir)?;
+        self.last = seconds;
+        Ok(())
+    }
+}
+
+impl Observer for Progressing<'_> {
+    fn iteration(&mut self, at: &Progress, renderer: &mut Renderer) -> ObserverResult {
+        self.bar.set_position(u64::from(at.iterations));
+        self.bar.set_message(format!("{:.1}s", at.seconds));
+        match &mut self.checkpoint {
+            // An interrupt stops the run after this iteration: keep its state first.
+            Some(c) if at.seconds - c.last >= c.every || interrupt::requested() => {
+                c.write(renderer, at.seconds)
+            }
+            _ => Ok(()),
+        }
+    }
+
+    fn step_done(&mut self, at: &Progress, renderer: &mut Renderer) -> ObserverResult {
+        match &mut self.checkpoint {
+            Some(c) => c.write(renderer, at.seconds),
+            None => Ok(()),
+        }
+    }
 }
 
 /// Writes a render's three files: the EXR, its PNG preview at `exposure`, and the JSON report.
@@ -249,6 +347,10 @@ pub struct ReferenceArgs {
     /// Seed of the random generator.
     #[arg(long, default_value_t = 0)]
     seed: u32,
+    /// Render only the rows y with y % N == I (0-based), exactly as one run of the whole
+    /// image renders them; `ppm merge` joins the N shards into that run, bit for bit.
+    #[arg(long, value_parser = Shard::parse)]
+    shard: Option<Shard>,
     /// Worker threads (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
@@ -288,15 +390,16 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
         scene.name
     );
     let bar = spp_bar(budget.spp);
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
     let reference = pool.install(|| {
-        render_reference(&compiled, args.seed, budget, &mut |spp, s| {
+        render_reference_shard(&compiled, args.seed, budget, shard, &mut |spp, s| {
             bar.set_position(u64::from(spp));
             bar.set_message(format!("{s:.1}s"));
             interrupt::flow()
         })
     });
     bar.finish_and_clear();
-    let summary = reference.summary(&scene.name, args.frame, args.seed);
+    let summary = reference.summary(&scene.name, args.frame, args.seed, shard);
     reference.write(&paths.exr, &summary)?;
     println!(
         "{}: {} spp in {:.2}s ({:.3e} paths/s), expected relative error {:.4} -> {}",
