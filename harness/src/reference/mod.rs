@@ -175,42 +175,52 @@ pub fn render_reference_shard(
     };
     let (width, height) = (camera.width, camera.height);
     let mut sums = vec![BatchSums::default(); width as usize * height as usize];
+    let rows: Vec<u32> = (0..height).filter(|&y| shard.owns_row(y)).collect();
     let clock = Stopwatch::start();
     let mut spp = 0;
     let mut error = None;
     let mut interrupted = false;
     while budget.spp.is_none_or(|n| spp < n) && budget.seconds.is_none_or(|s| clock.seconds() < s) {
-        let round: Vec<[Vec3; BATCHES as usize]> = (0..sums.len() as u32)
+        // The shard's rows, one after another: every pixel of them traces its samples.
+        let round: Vec<[Vec3; BATCHES as usize]> = (0..rows.len() * width as usize)
             .into_par_iter()
             .with_min_len(16)
-            .map(|pixel| {
-                let (x, y) = (pixel % width, pixel / width);
-                match shard.owns_row(y) {
-                    true => std::array::from_fn(|b| tracer.sample(seed, x, y, spp + b as u32)),
-                    false => [Vec3::ZERO; BATCHES as usize],
-                }
+            .map(|i| {
+                let (x, y) = (i as u32 % width, rows[i / width as usize]);
+                std::array::from_fn(|b| tracer.sample(seed, x, y, spp + b as u32))
             })
             .collect();
         let bad = round
             .iter()
             .enumerate()
             .find_map(|(p, ls)| ls.iter().position(|l| !l.is_finite()).map(|b| (p, b)));
-        if let Some((pixel, b)) = bad {
-            let (x, y) = (pixel as u32 % width, pixel as u32 / width);
+        if let Some((i, b)) = bad {
+            let (x, y) = (i as u32 % width, rows[i / width as usize]);
             error = Some(format!(
                 "sample {} of pixel ({x}, {y}) is not finite: {}",
                 spp + b as u32,
-                round[pixel][b]
+                round[i][b]
             ));
             break;
         }
-        sums.par_iter_mut().zip(&round).for_each(|(acc, ls)| {
-            for (batch, l) in acc.0.iter_mut().zip(ls) {
-                for c in 0..3 {
-                    batch[c] += f64::from(l[c]);
+        let mut owned: Vec<&mut [BatchSums]> = sums
+            .chunks_mut(width as usize)
+            .enumerate()
+            .filter(|(y, _)| shard.owns_row(*y as u32))
+            .map(|(_, row)| row)
+            .collect();
+        owned
+            .par_iter_mut()
+            .zip(round.par_chunks(width as usize))
+            .for_each(|(row, samples)| {
+                for (acc, ls) in row.iter_mut().zip(samples) {
+                    for (batch, l) in acc.0.iter_mut().zip(ls) {
+                        for c in 0..3 {
+                            batch[c] += f64::from(l[c]);
+                        }
+                    }
                 }
-            }
-        });
+            });
         spp += BATCHES;
         let spent = budget.spp.is_some_and(|n| spp >= n);
         if on_round(spp, clock.seconds()).is_break() && !spent {

@@ -83,10 +83,19 @@ pub fn render(args: RenderArgs) -> Result<()> {
     if let Some(dir) = &args.checkpoint {
         output_folder(dir, &format!("--checkpoint {}", dir.display()))?;
     }
+    let read = std::time::Instant::now();
     let resumed = match &args.resume {
         Some(dir) => Some(RenderState::read(dir)?),
         None => None,
     };
+    if let Some(state) = &resumed {
+        eprintln!(
+            "resume: {} iterations, {:.1} MB of slots read in {:.0} ms",
+            state.report.passes,
+            state.slots as f64 * size_of::<ppm_core::layout::HitPoint>() as f64 / 1e6,
+            read.elapsed().as_secs_f64() * 1e3
+        );
+    }
     let mut backend = args.backend.start()?;
     let (done, before) = resumed
         .as_ref()
@@ -188,10 +197,26 @@ struct Checkpointing {
 }
 
 impl Checkpointing {
-    fn write(&mut self, renderer: &mut Renderer, seconds: f64) -> ObserverResult {
+    /// Writes the state `seconds` into this run; says how large it was and how long it took.
+    fn write(
+        &mut self,
+        renderer: &mut Renderer,
+        seconds: f64,
+        bar: &ProgressBar,
+    ) -> ObserverResult {
+        let t = std::time::Instant::now();
         let state = renderer.snapshot(self.before + seconds)?;
         state.write(&self.dir)?;
         self.last = seconds;
+        bar.suspend(|| {
+            eprintln!(
+                "checkpoint: {} iterations, {:.1} MB of slots in {:.0} ms -> {}",
+                state.report.passes,
+                state.slots as f64 * size_of::<ppm_core::layout::HitPoint>() as f64 / 1e6,
+                t.elapsed().as_secs_f64() * 1e3,
+                self.dir.display()
+            )
+        });
         Ok(())
     }
 }
@@ -203,7 +228,7 @@ impl Observer for Progressing<'_> {
         match &mut self.checkpoint {
             // An interrupt stops the run after this iteration: keep its state first.
             Some(c) if at.seconds - c.last >= c.every || interrupt::requested() => {
-                c.write(renderer, at.seconds)
+                c.write(renderer, at.seconds, self.bar)
             }
             _ => Ok(()),
         }
@@ -211,7 +236,7 @@ impl Observer for Progressing<'_> {
 
     fn step_done(&mut self, at: &Progress, renderer: &mut Renderer) -> ObserverResult {
         match &mut self.checkpoint {
-            Some(c) => c.write(renderer, at.seconds),
+            Some(c) => c.write(renderer, at.seconds, self.bar),
             None => Ok(()),
         }
     }
