@@ -6,10 +6,12 @@ use backend_cpu::CpuBackend;
 use harness::conformance::{ConformanceOptions, run_conformance};
 use harness::diff::{OTHER_SEED_OFFSET, runs_of};
 use harness::diff::{independent, record, same_seed};
+use harness::driver::checkpoint::RenderState;
+use harness::driver::{Budget, Resume, Schedule};
 use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::*;
-use ppm_core::params::RenderParams;
+use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::*;
 
 #[test]
@@ -38,10 +40,11 @@ fn wgpu_backend_passes_conformance() {
 /// The CPU backend with one fault.
 #[derive(Clone, Copy)]
 enum Fault {
-    /// A faulty gather: one photon in ten (every tenth deposit) is never found, as if the
-    /// gather skipped it. It moves those photons out of every disc's reach after the photon
-    /// pass, so the grid still files them and only the gather misses them.
-    DropsOneInTen,
+    /// A faulty gather from photon pass `from_pass` on: one photon in ten (every tenth
+    /// deposit) is never found, as if the gather skipped it. It moves those photons out of
+    /// every disc's reach after the photon pass, so the grid still files them and only the
+    /// gather misses them.
+    DropsOneInTen { from_pass: u32 },
     /// Compensation photons traced with positive power: still frames are the CPU's exactly,
     /// every move adds what it should remove.
     MisSignsCompensation,
@@ -57,7 +60,7 @@ impl Broken {
                 power_scale: p.power_scale.abs(),
                 ..*p
             },
-            Fault::DropsOneInTen => *p,
+            Fault::DropsOneInTen { .. } => *p,
         }
     }
 }
@@ -80,7 +83,9 @@ impl DirectLight for Broken {
 impl PhotonPass for Broken {
     fn photon_pass(&mut self, p: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
         let stats = self.0.photon_pass(&self.misread(p))?;
-        if let Fault::DropsOneInTen = self.1 {
+        if let Fault::DropsOneInTen { from_pass } = self.1
+            && p.pass_index >= from_pass
+        {
             for photon in self.0.photons_mut().iter_mut().step_by(10) {
                 photon.position = [f32::MAX; 3];
             }
@@ -183,7 +188,7 @@ fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let reference = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
     let honest = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
     let broken = record(
-        &mut Broken(CpuBackend::new(), Fault::DropsOneInTen),
+        &mut Broken(CpuBackend::new(), Fault::DropsOneInTen { from_pass: 0 }),
         &scene,
         0,
         &p,
@@ -215,13 +220,47 @@ fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     );
 }
 
+/// A gather that goes wrong at the third iteration: the same-seed recordings part there, the
+/// state saved just before it replays that iteration alone on both backends (they part at
+/// once), and the honest backend's replay ends exactly where its uninterrupted run did.
+#[test]
+fn the_state_before_the_first_divergence_replays_it_alone() {
+    let (scene, p) = cornell_params();
+    let faulty = || Broken(CpuBackend::new(), Fault::DropsOneInTen { from_pass: 2 });
+    let reference = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
+    let broken = record(&mut faulty(), &scene, 0, &p).unwrap();
+    assert_eq!(same_seed::first_disagreement(&reference, &broken), Some(3));
+    assert_eq!(same_seed::first_disagreement(&reference, &reference), None);
+
+    let state = harness::diff::state_after(&mut CpuBackend::new(), &scene, &p, 2).unwrap();
+    let dir = std::env::temp_dir().join(format!("ppm-replay-{}", std::process::id()));
+    state.write(&dir).unwrap();
+    let state = RenderState::read(&dir).unwrap();
+    let replay = |backend: &mut dyn DynamicBackend| {
+        let schedule = Schedule::frame(0, Budget::iterations(p.passes - 2));
+        let resume = Some(Resume {
+            state: &state,
+            dir: &dir,
+        });
+        let moves = MoveParams::default();
+        harness::diff::record_schedule_from(backend, &scene, &p, &moves, &schedule, resume).unwrap()
+    };
+    let (honest, broken) = (replay(&mut CpuBackend::new()), replay(&mut faulty()));
+    assert_eq!(same_seed::first_disagreement(&honest, &broken), Some(1));
+    assert_eq!(
+        bytemuck::cast_slice::<_, u8>(honest.passes.last().unwrap()),
+        bytemuck::cast_slice::<_, u8>(reference.passes.last().unwrap()),
+        "the replay continues the uninterrupted run bit for bit"
+    );
+}
+
 #[test]
 fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let (scene, p) = cornell_params();
     let reference = runs_of(&mut CpuBackend::new(), &scene, &p, 4, 0).unwrap();
     let honest = runs_of(&mut CpuBackend::new(), &scene, &p, 4, OTHER_SEED_OFFSET).unwrap();
     let broken = runs_of(
-        &mut Broken(CpuBackend::new(), Fault::DropsOneInTen),
+        &mut Broken(CpuBackend::new(), Fault::DropsOneInTen { from_pass: 0 }),
         &scene,
         &p,
         4,
@@ -242,7 +281,12 @@ fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
 #[test]
 fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
     let verdict = run_conformance(
-        &mut || Ok(Box::new(Broken(CpuBackend::new(), Fault::DropsOneInTen))),
+        &mut || {
+            Ok(Box::new(Broken(
+                CpuBackend::new(),
+                Fault::DropsOneInTen { from_pass: 0 },
+            )))
+        },
         &ConformanceOptions::quick(),
     );
     println!("{verdict}");

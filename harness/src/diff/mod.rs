@@ -6,8 +6,9 @@ pub mod history;
 pub mod independent;
 pub mod same_seed;
 
+use crate::driver::checkpoint::RenderState;
 use crate::driver::schedule::{Observer, ObserverResult, Progress};
-use crate::driver::{Budget, MoveReport, Renderer, RunError, Schedule, run};
+use crate::driver::{Budget, MoveReport, Renderer, Resume, RunError, Schedule, run, run_from};
 use independent::{TileMeans, tile_means};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
@@ -48,6 +49,19 @@ pub fn record_schedule(
     moves: &MoveParams,
     schedule: &Schedule,
 ) -> Result<Recording, RunError> {
+    record_schedule_from(backend, scene, params, moves, schedule, None)
+}
+
+/// [`record_schedule`] from a saved state ([`state_after`]) when `resume` gives one: the
+/// steps recorded are those after it.
+pub fn record_schedule_from(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    moves: &MoveParams,
+    schedule: &Schedule,
+    resume: Option<Resume>,
+) -> Result<Recording, RunError> {
     /// Reads the slots back after each iteration and move.
     struct Keep {
         passes: Vec<Vec<HitPoint>>,
@@ -69,7 +83,7 @@ pub fn record_schedule(
         passes: Vec::new(),
         steps: Vec::new(),
     };
-    let outcome = run(backend, scene, params, moves, schedule, &mut keep)?;
+    let outcome = run_from(backend, scene, params, moves, schedule, &mut keep, resume)?;
     if let Some(e) = outcome.error {
         return Err(e.into());
     }
@@ -79,6 +93,39 @@ pub fn record_schedule(
         steps: keep.steps,
         image: outcome.image,
     })
+}
+
+/// The state of a still render of `scene` on `backend` after `iterations` iterations: what
+/// `ppm diff --save-state` keeps just before two backends part, and `--replay` starts both
+/// from.
+pub fn state_after(
+    backend: &mut dyn DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    iterations: u32,
+) -> Result<RenderState, RunError> {
+    /// Takes the state when the render step ends.
+    struct Take(Option<RenderState>);
+    impl Observer for Take {
+        fn step_done(&mut self, at: &Progress, r: &mut Renderer) -> ObserverResult {
+            self.0 = Some(r.snapshot(at.seconds)?);
+            Ok(())
+        }
+    }
+    let mut take = Take(None);
+    let schedule = Schedule::frame(0, Budget::iterations(iterations));
+    let outcome = run(
+        backend,
+        scene,
+        params,
+        &MoveParams::default(),
+        &schedule,
+        &mut take,
+    )?;
+    if let Some(e) = outcome.error {
+        return Err(e.into());
+    }
+    Ok(take.0.expect("a render step ends with step_done"))
 }
 
 /// Seed offset of the compared backend's runs: far from the reference's, so no run of one

@@ -248,6 +248,25 @@ pub fn compare(
     }
 }
 
+/// The first step (counted from 1) after which fewer than [`REQUIRED_SHARE`] of the slots
+/// agree on every field, if any: where two same-seed recordings part (`ppm diff
+/// --save-state` keeps the state just before it).
+pub fn first_disagreement(a: &Recording, b: &Recording) -> Option<u32> {
+    a.passes
+        .iter()
+        .zip(&b.passes)
+        .position(|(pa, pb)| {
+            let floor = floors(pa);
+            let agreeing = pa
+                .iter()
+                .zip(pb)
+                .filter(|(x, y)| differences(x, y, &floor).iter().all(|d| d.1))
+                .count();
+            pa.len() != pb.len() || (agreeing as f64) < REQUIRED_SHARE * pa.len() as f64
+        })
+        .map(|k| k as u32 + 1)
+}
+
 /// First iteration (counted from 1) after which slot `i` left tolerance on any field.
 fn first_divergence(a: &Recording, b: &Recording, i: usize, floor: &[f64; GROUPS]) -> u32 {
     for (pass, (pa, pb)) in a.passes.iter().zip(&b.passes).enumerate() {

@@ -8,8 +8,11 @@ use anyhow::{Result, bail};
 use harness::diff::history::{self, pixel_history};
 use harness::diff::independent;
 use harness::diff::same_seed;
-use harness::diff::{OTHER_SEED_OFFSET, record_schedule, runs_of_schedule};
-use harness::driver::{Budget, Schedule};
+use harness::diff::{
+    OTHER_SEED_OFFSET, Recording, record_schedule_from, runs_of_schedule, state_after,
+};
+use harness::driver::checkpoint::RenderState;
+use harness::driver::{Budget, Resume, Schedule};
 use ppm_core::limits::{MemoryBudget, check_render_memory};
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::scene::Scene;
@@ -75,6 +78,15 @@ pub struct DiffArgs {
     /// Print the slot history of pixel X,Y on both backends instead.
     #[arg(long, value_parser = parse_pixel)]
     pixel: Option<(u32, u32)>,
+    /// When a same-seed comparison of a still frame finds the backends part, write the
+    /// reference backend's state just before the first step where they do (a checkpoint
+    /// folder), to re-run that step alone with --replay.
+    #[arg(long, conflicts_with_all = ["independent", "pixel", "mode", "path", "replay"])]
+    save_state: Option<PathBuf>,
+    /// Start both backends from a state written by --save-state (give the same scene and
+    /// options) and compare the --passes iterations after it.
+    #[arg(long, conflicts_with_all = ["independent", "mode", "path"])]
+    replay: Option<PathBuf>,
     /// Folder for diff.json and the heat map (heatmap.exr, heatmap.png).
     #[arg(short, long, default_value = "out/diff")]
     output: PathBuf,
@@ -136,8 +148,23 @@ pub fn run(args: DiffArgs) -> Result<()> {
     let (mut a_backend, mut b_backend) = (first.start()?, second.start()?);
     let (a_name, b_name) = (a_backend.name().to_owned(), b_backend.name().to_owned());
     let moves = MoveParams::default();
+    let replayed = match &args.replay {
+        Some(dir) => Some((RenderState::read(dir)?, dir)),
+        None => None,
+    };
+    if let Some((state, dir)) = &replayed {
+        println!(
+            "replaying {} from its state after {} iterations",
+            dir.display(),
+            state.report.passes
+        );
+    }
     let record = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
-        record_schedule(backend, &scene, &params, &moves, &schedule)
+        let resume = replayed.as_ref().map(|(state, dir)| Resume {
+            state,
+            dir: dir.as_path(),
+        });
+        record_schedule_from(backend, &scene, &params, &moves, &schedule, resume)
     };
     if let Some((x, y)) = args.pixel {
         let a = record(a_backend.as_mut())?;
@@ -168,10 +195,40 @@ pub fn run(args: DiffArgs) -> Result<()> {
         let report = same_seed::compare(&a, &b, &params, 10);
         print!("{}", same_seed::format(&report));
         write_outputs(&args, &report, &same_seed::heat(&a.image, &b.image))?;
+        if let Some(dir) = &args.save_state {
+            save_state(dir, a_backend.as_mut(), &scene, &params, &a, &b)?;
+        }
         if !report.agree {
             bail!("the backends disagree (same seed)");
         }
     }
+    Ok(())
+}
+
+/// Writes into `dir` the reference backend's state just before the first step where the
+/// recordings `a` and `b` part, if they do.
+fn save_state(
+    dir: &std::path::Path,
+    reference: &mut dyn ppm_core::passes::DynamicBackend,
+    scene: &Scene,
+    params: &RenderParams,
+    a: &Recording,
+    b: &Recording,
+) -> Result<()> {
+    let Some(step) = same_seed::first_disagreement(a, b) else {
+        println!("no step disagreed: no state saved");
+        return Ok(());
+    };
+    let state = state_after(reference, scene, params, step - 1)?;
+    state.write(dir)?;
+    println!(
+        "the backends part at iteration {step}: {}'s state after {} iterations is in {} \
+         (ppm diff ... --replay {} --passes 1 re-runs that iteration alone)",
+        a.backend,
+        step - 1,
+        dir.display(),
+        dir.display()
+    );
     Ok(())
 }
 
