@@ -38,7 +38,8 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams, SlotBounds, eye_flags, photon_flags,
+    Photon, PhotonPassParams, RecordedPath, ResolveParams, SlotBounds, eye_flags, gather_kind,
+    photon_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
@@ -81,8 +82,10 @@ struct Kernels {
     resolve: ResolveKernel,
     check: CheckKernel,
     rng: RngVectorsKernel,
-    update: HitPointUpdateKernel,
-    landing: LandingPathsKernel,
+    /// Compiled when a move first needs it: a still render never does.
+    update: Option<HitPointUpdateKernel>,
+    /// Compiled when a move first needs it.
+    landing: Option<LandingPathsKernel>,
     scan: Scan,
 }
 
@@ -97,8 +100,12 @@ pub struct WgpuBackend {
     slot_bounds: Option<wgpu::Buffer>,
     /// Per hit point: photons found, their power and weight so far in the current pass.
     accumulated: Option<wgpu::Buffer>,
-    /// Per hit point: deferred region photons (area mode).
+    /// Per hit point: deferred region photons (the moves' deferred passes), allocated when a
+    /// move or a deferred gather first needs it; until then passes bind `placeholder`.
     pending: Option<wgpu::Buffer>,
+    /// Bound where `pending` would be by the passes that never touch it (every kind of
+    /// gather but the deferred ones and their apply).
+    placeholder: wgpu::Buffer,
     /// The initial squared radius of the last eye pass.
     r2_initial: Option<f32>,
     /// Where photon passes append their deposits, kept from pass to pass.
@@ -138,12 +145,13 @@ impl WgpuBackend {
             resolve: ResolveKernel::new(&ctx),
             check: CheckKernel::new(&ctx),
             rng: RngVectorsKernel::new(&ctx),
-            update: HitPointUpdateKernel::new(&ctx),
-            landing: LandingPathsKernel::new(&ctx),
+            update: None,
+            landing: None,
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
         let crossed = buffers::storage_init(&ctx, "crossed", &[u32::MAX; 4]);
+        let placeholder = buffers::storage_init(&ctx, "pending placeholder", &[0.0f32; 4]);
         Ok(Self {
             ctx,
             kernels,
@@ -153,6 +161,7 @@ impl WgpuBackend {
             slot_bounds: None,
             accumulated: None,
             pending: None,
+            placeholder,
             r2_initial: None,
             deposits: None,
             deposits_per_path: 1.5,
@@ -229,13 +238,24 @@ impl WgpuBackend {
         &self,
         pass: &'static str,
     ) -> Result<(&wgpu::Buffer, &wgpu::Buffer, f32), BackendError> {
-        match (&self.accumulated, &self.pending, self.r2_initial) {
-            (Some(a), Some(p), Some(r)) => Ok((a, p, r)),
+        match (&self.accumulated, self.r2_initial) {
+            (Some(a), Some(r)) => Ok((a, self.pending.as_ref().unwrap_or(&self.placeholder), r)),
             _ => Err(BackendError::OutOfOrder {
                 pass,
                 needs: "an eye pass",
             }),
         }
+    }
+
+    /// Allocates the pending sums (zero) if they are not yet: before a pass that writes or
+    /// reads them.
+    fn allocate_pending(&mut self, pass: &'static str) -> Result<(), BackendError> {
+        if self.pending.is_none() {
+            let (_, slots) = self.hit_points(pass)?;
+            let bytes = u64::from(*slots) * 16;
+            self.pending = Some(storage_zeroed(&self.ctx, "pending", bytes)?);
+        }
+        Ok(())
     }
 
     fn hit_points(&self, pass: &'static str) -> Result<&(wgpu::Buffer, u32), BackendError> {
@@ -374,7 +394,7 @@ impl EyePass for WgpuBackend {
         self.hit_points = Some((hit_points, slots));
         if !keep {
             self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
-            self.pending = Some(storage_zeroed(&self.ctx, "pending", slots64 * 16)?);
+            self.pending = None;
             self.r2_initial = Some(params.r2_initial);
         }
         self.map = None;
@@ -470,9 +490,9 @@ impl WgpuBackend {
         let lit = self.scene("photon")?.light_count > 0;
         let accumulate = GatherParams {
             kind: match emitter.kind {
-                emission_kind::REGION => ppm_core::layout::gather_kind::REGION_POSITIVE,
-                emission_kind::GUIDED => ppm_core::layout::gather_kind::GUIDED,
-                _ => ppm_core::layout::gather_kind::ORDINARY,
+                emission_kind::REGION => gather_kind::REGION_POSITIVE,
+                emission_kind::GUIDED => gather_kind::GUIDED,
+                _ => gather_kind::ORDINARY,
             },
             ..GatherParams::default()
         };
@@ -644,6 +664,13 @@ impl HitPointUpdate for WgpuBackend {
         params: &EyePassParams,
         epsilon: f32,
     ) -> Result<UpdateStats, BackendError> {
+        if self.kernels.update.is_none() {
+            let kernel = self.ctx.scoped("shader compilation", || {
+                HitPointUpdateKernel::new(&self.ctx)
+            })?;
+            self.kernels.update = Some(kernel);
+        }
+        self.allocate_pending("hit-point update")?;
         let scene = self.scene("hit-point update")?;
         let (hit_points, slots) = self.hit_points("hit-point update")?;
         let (_, pending, _) = self.gather_state("hit-point update")?;
@@ -688,6 +715,8 @@ impl HitPointUpdate for WgpuBackend {
         let counters = self.run("hit-point update", |encoder| {
             self.kernels
                 .update
+                .as_ref()
+                .expect("compiled above")
                 .record(&self.ctx, encoder, &update, &fresh, pending, &targets);
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
@@ -712,6 +741,12 @@ impl LandingPaths for WgpuBackend {
                 self.batches
             )));
         }
+        if self.kernels.landing.is_none() {
+            let kernel = self
+                .ctx
+                .scoped("shader compilation", || LandingPathsKernel::new(&self.ctx))?;
+            self.kernels.landing = Some(kernel);
+        }
         let (hit_points, slots) = self.hit_points("landing paths")?;
         let map = self.map.as_ref().ok_or(BackendError::OutOfOrder {
             pass: "landing paths",
@@ -727,6 +762,8 @@ impl LandingPaths for WgpuBackend {
         self.run("landing paths", |encoder| {
             self.kernels
                 .landing
+                .as_ref()
+                .expect("compiled above")
                 .record(&self.ctx, encoder, map, &targets, &landed);
             Ok(())
         })?;
@@ -737,6 +774,11 @@ impl LandingPaths for WgpuBackend {
 
 impl GatherPass for WgpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
+        // Only deferred gathers and their apply touch the pending sums.
+        let kind = params.kind & gather_kind::KIND_MASK;
+        if kind == gather_kind::REGION_APPLY || params.kind & gather_kind::DEFERRED != 0 {
+            self.allocate_pending("gather")?;
+        }
         let scene = self.scene("gather")?;
         let (hit_points, slots) = self.hit_points("gather")?;
         let needs_photons = BackendError::OutOfOrder {
@@ -877,6 +919,24 @@ impl Backend for WgpuBackend {
     /// The viewer reaches [`WgpuBackend::resolve_into`] through it.
     fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
         Some(self)
+    }
+
+    /// The move's pipelines until a move, and the pending sums until a deferred gather.
+    fn not_created(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.kernels.update.is_none() {
+            out.push("hit-point update pipeline: not compiled (no move)".to_owned());
+        }
+        if self.kernels.landing.is_none() {
+            out.push("landing-path pipeline: not compiled (no move)".to_owned());
+        }
+        if let (None, Some((_, slots))) = (&self.pending, &self.hit_points) {
+            out.push(format!(
+                "pending sums: {} bytes not allocated (no deferred gather)",
+                u64::from(*slots) * 16
+            ));
+        }
+        out
     }
 }
 

@@ -218,6 +218,13 @@ pub trait Backend:
     fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
         None
     }
+
+    /// What the backend has not compiled or allocated so far because nothing needed it (a
+    /// still render needs no move's pipelines), one line each, bytes named: the render's
+    /// report lists it under `left_out`.
+    fn not_created(&self) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3).

@@ -371,6 +371,7 @@ pub fn run_from(
     let mut report = renderer.report().clone();
     report.frame = u32::from(schedule.start >= 1.0);
     report.left_out = left_out(&report.features, params, schedule.moves());
+    report.left_out.extend(renderer.backend().not_created());
     for p in image.pixels.iter_mut().flatten().filter(|v| !v.is_finite()) {
         *p = 0.0;
         report.non_finite_pixels_zeroed += 1;
