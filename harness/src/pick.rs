@@ -35,7 +35,7 @@ impl Picker {
     /// The ray through image point `(px, py)` (pixels, `(0, 0)` the top-left corner): origin
     /// and unit direction.
     pub fn ray(&self, px: f32, py: f32) -> (Vec3, Vec3) {
-        (self.camera.eye.into(), camera_ray(&self.camera, px, py))
+        ray(&self.camera, px, py)
     }
 
     /// The object whose surface is nearest along the ray through `(px, py)`, if any.
@@ -47,6 +47,12 @@ impl Picker {
             point: origin + dir * hit.t,
         })
     }
+}
+
+/// The ray of `camera` through image point `(px, py)`: origin and unit direction. A drag
+/// needs only this, not the scene.
+pub fn ray(camera: &GpuCamera, px: f32, py: f32) -> (Vec3, Vec3) {
+    (camera.eye.into(), camera_ray(camera, px, py))
 }
 
 /// A plane a drag slides an object in.

@@ -11,7 +11,8 @@ use anyhow::{Context, Result, anyhow};
 use backend_cpu::CpuBackend;
 use backend_wgpu::{GpuContext, WgpuBackend};
 use glam::{Quat, Vec3};
-use harness::pick::{DragPlane, Picker};
+use harness::pick::{DragPlane, Picker, ray};
+use ppm_core::compile::gpu_camera;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::{Camera, Move, Scene};
@@ -473,7 +474,7 @@ impl Running {
             (ElementState::Pressed, MouseButton::Right) if self.pane_at(self.cursor).is_some() => {
                 self.gesture = Some(Gesture::Orbit {
                     last: self.cursor,
-                    camera: self.shared.pose().camera,
+                    camera: self.shared.camera(),
                 });
             }
             (ElementState::Released, _) => {
@@ -500,8 +501,9 @@ impl Running {
                     return;
                 };
                 let (w, h) = self.display.size();
-                let picker = Picker::new(&self.shared.pose(), w, h);
-                if let Some(t) = plane.translation(picker.ray(a.0, a.1), picker.ray(b.0, b.1))
+                let camera = gpu_camera(&self.shared.camera(), w, h);
+                let rays = (ray(&camera, a.0, a.1), ray(&camera, b.0, b.1));
+                if let Some(t) = plane.translation(rays.0, rays.1)
                     && t.length_squared() > 0.0
                 {
                     plane.point += t;
@@ -526,7 +528,7 @@ impl Running {
     }
 
     fn dolly(&mut self, steps: f32) {
-        let mut camera = self.shared.pose().camera;
+        let mut camera = self.shared.camera();
         let offset = camera.eye - camera.look_at;
         camera.eye = camera.look_at + offset * 0.9f32.powf(steps);
         let _ = self.commands.send(Command::Camera(camera));

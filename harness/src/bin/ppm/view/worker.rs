@@ -108,6 +108,15 @@ impl Shared {
     pub fn pose(&self) -> Scene {
         self.pose.lock().unwrap_or_else(|p| p.into_inner()).clone()
     }
+
+    /// The current camera (without copying the scene).
+    pub fn camera(&self) -> Camera {
+        self.pose
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .camera
+            .clone()
+    }
 }
 
 /// Everything the render thread needs.
