@@ -7,7 +7,7 @@
 //! the scene and the settings). Each file is written atomically, slots first; the state names
 //! the slots' hash, so a folder caught between the two writes is refused, not half-read.
 
-use super::{PhotonCounts, Renderer};
+use super::{Counters, PhotonCounts, Renderer};
 use crate::report::RenderReport;
 use ppm_core::compile::CompiledScene;
 use ppm_core::layout::HitPoint;
@@ -42,19 +42,6 @@ pub enum CheckpointError {
     /// A pass failed while taking or restoring the state.
     #[error(transparent)]
     Backend(#[from] BackendError),
-}
-
-/// The driver's counters: which iteration, pass and pose comes next.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-pub struct Counters {
-    frame: u32,
-    iteration: u32,
-    fresh: bool,
-    photon_pass: u32,
-    region_pass: u32,
-    difference_pass: u32,
-    guided_pass: u32,
-    steps_since_move: u32,
 }
 
 /// A render's state between two iterations.
@@ -173,11 +160,9 @@ impl Renderer<'_> {
                 "a checkpoint of a render that is following a move".to_owned(),
             ));
         }
-        let hit_points = if self.fresh && self.params.estimator == ppm_core::params::Estimator::Sppm
-        {
-            Vec::new()
-        } else {
-            self.backend.read_hit_points()?
+        let hit_points = match self.has_image() {
+            true => self.backend.read_hit_points()?,
+            false => Vec::new(),
         };
         let bytes: &[u8] = bytemuck::cast_slice(&hit_points);
         Ok(RenderState {
@@ -186,16 +171,7 @@ impl Renderer<'_> {
             seconds,
             slots: hit_points.len() as u64,
             slots_hash: format!("{:016x}", fnv(bytes, FNV_START)),
-            counters: Counters {
-                frame: self.frame,
-                iteration: self.iteration,
-                fresh: self.fresh,
-                photon_pass: self.photon_pass,
-                region_pass: self.region_pass,
-                difference_pass: self.difference_pass,
-                guided_pass: self.guided_pass,
-                steps_since_move: self.steps_since_move,
-            },
+            counters: self.counters.clone(),
             counts: self.counts.clone(),
             report: self.report.clone(),
             hit_points,
@@ -216,23 +192,16 @@ impl Renderer<'_> {
                 ),
             });
         }
-        let c = &state.counters;
-        if !c.fresh || self.params.estimator == ppm_core::params::Estimator::Ppm {
-            if self.fresh {
+        // A state without slots was taken before any were traced.
+        if !state.hit_points.is_empty() {
+            if self.counters.fresh {
                 // The slot buffers exist once an eye pass has run: this one's results are
                 // replaced at once.
                 self.eye_pass(0, false)?;
             }
             self.backend.write_hit_points(&state.hit_points)?;
         }
-        self.frame = c.frame;
-        self.iteration = c.iteration;
-        self.fresh = c.fresh;
-        self.photon_pass = c.photon_pass;
-        self.region_pass = c.region_pass;
-        self.difference_pass = c.difference_pass;
-        self.guided_pass = c.guided_pass;
-        self.steps_since_move = c.steps_since_move;
+        self.counters = state.counters.clone();
         self.counts = state.counts.clone();
         // A state may continue on another backend (a preempted job landing elsewhere): the
         // slots' layout is the contract's; only the bit-for-bit promise needs the same one.

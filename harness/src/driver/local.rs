@@ -179,7 +179,7 @@ impl Renderer<'_> {
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
-        self.frame += 1;
+        self.counters.frame += 1;
         if resets.direct_corrected > 0 {
             self.correct_direct(1.0)?;
             self.weigh_direct_corrections(&resets.direct_before)?;
@@ -188,7 +188,7 @@ impl Renderer<'_> {
         if positive.emitted > 0 {
             report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
         }
-        self.difference_pass += self.moves.correction_passes;
+        self.counters.difference_pass += self.moves.correction_passes;
         if self.moves.correction_passes > 0 {
             self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;
         }
@@ -200,7 +200,7 @@ impl Renderer<'_> {
             );
         }
         self.guide = None;
-        self.steps_since_move = 0;
+        self.counters.steps_since_move = 0;
         report.seconds = start.elapsed().as_secs_f64();
         self.report.times.moves += report.seconds;
         Ok(report)
@@ -212,7 +212,7 @@ impl Renderer<'_> {
         let params = DirectLightParams {
             seed: self.params.seed ^ CORRECTION_SEED,
             samples: CORRECTION_SAMPLES,
-            iteration: self.difference_pass,
+            iteration: self.counters.difference_pass,
             accumulate: direct_accumulate::CORRECT,
             sign,
             ..self.direct_params(0, true)

@@ -53,6 +53,23 @@ pub const OFFSET_RADII: f32 = 1000.0;
 /// cheap iterations.
 pub const FOCUS_PERIOD: u32 = 2;
 
+/// Which iteration, pass and pose comes next: the keys of every random stream, so that with
+/// the slots they are a render's whole state (a checkpoint saves both).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct Counters {
+    /// Poses loaded or moved to so far: keys `ppm`'s eye and direct passes.
+    frame: u32,
+    /// `sppm` iterations so far: keys their eye and direct passes.
+    iteration: u32,
+    /// The slots have not been traced since the last load (`sppm` starts them fresh).
+    fresh: bool,
+    photon_pass: u32,
+    region_pass: u32,
+    difference_pass: u32,
+    guided_pass: u32,
+    steps_since_move: u32,
+}
+
 /// A progressive render on one backend, carried across moves.
 pub struct Renderer<'a> {
     backend: &'a mut dyn DynamicBackend,
@@ -65,17 +82,7 @@ pub struct Renderer<'a> {
     /// The current pose as the backend holds it: a local move uploads it again with the
     /// moved objects' boxes.
     compiled: CompiledScene,
-    /// Poses loaded or moved to so far: keys `ppm`'s eye and direct passes.
-    frame: u32,
-    /// `sppm` iterations so far: keys their eye and direct passes.
-    iteration: u32,
-    /// The slots have not been traced since the last load (`sppm` starts them fresh).
-    fresh: bool,
-    photon_pass: u32,
-    region_pass: u32,
-    difference_pass: u32,
-    guided_pass: u32,
-    steps_since_move: u32,
+    counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,
     guide: Option<(GuidedEmission, Vec<RecordedPath>)>,
@@ -105,14 +112,10 @@ impl<'a> Renderer<'a> {
             materials: compiled.materials.clone(),
             extent: compiled.extent,
             compiled,
-            frame: 0,
-            iteration: 0,
-            fresh: true,
-            photon_pass: 0,
-            region_pass: 0,
-            difference_pass: 0,
-            guided_pass: 0,
-            steps_since_move: 0,
+            counters: Counters {
+                fresh: true,
+                ..Counters::default()
+            },
             focus: false,
             guide: None,
             counts: PhotonCounts::default(),
@@ -138,10 +141,10 @@ impl<'a> Renderer<'a> {
         self.report.times.bvh_build += self.compiled.bvh_build_time.as_secs_f64();
         self.guide = None;
         self.focus = false;
-        self.fresh = true;
+        self.counters.fresh = true;
         if self.params.estimator == Estimator::Ppm {
-            self.eye_pass(self.frame, false)?;
-            self.direct_light(self.frame, false)?;
+            self.eye_pass(self.counters.frame, false)?;
+            self.direct_light(self.counters.frame, false)?;
         }
         Ok(())
     }
@@ -165,23 +168,23 @@ impl<'a> Renderer<'a> {
     /// there are recorded paths).
     pub fn iteration(&mut self) -> Result<(), BackendError> {
         if self.params.estimator == Estimator::Sppm {
-            let key = self.iteration;
-            self.eye_pass(key, !self.fresh)?;
+            let key = self.counters.iteration;
+            self.eye_pass(key, !self.counters.fresh)?;
             self.direct_light(key, true)?;
-            self.iteration += 1;
-            self.fresh = false;
+            self.counters.iteration += 1;
+            self.counters.fresh = false;
         }
-        let guided_turn = self.steps_since_move.is_multiple_of(2);
-        self.steps_since_move += 1;
+        let guided_turn = self.counters.steps_since_move.is_multiple_of(2);
+        self.counters.steps_since_move += 1;
         match &self.guide {
             Some((guide, paths)) if guided_turn => {
                 let (guide, paths) = (*guide, paths.clone());
                 let n = self.params.photons_per_pass;
-                let params = self.photon_params(self.guided_pass, n, 1.0);
+                let params = self.photon_params(self.counters.guided_pass, n, 1.0);
                 let t = Instant::now();
                 let stats = self.backend.guided_photon_pass(&params, &guide, &paths)?;
                 self.count_photons(&stats, t);
-                self.guided_pass += 1;
+                self.counters.guided_pass += 1;
                 self.counts.guided.add(&stats);
                 self.gather(gather_kind::GUIDED, n as f32, 0.0)?;
             }
@@ -194,11 +197,11 @@ impl<'a> Renderer<'a> {
     /// One ordinary photon pass, gathered by every slot.
     fn ordinary_pass(&mut self) -> Result<(), BackendError> {
         let n = self.params.photons_per_pass;
-        let params = self.photon_params(self.photon_pass, n, 1.0);
+        let params = self.photon_params(self.counters.photon_pass, n, 1.0);
         let t = Instant::now();
         let stats = self.backend.photon_pass(&params)?;
         self.count_photons(&stats, t);
-        self.photon_pass += 1;
+        self.counters.photon_pass += 1;
         self.counts.ordinary.add(&stats);
         self.gather(gather_kind::ORDINARY, n as f32, 0.0)
     }
@@ -243,14 +246,14 @@ impl<'a> Renderer<'a> {
     /// Whether the slots hold statistics to show (`sppm` has none before its first
     /// iteration after a load).
     pub fn has_image(&self) -> bool {
-        !(self.fresh && self.params.estimator == Estimator::Sppm)
+        !(self.counters.fresh && self.params.estimator == Estimator::Sppm)
     }
 
     /// Starts over from `camera`: every slot sees something else, so nothing is kept.
     pub fn look_from(&mut self, camera: ppm_core::scene::Camera) -> Result<(), BackendError> {
         let mut scene = self.scene.clone();
         scene.camera = camera;
-        self.frame += 1;
+        self.counters.frame += 1;
         let compiled = self.compile(&scene);
         self.load(scene, compiled)
     }
@@ -274,6 +277,16 @@ impl<'a> Renderer<'a> {
         &self.report
     }
 
+    /// The report as a finished render writes it: what ran, and `left_out` saying what the
+    /// scene and the settings did not need (the compensation passes too unless `moving`) and
+    /// what the backend never created.
+    pub fn final_report(&mut self, moving: bool) -> RenderReport {
+        let mut report = self.report.clone();
+        report.left_out = left_out(&report.features, &self.params, moving);
+        report.left_out.extend(self.backend.not_created());
+        report
+    }
+
     /// Relative to the scene's extent, but never to more of it than [`OFFSET_RADII`] initial
     /// gather radii: geometry far from the rest (a vertex at 1e8 beside a 0.5 m box) must not
     /// push every ray offset past the features the gather resolves.
@@ -291,9 +304,9 @@ impl<'a> Renderer<'a> {
         // After a local move the reset slots hold `steps_since_move` iterations: every other
         // iteration, the slots that hold more rest, until those catch up.
         let rest_at = match self.focus {
-            true if keep && self.steps_since_move.is_multiple_of(FOCUS_PERIOD) => {
+            true if keep && self.counters.steps_since_move.is_multiple_of(FOCUS_PERIOD) => {
                 flags |= eye_flags::FOCUS;
-                self.steps_since_move + 1
+                self.counters.steps_since_move + 1
             }
             _ => 0,
         };

@@ -146,7 +146,7 @@ impl Renderer<'_> {
             .flatten()
             .copied()
             .collect();
-        let plan = if self.fresh && self.params.estimator == Estimator::Sppm {
+        let plan = if !self.has_image() {
             Err("no iteration has run: nothing to keep".to_owned())
         } else {
             self.compensation_plan(mode, &vertices, &changed)
@@ -154,7 +154,7 @@ impl Renderer<'_> {
         let plan = match plan {
             Ok(plan) => plan,
             Err(why) => {
-                self.frame += 1;
+                self.counters.frame += 1;
                 let compiled = self.compile(&next);
                 self.load(next, compiled)?;
                 report.restarted = Some(why);
@@ -177,13 +177,13 @@ impl Renderer<'_> {
         self.backend.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
-        self.frame += 1;
+        self.counters.frame += 1;
         // Each slot traces its last sample again in the new pose: the frame's for `ppm`, the
         // last iteration's for `sppm` (its random numbers; the jitter stratum the slot's own
         // count last drew, `eye_flags::RETRACE`).
         let key = match self.params.estimator {
-            Estimator::Ppm => self.frame,
-            Estimator::Sppm => self.iteration - 1,
+            Estimator::Ppm => self.counters.frame,
+            Estimator::Sppm => self.counters.iteration - 1,
         };
         let update = self.backend.update_hit_points(
             &self.eye_params(key, false),
@@ -196,21 +196,21 @@ impl Renderer<'_> {
         // direct sum; `ppm` draws the frame's estimate, `sppm` a first sample at the updated
         // visible points.
         match self.params.estimator {
-            Estimator::Ppm => self.direct_light(self.frame, false)?,
+            Estimator::Ppm => self.direct_light(self.counters.frame, false)?,
             Estimator::Sppm => {
-                self.direct_light(self.iteration, true)?;
-                self.iteration += 1;
+                self.direct_light(self.counters.iteration, true)?;
+                self.counters.iteration += 1;
             }
         }
         self.compensate(&plan, gather_kind::REGION_POSITIVE)?;
         // Deferred passes are applied once, as a net change (none when none ran).
         let (ran, deferred) = match plan {
             Compensation::Region { raw, .. } => {
-                self.region_pass += self.moves.compensation_passes;
+                self.counters.region_pass += self.moves.compensation_passes;
                 (self.moves.compensation_passes, !raw)
             }
             Compensation::Difference { .. } => {
-                self.difference_pass += self.moves.difference_passes;
+                self.counters.difference_pass += self.moves.difference_passes;
                 (self.moves.difference_passes, true)
             }
         };
@@ -220,12 +220,12 @@ impl Renderer<'_> {
         // Testing photons: ordinary photons gathered by the updated slots only; the paths
         // that reached them are rebuilt from their index and guide later passes.
         let n = self.params.photons_per_pass;
-        let testing_index = self.photon_pass;
+        let testing_index = self.counters.photon_pass;
         let params = self.photon_params(testing_index, n, 1.0);
         let t = Instant::now();
         let stats = self.backend.photon_pass(&params)?;
         self.count_photons(&stats, t);
-        self.photon_pass += 1;
+        self.counters.photon_pass += 1;
         self.counts.testing.add(&stats);
         let landed = self.backend.landing_paths()?;
         self.gather(gather_kind::GUIDED, n as f32, 0.0)?;
@@ -240,7 +240,7 @@ impl Renderer<'_> {
             };
             (guide, paths)
         });
-        self.steps_since_move = 0;
+        self.counters.steps_since_move = 0;
         report.seconds = start.elapsed().as_secs_f64();
         self.report.times.moves += report.seconds;
         Ok(report)
@@ -305,7 +305,7 @@ impl Renderer<'_> {
                 let nc = self.moves.region_photons;
                 let total = (nc * self.moves.compensation_passes) as f32;
                 for k in 0..self.moves.compensation_passes {
-                    let params = self.photon_params(self.region_pass + k, nc, sign);
+                    let params = self.photon_params(self.counters.region_pass + k, nc, sign);
                     let t = Instant::now();
                     let stats = self.backend.region_photon_pass(&params, region)?;
                     self.count_photons(&stats, t);
@@ -355,7 +355,7 @@ impl Renderer<'_> {
                     }
                 }
                 for k in 0..passes {
-                    let index = DIFFERENCE_PASS_BASE + self.difference_pass + k;
+                    let index = DIFFERENCE_PASS_BASE + self.counters.difference_pass + k;
                     let mask_offset = k.checked_mul(n).ok_or_else(|| {
                         BackendError::Limit(format!(
                             "crossed-path mask: {passes} difference passes of {n} photons exceed 2^32 bits"

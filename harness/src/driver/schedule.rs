@@ -6,7 +6,7 @@
 
 use super::{MoveReport, PhotonCounts, Renderer};
 use crate::clock::Stopwatch;
-use crate::report::{RenderReport, left_out};
+use crate::report::RenderReport;
 use ppm_core::image::Image;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{BackendError, DynamicBackend};
@@ -368,10 +368,8 @@ pub fn run_from(
         }
     }
     let mut image = renderer.resolve()?;
-    let mut report = renderer.report().clone();
+    let mut report = renderer.final_report(schedule.moves());
     report.frame = u32::from(schedule.start >= 1.0);
-    report.left_out = left_out(&report.features, params, schedule.moves());
-    report.left_out.extend(renderer.backend().not_created());
     for p in image.pixels.iter_mut().flatten().filter(|v| !v.is_finite()) {
         *p = 0.0;
         report.non_finite_pixels_zeroed += 1;
