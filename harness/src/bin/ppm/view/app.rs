@@ -3,21 +3,18 @@
 
 use super::display::Display;
 use super::panel::{self, PANEL_WIDTH, Settings};
-use super::worker::{self, Command, Inbox, PaneView, Setup, Shared, UiEvent};
+use super::worker::{self, Command, Inbox, PaneView, Plan, Setup, Shared, UiEvent};
 use crate::interrupt;
 use crate::options::BackendChoice;
-use crate::render::OutputPaths;
 use anyhow::{Context, Result, anyhow};
 use backend_cpu::CpuBackend;
 use backend_wgpu::{GpuContext, WgpuBackend};
 use glam::{Quat, Vec3};
 use harness::pick::{DragPlane, Picker, ray};
 use ppm_core::compile::gpu_camera;
-use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::DynamicBackend;
 use ppm_core::scene::{Camera, Move, Scene};
 use scenes::file::image::write_png_rgb;
-use scenes::file::path::Script;
 use std::path::PathBuf;
 use std::sync::mpsc::{self, Sender};
 use std::sync::{Arc, Mutex};
@@ -32,16 +29,9 @@ use winit::window::{Window, WindowId};
 
 /// Everything the window needs before it opens.
 pub struct AppSetup {
-    pub scene: Scene,
-    pub params: RenderParams,
-    pub moves: MoveParams,
-    pub modes: Vec<MoveMode>,
+    /// What the render thread renders.
+    pub plan: Plan,
     pub backend: BackendChoice,
-    pub script: Option<Script>,
-    pub exit_after: bool,
-    pub outputs: Vec<OutputPaths>,
-    pub exposure: f32,
-    pub heat_map: bool,
     pub screenshot_dir: Option<PathBuf>,
     pub pool: rayon::ThreadPool,
     pub proxy: EventLoopProxy<UiEvent>,
@@ -246,14 +236,15 @@ impl ApplicationHandler<UiEvent> for App {
 impl Running {
     /// Opens the window and the device, starts the backends on it, and the render thread.
     fn open(event_loop: &ActiveEventLoop, setup: AppSetup) -> Result<Self> {
-        let (width, height) = (setup.params.width, setup.params.height);
-        let panes = setup.modes.len();
+        let plan = &setup.plan;
+        let (width, height) = (plan.params.width, plan.params.height);
+        let panes = plan.modes.len();
         let size = PhysicalSize::new(panes as u32 * width + PANEL_WIDTH, height.max(480));
         let window = Arc::new(
             event_loop
                 .create_window(
                     Window::default_attributes()
-                        .with_title(format!("ppm view: {}", setup.scene.name))
+                        .with_title(format!("ppm view: {}", plan.scene.name))
                         .with_inner_size(size),
                 )
                 .context("cannot open the window")?,
@@ -316,26 +307,20 @@ impl Running {
         }
         eprintln!(
             "ppm view: {} on {} ({}), {}x{}",
-            setup.scene.name,
+            plan.scene.name,
             backends[0].name(),
             adapter.get_info().name,
             width,
             height
         );
         let shared = Arc::new(Shared {
-            panes: setup
+            panes: plan
                 .modes
                 .iter()
                 .zip(&backends)
-                .map(|(m, b)| {
-                    Mutex::new(PaneView {
-                        mode: Some(*m),
-                        backend: b.name().to_owned(),
-                        ..PaneView::default()
-                    })
-                })
+                .map(|(m, b)| Mutex::new(PaneView::new(*m, b.name())))
                 .collect(),
-            pose: Mutex::new(setup.scene.clone()),
+            pose: Mutex::new(plan.scene.clone()),
         });
         let egui_ctx = egui::Context::default();
         let egui_state = egui_winit::State::new(
@@ -349,27 +334,19 @@ impl Running {
         let egui_renderer = egui_wgpu::Renderer::new(&device, format, Default::default());
 
         let settings = Settings {
-            exposure: setup.exposure,
-            photons_per_pass: setup.params.photons_per_pass,
-            alpha: setup.params.alpha,
-            mode: setup.modes[0],
-            heat: setup.heat_map,
+            exposure: plan.exposure,
+            photons_per_pass: plan.params.photons_per_pass,
+            alpha: plan.params.alpha,
+            mode: plan.modes[0],
+            heat: plan.heat_map,
         };
         let (commands, command_inbox) = mpsc::channel();
         let (screenshots, screenshot_inbox) = mpsc::channel();
-        let scripted = setup.script.is_some();
+        let scripted = plan.script.is_some();
         let work = Setup {
+            plan: setup.plan,
             backends,
             targets,
-            modes: setup.modes,
-            scene: setup.scene,
-            params: setup.params,
-            moves: setup.moves,
-            script: setup.script,
-            exit_after: setup.exit_after,
-            outputs: setup.outputs,
-            exposure: setup.exposure,
-            heat_map: setup.heat_map,
         };
         let (pool, proxy, for_worker) = (setup.pool, setup.proxy, shared.clone());
         let worker = std::thread::Builder::new()
@@ -823,7 +800,7 @@ impl Running {
             let s = &view.stats;
             eprintln!(
                 "pane {i} ({}): {} iterations in {:.2}s of rendering, {:.1} iterations/s",
-                view.mode.map_or("", MoveMode::name),
+                view.mode.name(),
                 s.iterations,
                 s.seconds,
                 f64::from(s.iterations) / s.seconds.max(1e-9)

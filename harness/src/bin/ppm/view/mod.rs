@@ -106,16 +106,18 @@ pub fn view(args: ViewArgs) -> Result<()> {
         .build()
         .map_err(|e| anyhow::anyhow!("{}", no_display(&e.to_string())))?;
     let mut app = app::App::new(app::AppSetup {
-        scene,
-        params,
-        moves,
-        modes,
+        plan: worker::Plan {
+            modes,
+            scene,
+            params,
+            moves,
+            script,
+            exit_after: args.exit_after,
+            outputs,
+            exposure: args.exposure,
+            heat_map: args.heat_map,
+        },
         backend: args.backend,
-        script,
-        exit_after: args.exit_after,
-        outputs,
-        exposure: args.exposure,
-        heat_map: args.heat_map,
         screenshot_dir: args.screenshot_dir,
         pool,
         proxy: event_loop.create_proxy(),

@@ -50,7 +50,7 @@ fn contents(ui: &mut egui::Ui, shared: &Shared, settings: &mut Settings, actions
             let view = shared.pane(i);
             (view.mode, view.backend.clone(), view.stats.clone())
         };
-        let mode = mode.map_or("", MoveMode::name);
+        let mode = mode.name();
         ui.heading(format!("{mode} on {backend}"));
         pane_stats(ui, &stats);
         ui.separator();

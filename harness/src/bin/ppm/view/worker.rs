@@ -6,7 +6,6 @@
 use crate::render::{OutputPaths, write_render};
 use backend_wgpu::WgpuBackend;
 use harness::driver::{MoveReport, Renderer};
-use harness::report::left_out;
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -80,9 +79,8 @@ pub struct PaneStats {
 }
 
 /// What a pane shares with the window.
-#[derive(Default)]
 pub struct PaneView {
-    pub mode: Option<MoveMode>,
+    pub mode: MoveMode,
     pub backend: String,
     pub stats: PaneStats,
     /// A CPU pane's newest image, not yet uploaded.
@@ -91,6 +89,20 @@ pub struct PaneView {
     pub resets: Option<Vec<f32>>,
     /// When the move now on this pane's newest image was requested.
     pub moved_at: Option<Instant>,
+}
+
+impl PaneView {
+    /// A pane rendering in `mode` on the backend named `backend`, nothing shown yet.
+    pub fn new(mode: MoveMode, backend: &str) -> Self {
+        Self {
+            mode,
+            backend: backend.to_owned(),
+            stats: PaneStats::default(),
+            image: None,
+            resets: None,
+            moved_at: None,
+        }
+    }
 }
 
 /// State shared by the render thread and the window.
@@ -119,11 +131,9 @@ impl Shared {
     }
 }
 
-/// Everything the render thread needs.
-pub struct Setup {
-    pub backends: Vec<Box<dyn DynamicBackend + Send>>,
-    /// Per pane: the device buffer a wgpu pane resolves into (`None`: upload CPU images).
-    pub targets: Vec<Option<wgpu::Buffer>>,
+/// What to render and where to write it: the command line's part of [`Setup`].
+pub struct Plan {
+    /// One pane per mode.
     pub modes: Vec<MoveMode>,
     pub scene: Scene,
     pub params: RenderParams,
@@ -134,6 +144,15 @@ pub struct Setup {
     pub exposure: f32,
     /// Compute the heat map of each move's resets from the start.
     pub heat_map: bool,
+}
+
+/// Everything the render thread needs: the plan, and per pane a backend (started on the
+/// window's device for wgpu) and the device buffer a wgpu pane resolves into (`None`: the
+/// CPU image is handed over).
+pub struct Setup {
+    pub plan: Plan,
+    pub backends: Vec<Box<dyn DynamicBackend + Send>>,
+    pub targets: Vec<Option<wgpu::Buffer>>,
 }
 
 /// The channels the render thread listens on.
@@ -156,8 +175,7 @@ struct Pane<'a> {
     iterations_since_event: u32,
     last_image: Option<Image>,
     last_copy: Instant,
-    failed: bool,
-    /// The pass error that stopped the pane.
+    /// The pass error that stopped the pane, if one did.
     error: Option<String>,
     /// Whether a move ran (the report's `left_out` then keeps the compensation passes).
     moved: bool,
@@ -173,8 +191,11 @@ pub fn run(
     wake: &dyn Fn(UiEvent),
 ) -> anyhow::Result<()> {
     let Setup {
+        plan,
         mut backends,
         targets,
+    } = setup;
+    let Plan {
         modes,
         scene,
         params,
@@ -184,7 +205,7 @@ pub fn run(
         outputs,
         exposure,
         heat_map,
-    } = setup;
+    } = plan;
     let out = Outputs {
         paths: outputs,
         exposure,
@@ -201,7 +222,6 @@ pub fn run(
             iterations_since_event: 0,
             last_image: None,
             last_copy: Instant::now(),
-            failed: false,
             error: None,
             previous_times: Default::default(),
         });
@@ -209,8 +229,8 @@ pub fn run(
     let mut player = script.map(|s| (s.events, 0usize));
     let mut screenshots = 0;
     let mut heat = heat_map;
+    // Rendering time since the script's last event (screenshots wait before it restarts).
     let mut event_clock = Instant::now();
-    let mut event_seconds = 0.0;
     let mut quit = false;
     while !quit {
         // The window's commands, merged: every queued move becomes one move of each pane.
@@ -230,7 +250,7 @@ pub fn run(
             && panes.len() == 1
         {
             panes[0].mode = mode;
-            shared.pane(0).mode = Some(mode);
+            shared.pane(0).mode = mode;
         }
         if let Some(on) = batch.heat {
             heat = on;
@@ -268,8 +288,8 @@ pub fn run(
             let due = match events[*next].after {
                 After::Iterations(n) => panes
                     .iter()
-                    .all(|p| p.failed || p.iterations_since_event >= n),
-                After::Seconds(s) => event_seconds >= s,
+                    .all(|p| p.error.is_some() || p.iterations_since_event >= n),
+                After::Seconds(s) => event_clock.elapsed().as_secs_f64() >= s,
             };
             if due {
                 let event = events[*next].clone();
@@ -279,7 +299,6 @@ pub fn run(
                 for pane in &mut panes {
                     pane.iterations_since_event = 0;
                 }
-                event_seconds = 0.0;
                 event_clock = Instant::now();
                 if *next == events.len() {
                     player = None;
@@ -303,7 +322,9 @@ pub fn run(
         let next = panes
             .iter()
             .enumerate()
-            .filter(|(_, p)| !p.failed && waiting_for.is_none_or(|n| p.iterations_since_event < n))
+            .filter(|(_, p)| {
+                p.error.is_none() && waiting_for.is_none_or(|n| p.iterations_since_event < n)
+            })
             .min_by(|a, b| a.1.spent.total_cmp(&b.1.spent))
             .map(|(i, _)| i);
         let Some(i) = next else {
@@ -314,8 +335,6 @@ pub fn run(
         let t = Instant::now();
         let result = panes[i].renderer.iteration();
         panes[i].spent += t.elapsed().as_secs_f64();
-        event_seconds += event_clock.elapsed().as_secs_f64();
-        event_clock = Instant::now();
         let t = Instant::now();
         match result.and_then(|()| present(&mut panes[i], shared, i)) {
             Ok(()) => {
@@ -393,7 +412,7 @@ fn move_panes(
         }
     }
     for (i, pane) in panes.iter_mut().enumerate() {
-        if pane.failed {
+        if pane.error.is_some() {
             continue;
         }
         let before = heat.then(|| pane.renderer.backend().read_hit_points());
@@ -459,7 +478,7 @@ fn reset_share(before: &[HitPoint], after: &[HitPoint], pixels: usize) -> Vec<f3
 /// Every pane starts over from `camera`, and says so, with one iteration of the new view.
 fn look_from(panes: &mut [Pane], shared: &Shared, camera: Camera) {
     for (i, pane) in panes.iter_mut().enumerate() {
-        if pane.failed {
+        if pane.error.is_some() {
             continue;
         }
         // One iteration at once: the new view replaces the old one on screen now.
@@ -512,7 +531,7 @@ fn play(
     }
     if event.screenshot {
         for (i, pane) in panes.iter_mut().enumerate() {
-            if !pane.failed
+            if pane.error.is_none()
                 && let Err(e) = present(pane, shared, i)
             {
                 fail(pane, shared, i, &e);
@@ -586,7 +605,6 @@ fn update_stats(pane: &mut Pane, shared: &Shared, i: usize, present: f64) {
 }
 
 fn fail(pane: &mut Pane, shared: &Shared, i: usize, e: &BackendError) {
-    pane.failed = true;
     pane.error = Some(e.to_string());
     eprintln!("pane {i}: stopped: {e}");
     shared.pane(i).stats.error = Some(e.to_string());
@@ -604,7 +622,7 @@ struct Outputs {
 /// when the window closed before the end).
 fn save(panes: &mut [Pane], out: &Outputs, interrupted: bool) -> anyhow::Result<()> {
     for (pane, paths) in panes.iter_mut().zip(&out.paths) {
-        let image = match pane.failed {
+        let image = match pane.error.is_some() {
             true => pane.last_image.clone(),
             false => match pane.renderer.resolve() {
                 Ok(image) => Some(image),
@@ -618,10 +636,9 @@ fn save(panes: &mut [Pane], out: &Outputs, interrupted: bool) -> anyhow::Result<
             eprintln!("{}: nothing rendered yet", paths.exr.display());
             continue;
         };
-        let mut report = pane.renderer.report().clone();
+        let mut report = pane.renderer.final_report(pane.moved);
         report.interrupted = interrupted;
         report.times.total = pane.spent;
-        report.left_out = left_out(&report.features, pane.renderer.params(), pane.moved);
         report.error = pane.error.clone();
         println!(
             "{} ({}, {}): {} iterations, {:.2}s -> {}",
