@@ -73,7 +73,10 @@ impl ReferenceImage {
             seconds: self.seconds,
             samples_per_second: samples as f64 / self.seconds.max(1e-9),
             max_bounces: path_tracer::MAX_BOUNCES,
-            relative_noise: self.noise(),
+            relative_noise: reference_noise(
+                &shard_rows(&self.image, shard),
+                &shard_rows(&self.variance, shard),
+            ),
             error: self.error.clone(),
             interrupted: self.interrupted,
             shard: (!shard.is_whole()).then_some(shard),
@@ -94,6 +97,21 @@ impl ReferenceImage {
                 reason: e.to_string(),
             }
         })
+    }
+}
+
+/// The rows of `image` that `shard` renders, as an image of their own (the zero rows of the
+/// other shards would dilute any mean taken over the whole).
+fn shard_rows(image: &Image, shard: Shard) -> Image {
+    let w = image.width as usize;
+    let pixels: Vec<[f32; 3]> = (0..image.height)
+        .filter(|&y| shard.owns_row(y))
+        .flat_map(|y| image.pixels[y as usize * w..][..w].iter().copied())
+        .collect();
+    Image {
+        width: image.width,
+        height: (pixels.len() / w.max(1)) as u32,
+        pixels,
     }
 }
 
