@@ -1,6 +1,8 @@
 //! The `ppm` command as a user meets it: listing scenes, rendering, and clear errors on bad
 //! input that name the option and the value.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -457,36 +459,11 @@ fn an_output_that_is_a_folder_is_refused() {
     insta::assert_snapshot!(err.replace(dir.to_str().unwrap(), "DIR"));
 }
 
-/// Runs `ppm ARGS`, waits for a line of its standard error that starts with `started`, lets it
-/// work half a second more, sends SIGINT (as Ctrl-C does), and returns its exit code and
-/// standard error.
+/// [`common::interrupted`] for `ppm ARGS`.
 fn interrupted(args: &[&str], started: &str) -> (Option<i32>, String) {
-    use std::io::{BufRead, BufReader, Read};
-    use std::process::Stdio;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ppm"))
-        .args(args)
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
-    let mut seen = String::new();
-    let mut line = String::new();
-    while !line.starts_with(started) {
-        line.clear();
-        let read = stderr.read_line(&mut line).unwrap();
-        seen.push_str(&line);
-        assert!(read > 0, "ppm ended before {started:?}: {seen}");
-    }
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let status = child.wait().unwrap();
-    stderr.read_to_string(&mut seen).unwrap();
-    (status.code(), seen)
+    let mut command = Command::new(env!("CARGO_BIN_EXE_ppm"));
+    command.args(args);
+    common::interrupted(command, started)
 }
 
 fn json(path: &std::path::Path) -> serde_json::Value {

@@ -2,9 +2,10 @@
 //! shards averaged by their iterations, merges refused when the files do not belong together,
 //! and checkpoints that resume a render bit for bit on both backends, Ctrl-C included.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
 
 fn ppm(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ppm"))
@@ -52,7 +53,8 @@ fn wgpu_available(test: &str) -> bool {
 #[test]
 fn reference_shards_merge_into_one_run_bit_for_bit() {
     let dir = scratch("reference");
-    let reference = |extra: &[&str], out: &Path| {
+    let reference = |spp: &str, extra: &[&str], out: &Path| {
+        let out = s(out);
         let mut args = vec![
             "reference",
             "cornell-box",
@@ -61,19 +63,18 @@ fn reference_shards_merge_into_one_run_bit_for_bit() {
             "--height",
             "136",
             "--spp",
-            "32",
+            spp,
             "-o",
+            &out,
         ];
-        let out = s(out);
-        args.push(&out);
         args.extend(extra);
         ok(&args);
     };
     let whole = dir.join("whole.exr");
-    reference(&[], &whole);
+    reference("32", &[], &whole);
     let shards: Vec<PathBuf> = (0..4).map(|i| dir.join(format!("shard{i}.exr"))).collect();
     for (i, shard) in shards.iter().enumerate() {
-        reference(&["--shard", &format!("{i}/4")], shard);
+        reference("32", &["--shard", &format!("{i}/4")], shard);
     }
     // Any order of the inputs.
     let merged = dir.join("merged.exr");
@@ -95,20 +96,7 @@ fn reference_shards_merge_into_one_run_bit_for_bit() {
 
     // What does not belong together is refused, naming the file and what differs.
     let other_spp = dir.join("other.exr");
-    ok(&[
-        "reference",
-        "cornell-box",
-        "--width",
-        "160",
-        "--height",
-        "136",
-        "--spp",
-        "16",
-        "--shard",
-        "3/4",
-        "-o",
-        &s(&other_spp),
-    ]);
+    reference("16", &["--shard", "3/4"], &other_spp);
     let (a, b, c) = (s(&shards[0]), s(&shards[1]), s(&shards[2]));
     let mismatch = refused(&[
         "merge",
@@ -134,8 +122,9 @@ fn reference_shards_merge_into_one_run_bit_for_bit() {
 #[test]
 fn render_shards_average_by_their_iterations() {
     let dir = scratch("render");
-    let render = |shard: &str, passes: &str, out: &Path| {
-        ok(&[
+    let render = |shard: &str, passes: &str, extra: &[&str], out: &Path| {
+        let out = s(out);
+        let mut args = vec![
             "render",
             "cornell-box",
             "--width",
@@ -147,12 +136,14 @@ fn render_shards_average_by_their_iterations() {
             "--shard",
             shard,
             "-o",
-            &s(out),
-        ]);
+            &out,
+        ];
+        args.extend(extra);
+        ok(&args);
     };
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
-    render("0/2", "3", &a);
-    render("1/2", "5", &b);
+    render("0/2", "3", &[], &a);
+    render("1/2", "5", &[], &b);
     let merged = dir.join("merged.exr");
     ok(&["merge", &s(&a), &s(&b), "-o", &s(&merged)]);
     let read = |p: &Path| scenes::file::image::read_exr(p, 24, 24).unwrap();
@@ -170,22 +161,7 @@ fn render_shards_average_by_their_iterations() {
         "{summary}"
     );
     let c = dir.join("c.exr");
-    ok(&[
-        "render",
-        "cornell-box",
-        "--width",
-        "24",
-        "--height",
-        "24",
-        "--passes",
-        "3",
-        "--alpha",
-        "0.5",
-        "--shard",
-        "1/2",
-        "-o",
-        &s(&c),
-    ]);
+    render("1/2", "3", &["--alpha", "0.5"], &c);
     let other = refused(&["merge", &s(&a), &s(&c), "-o", &s(&dir.join("x.exr"))]);
     assert!(other.contains("c.exr: params.alpha = 0.5"), "{other}");
 }
@@ -272,27 +248,10 @@ fn an_interrupted_render_resumes_bit_for_bit() {
         "--checkpoint-every",
         every,
     ]);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ppm"))
-        .args(&args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while !checkpoint.join("state.json").exists() {
-        assert!(start.elapsed() < Duration::from_secs(60), "no checkpoint");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    let pid = child.id().to_string();
-    assert!(
-        Command::new("kill")
-            .args(["-INT", &pid])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130), "stopped by the interrupt");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_ppm"));
+    command.args(&args);
+    let (status, stderr) = common::interrupted(command, "checkpoint:");
+    assert_eq!(status, Some(130), "stopped by the interrupt: {stderr}");
     let state = std::fs::read_to_string(checkpoint.join("state.json")).unwrap();
     let state: serde_json::Value = serde_json::from_str(&state).unwrap();
     let done = state["report"]["passes"].as_u64().unwrap();

@@ -5,6 +5,8 @@
 //! Without Xvfb these tests skip with a loud message, unless `PPM_REQUIRE_WGPU=1` (as CI sets
 //! it, with Xvfb installed by `.ci/run`) turns that into a failure.
 
+mod common;
+
 use backend_cpu::CpuBackend;
 use glam::Vec3;
 use harness::driver::{Budget, Schedule, run};
@@ -404,47 +406,22 @@ fn an_interrupt_writes_the_render() {
     let size = SIZE.to_string();
     let shots = dir.join("shots");
     let out = dir.join("view.exr");
-    let mut child = display
-        .ppm(&[
-            "view",
-            "cornell-box",
-            "--width",
-            &size,
-            "--height",
-            &size,
-            "--script",
-            &script.display().to_string(),
-            "--screenshot-dir",
-            &shots.display().to_string(),
-            "-o",
-            &out.display().to_string(),
-        ])
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while !shots.join("screenshot-000.png").exists() {
-        assert!(start.elapsed() < Duration::from_secs(120), "no screenshot");
-        if let Ok(Some(status)) = child.try_wait() {
-            panic!("ppm view ended early: {status}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let pid = child.id().to_string();
-    assert!(
-        Command::new("kill")
-            .args(["-INT", &pid])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let output = child.wait_with_output().unwrap();
-    assert_eq!(
-        output.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    let command = display.ppm(&[
+        "view",
+        "cornell-box",
+        "--width",
+        &size,
+        "--height",
+        &size,
+        "--script",
+        &script.display().to_string(),
+        "--screenshot-dir",
+        &shots.display().to_string(),
+        "-o",
+        &out.display().to_string(),
+    ]);
+    let (status, stderr) = common::interrupted(command, "screenshot:");
+    assert_eq!(status, Some(130), "{stderr}");
     let json = std::fs::read_to_string(out.with_extension("json")).unwrap();
     assert!(json.contains("\"interrupted\": true"), "{json}");
     assert!(out.exists() && out.with_extension("png").exists());
