@@ -36,8 +36,8 @@ use ppm_core::passes::{
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
 use ppm_core::passes::{
-    GuidedPhotonPass, HitPointUpdate, LandingPaths, RegionPhotonPass, SceneUpdate, UpdateStats,
-    crossed_mask_words,
+    DynamicBackend, GuidedPhotonPass, HitPointUpdate, LandingPaths, RegionPhotonPass, SceneUpdate,
+    UpdateStats, crossed_mask_words,
 };
 use ppm_core::rng::PassKind;
 use rayon::prelude::*;
@@ -440,5 +440,9 @@ impl RandomSource for CpuBackend {
 impl Backend for CpuBackend {
     fn name(&self) -> &str {
         "cpu"
+    }
+
+    fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
+        Some(self)
     }
 }

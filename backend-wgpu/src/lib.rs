@@ -42,10 +42,12 @@ use ppm_core::layout::{
     photon_flags,
 };
 use ppm_core::passes::{
-    Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
-    GuidedPhotonPass, HitPointUpdate, LandingPaths, PhotonPass, PhotonStats, RandomSource,
-    ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats, crossed_mask_words,
+    Backend, BackendError, DirectLight, DirectStats, DynamicBackend, EyePass, EyeStats, GatherPass,
+    GatherStats, GuidedPhotonPass, HitPointUpdate, LandingPaths, PhotonPass, PhotonStats,
+    RandomSource, ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats,
+    crossed_mask_words,
 };
+use ppm_core::update::gather::{GatherCase, SlotState};
 use scan::Scan;
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
@@ -911,9 +913,33 @@ impl WgpuBackend {
     }
 }
 
+impl WgpuBackend {
+    /// Runs update.wgsl's gather rule on `cases`, the slot after each: a test compares them
+    /// with [`ppm_core::update::gather::gather_rule`] on
+    /// [`ppm_core::update::gather::test_cases`]. Compiles its kernel on every call.
+    pub fn gather_rule_vectors(
+        &self,
+        cases: &[GatherCase],
+    ) -> Result<Vec<SlotState>, BackendError> {
+        let kernel = passes::GatherVectorsKernel::new(&self.ctx);
+        let input = buffers::storage_init(&self.ctx, "gather cases", cases);
+        let size = (cases.len() * std::mem::size_of::<SlotState>()) as u64;
+        let results = storage_zeroed(&self.ctx, "gather results", size)?;
+        self.run("gather vectors", |encoder| {
+            kernel.record(&self.ctx, encoder, (&input, &results), cases.len() as u32);
+            Ok(())
+        })?;
+        read_back(&self.ctx, &results, cases.len())
+    }
+}
+
 impl Backend for WgpuBackend {
     fn name(&self) -> &str {
         "wgpu"
+    }
+
+    fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
+        Some(self)
     }
 
     /// The viewer reaches [`WgpuBackend::resolve_into`] through it.

@@ -331,6 +331,36 @@ impl CheckKernel {
     }
 }
 
+/// gather_vectors.wgsl: update.wgsl's gather rule on given cases. Compiled only when a test
+/// asks for it.
+pub struct GatherVectorsKernel(Kernel);
+
+impl GatherVectorsKernel {
+    /// Compiles the shader.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let module = shader_module(&ctx.device, "gather_vectors", shaders::GATHER_VECTORS);
+        Self(Kernel::new(
+            &ctx.device,
+            &module,
+            "gather_vectors_main",
+            &[Read, ReadWrite],
+            WORKGROUP,
+        ))
+    }
+
+    /// Records the rule on `count` cases into `results`.
+    pub fn record(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        (cases, results): (&wgpu::Buffer, &wgpu::Buffer),
+        count: u32,
+    ) {
+        let group = self.0.bind(&ctx.device, &[cases, results]);
+        self.0.dispatch(encoder, &group, count);
+    }
+}
+
 /// rng_vectors.wgsl: the counter-based generator and the stratified sequences on given keys.
 pub struct RngVectorsKernel {
     random: Kernel,

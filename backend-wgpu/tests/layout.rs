@@ -3,6 +3,7 @@
 
 use naga::proc::Layouter;
 use ppm_core::layout::*;
+use ppm_core::update::gather::{Found, GatherCase, SlotState};
 use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
@@ -116,6 +117,33 @@ fn buffer_elements_match_their_wgsl_twins() {
         _pad0,
         up,
         _pad1
+    });
+}
+
+#[test]
+fn the_gather_rule_s_structs_match_their_wgsl_twins() {
+    same_layout!(SlotState {
+        tau,
+        n,
+        pending,
+        r2,
+        emitted,
+        flags,
+        _pad
+    });
+    same_layout!(Found {
+        flux,
+        count,
+        weight,
+        power_sq,
+        _pad
+    });
+    same_layout!(GatherCase {
+        slot,
+        found,
+        reflectance,
+        r2_initial,
+        params
     });
 }
 

@@ -15,7 +15,7 @@ use backend_cpu::CpuBackend;
 use common::{backends, setting, wgpu_if_wanted};
 use harness::driver::Renderer;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Move;
 use std::time::Instant;
 
@@ -51,7 +51,7 @@ fn main() {
         };
         let mut p = RenderParams::for_scene(&scene);
         (p.width, p.height) = (size, size);
-        let row = |backend: &mut dyn DynamicBackend| {
+        let row = |backend: &mut dyn Backend| {
             let mut r = Renderer::start(backend, scene.clone(), &p, &MoveParams::default())
                 .expect("the scene loads");
             let mut iteration_ms = Vec::new();

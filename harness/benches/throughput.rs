@@ -17,7 +17,7 @@ use backend_cpu::CpuBackend;
 use common::{backends, setting, wgpu_if_wanted};
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::params::{MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 
 fn main() {
     let scene = scenes::builtin("cornell-box")
@@ -62,7 +62,7 @@ fn main() {
         params.photons_per_pass = photons;
         params.initial_radius = radius;
         let mut cpu = CpuBackend::new();
-        let mut rows: Vec<&mut dyn DynamicBackend> = Vec::new();
+        let mut rows: Vec<&mut dyn Backend> = Vec::new();
         if backends.contains("cpu") {
             rows.push(&mut cpu);
         }

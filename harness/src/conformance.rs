@@ -1,7 +1,7 @@
 //! The conformance suite: named checks that any backend implementing ppm-core's pass traits
 //! must pass. A backend author calls [`run_conformance`] with a way to make the backend and
-//! gets a verdict per check; no check knows which backend it tests. The CPU backend is the
-//! reference for the checks that compare.
+//! the [`Tier`] it claims, and gets a verdict per check; no check knows which backend it
+//! tests. The CPU backend is the reference for the checks that compare.
 
 use crate::diff::{
     OTHER_SEED_OFFSET, Recording, independent, record, record_schedule, runs_of, runs_of_schedule,
@@ -16,7 +16,7 @@ use ppm_core::layout::{
     EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
 };
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::{Backend, BackendError, DynamicBackend};
+use ppm_core::passes::{Backend, BackendError};
 use ppm_core::qmc;
 use ppm_core::rng::TEST_VECTORS;
 use ppm_core::scene::Scene;
@@ -25,7 +25,7 @@ use ppm_core::update::{Statistics, ppm_update};
 use std::fmt;
 
 /// Makes a fresh backend for each check.
-pub type BackendFactory<'a> = &'a mut dyn FnMut() -> Result<Box<dyn DynamicBackend>, BackendError>;
+pub type BackendFactory<'a> = &'a mut dyn FnMut() -> Result<Box<dyn Backend>, BackendError>;
 
 /// Sizes the checks render at.
 #[derive(Clone, Debug)]
@@ -52,6 +52,26 @@ impl ConformanceOptions {
     }
 }
 
+/// What a backend claims to render: each tier's checks include the tiers below.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Tier {
+    /// Still frames: any [`Backend`] plugs into the driver, the CLI and the suite (a move
+    /// restarts on it).
+    Static,
+    /// Moves that keep light too: [`Backend::dynamic`] gives the dynamic passes, and every
+    /// move mode agrees with the CPU backend.
+    Dynamic,
+}
+
+impl fmt::Display for Tier {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Tier::Static => "static",
+            Tier::Dynamic => "dynamic",
+        })
+    }
+}
+
 /// One check's outcome.
 #[derive(Clone, Debug)]
 pub struct CheckResult {
@@ -68,6 +88,8 @@ pub struct CheckResult {
 pub struct Verdict {
     /// Backend name.
     pub backend: String,
+    /// The tier checked.
+    pub tier: Tier,
     /// Results, in the order run.
     pub checks: Vec<CheckResult>,
 }
@@ -86,7 +108,11 @@ impl Verdict {
 
 impl fmt::Display for Verdict {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "conformance of backend '{}':", self.backend)?;
+        writeln!(
+            f,
+            "conformance of backend '{}', tier {}:",
+            self.backend, self.tier
+        )?;
         for c in &self.checks {
             writeln!(
                 f,
@@ -110,29 +136,32 @@ impl fmt::Display for Verdict {
 
 type Check = fn(BackendFactory, &ConformanceOptions) -> Result<String, String>;
 
-/// The named checks, in order.
-pub const CHECKS: &[(&str, Check)] = &[
-    ("rng-vectors", check_rng_vectors),
-    ("hit-point-layout", check_hit_point_layout),
-    ("eye-pass", check_eye_pass),
-    ("photon-power", check_photon_power),
-    ("gather-formulas", check_gather_formulas),
-    ("determinism", check_determinism),
-    ("agreement/same-seed", check_same_seed),
-    ("agreement/independent", check_independent),
-    ("moves/same-seed", check_moves_same_seed),
-    ("moves/independent", check_moves_independent),
-    ("stress-family", check_stress_family),
+/// The named checks, in order, with their tier.
+pub const CHECKS: &[(&str, Tier, Check)] = &[
+    ("rng-vectors", Tier::Static, check_rng_vectors),
+    ("hit-point-layout", Tier::Static, check_hit_point_layout),
+    ("eye-pass", Tier::Static, check_eye_pass),
+    ("photon-power", Tier::Static, check_photon_power),
+    ("gather-formulas", Tier::Static, check_gather_formulas),
+    ("determinism", Tier::Static, check_determinism),
+    ("agreement/same-seed", Tier::Static, check_same_seed),
+    ("agreement/independent", Tier::Static, check_independent),
+    ("stress-family", Tier::Static, check_still_stress),
+    ("dynamic-passes", Tier::Dynamic, check_dynamic_passes),
+    ("moves/same-seed", Tier::Dynamic, check_moves_same_seed),
+    ("moves/independent", Tier::Dynamic, check_moves_independent),
+    ("moves/stress-family", Tier::Dynamic, check_moving_stress),
 ];
 
-/// Runs every check against backends made by `make`.
-pub fn run_conformance(make: BackendFactory, options: &ConformanceOptions) -> Verdict {
+/// Runs every check of `tier` and the tiers below against backends made by `make`.
+pub fn run_conformance(make: BackendFactory, options: &ConformanceOptions, tier: Tier) -> Verdict {
     let backend = make()
         .map(|b| b.name().to_owned())
         .unwrap_or_else(|e| format!("(cannot start: {e})"));
     let checks = CHECKS
         .iter()
-        .map(|(name, check)| {
+        .filter(|(_, of, _)| *of <= tier)
+        .map(|(name, _, check)| {
             let (passed, detail) = match check(&mut *make, options) {
                 Ok(detail) => (true, detail),
                 Err(detail) => (false, detail),
@@ -144,7 +173,11 @@ pub fn run_conformance(make: BackendFactory, options: &ConformanceOptions) -> Ve
             }
         })
         .collect();
-    Verdict { backend, checks }
+    Verdict {
+        backend,
+        tier,
+        checks,
+    }
 }
 
 fn err(e: impl fmt::Display) -> String {
@@ -521,7 +554,7 @@ fn check_moves_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result
     let mut details = Vec::new();
     for (name, scene, schedule) in move_cases(o, &modes)? {
         let p = params_for(&scene, o);
-        let render = |backend: &mut dyn DynamicBackend| {
+        let render = |backend: &mut dyn Backend| {
             record_schedule(backend, &scene, &p, &moves, &schedule).map_err(err)
         };
         let reference = render(&mut CpuBackend::new())?;
@@ -538,7 +571,7 @@ fn check_moves_independent(make: BackendFactory, o: &ConformanceOptions) -> Resu
     let mut details = Vec::new();
     for (name, scene, schedule) in move_cases(o, &[MoveMode::Local])? {
         let p = params_for(&scene, o);
-        let runs = |backend: &mut dyn DynamicBackend, offset| {
+        let runs = |backend: &mut dyn Backend, offset| {
             runs_of_schedule(backend, &scene, &p, &moves, &schedule, o.runs, offset).map_err(err)
         };
         let reference = runs(&mut CpuBackend::new(), 0)?;
@@ -585,10 +618,21 @@ fn check_independent(make: BackendFactory, o: &ConformanceOptions) -> Result<Str
 }
 
 /// Every case of the stress family holds its invariants and closed forms.
-fn check_stress_family(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+/// The still cases of the stress family hold.
+fn check_still_stress(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    stress_family(make, false)
+}
+
+/// The moving cases of the stress family hold.
+fn check_moving_stress(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    stress_family(make, true)
+}
+
+fn stress_family(make: BackendFactory, moving: bool) -> Result<String, String> {
     let mut backend = make().map_err(err)?;
     let results: Vec<_> = scenes::stress::STRESS
         .iter()
+        .filter(|case| (case.build)().moves.is_some() == moving)
         .map(|case| crate::stress::run_case(backend.as_mut(), case))
         .collect();
     let failed: Vec<String> = results
@@ -600,5 +644,19 @@ fn check_stress_family(make: BackendFactory, _: &ConformanceOptions) -> Result<S
         Ok(format!("{} cases hold", results.len()))
     } else {
         Err(failed.join("; "))
+    }
+}
+
+/// The backend gives its dynamic passes ([`Backend::dynamic`]); without them every move
+/// restarts, and the moves checks cannot pass.
+fn check_dynamic_passes(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    let mut backend = make().map_err(err)?;
+    match backend.dynamic() {
+        Some(_) => Ok("scene update, hit-point update, region, guided and landing passes".into()),
+        None => Err(format!(
+            "backend '{}' gives no dynamic passes (Backend::dynamic is None): it renders still \
+             frames only, the static tier",
+            backend.name()
+        )),
     }
 }

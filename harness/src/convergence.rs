@@ -11,7 +11,7 @@ use crate::report::RenderReport;
 use ppm_core::image::Image;
 use ppm_core::metrics::{block_relative_rmse, mean_ratio, relative_rmse};
 use ppm_core::params::{MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use serde::Serialize;
 use std::path::Path;
@@ -61,7 +61,7 @@ pub fn measure(image: &Image, truth: &Truth, seconds: f64, passes: u32) -> Point
 /// `CHECKPOINT_GROWTH`, and after the last; ends early, with the points measured so far,
 /// when `stop` says so (the report says `interrupted`).
 pub fn run_from_scratch(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     frame: u32,
     params: &RenderParams,

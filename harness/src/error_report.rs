@@ -11,7 +11,7 @@ use ppm_core::image::Image;
 use ppm_core::layout::{HitPoint, hit_flags};
 use ppm_core::metrics::relative_rmse_parts;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::update::luminance;
@@ -78,7 +78,7 @@ pub struct ModeRun {
 /// that gain or lose their visible point (an object's silhouette over the void), with one
 /// iteration before each move.
 pub fn reset_pixels(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     settings: &ErrorSettings,
 ) -> Result<Vec<bool>, RunError> {
@@ -197,7 +197,7 @@ impl Observer for AfterMove<'_> {
 /// [`reset_pixels`]) splits the error. Ends early, with the measurements so far, when `stop`
 /// says so.
 pub fn run_mode(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     mode: MoveMode,
     settings: &ErrorSettings,
@@ -282,7 +282,7 @@ fn brightest(image: &Image) -> f32 {
 /// warm-up: it says what keeping the converged light can win on the scene. `None` when
 /// `stop` ended the render early (its kept pixels would be judged on less than the warm-up).
 pub fn perfect_compensation(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     settings: &ErrorSettings,
     truth: &Image,

@@ -8,7 +8,7 @@ use crate::driver::schedule::EachIteration;
 use crate::driver::{Budget, Progress, Renderer, Schedule, run};
 use ppm_core::image::Image;
 use ppm_core::params::MoveParams;
-use ppm_core::passes::{BackendError, DynamicBackend};
+use ppm_core::passes::{Backend, BackendError};
 use scenes::stress::{Expected, MoveStress, StressCase, StressSetup};
 use serde::Serialize;
 use std::time::Instant;
@@ -49,7 +49,7 @@ pub struct CaseResult {
 
 /// Renders a moving case: frame 0, a compensated move, then as many iterations again.
 fn render_move(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     setup: &StressSetup,
     m: MoveStress,
 ) -> Result<Image, String> {
@@ -77,7 +77,7 @@ fn render_move(
 
 /// Renders a static case, seeding its state after the first iteration when it has one.
 fn render_still(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     setup: &StressSetup,
 ) -> Result<(Image, Option<BackendError>), String> {
     let mut seeding = EachIteration(|at: &Progress, r: &mut Renderer| {
@@ -103,7 +103,7 @@ fn render_still(
 }
 
 /// Runs `case` on `backend`.
-pub fn run_case(backend: &mut dyn DynamicBackend, case: &StressCase) -> CaseResult {
+pub fn run_case(backend: &mut dyn Backend, case: &StressCase) -> CaseResult {
     let start = Instant::now();
     let setup = (case.build)();
     let mut result = CaseResult {
@@ -140,7 +140,7 @@ pub fn run_case(backend: &mut dyn DynamicBackend, case: &StressCase) -> CaseResu
 }
 
 fn check(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     setup: &StressSetup,
     image: &Image,
     worst: &mut Worst,
@@ -220,7 +220,7 @@ pub const AGREEMENT_RUNS: u32 = 4;
 /// Tile means of one run of `case` with `seed`, or `None` when the case refused (allowed at
 /// the f32 limit, and then nothing to compare).
 fn sample(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     case: &StressCase,
     seed: u32,
 ) -> Result<Option<TileMeans>, String> {
@@ -241,22 +241,21 @@ fn sample(
 /// Whether two backends agree on `case` by the independent-seed test (Welch t per tile and
 /// quantity, Holm-corrected at `alpha`), each rendering it [`AGREEMENT_RUNS`] times.
 pub fn agreement(
-    reference: &mut dyn DynamicBackend,
-    other: &mut dyn DynamicBackend,
+    reference: &mut dyn Backend,
+    other: &mut dyn Backend,
     case: &StressCase,
     alpha: f64,
 ) -> Result<Option<IndependentReport>, String> {
-    let runs =
-        |b: &mut dyn DynamicBackend, offset: u32| -> Result<Option<Vec<TileMeans>>, String> {
-            let mut out = Vec::new();
-            for k in 0..AGREEMENT_RUNS {
-                match sample(b, case, offset + k)? {
-                    Some(t) => out.push(t),
-                    None => return Ok(None),
-                }
+    let runs = |b: &mut dyn Backend, offset: u32| -> Result<Option<Vec<TileMeans>>, String> {
+        let mut out = Vec::new();
+        for k in 0..AGREEMENT_RUNS {
+            match sample(b, case, offset + k)? {
+                Some(t) => out.push(t),
+                None => return Ok(None),
             }
-            Ok(Some(out))
-        };
+        }
+        Ok(Some(out))
+    };
     let (Some(a), Some(b)) = (runs(reference, 0)?, runs(other, OTHER_SEED_OFFSET)?) else {
         return Ok(None);
     };

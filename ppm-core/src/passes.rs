@@ -219,6 +219,14 @@ pub trait Backend:
         None
     }
 
+    /// The backend's dynamic passes, for the moves that keep light (docs/algorithm.md 2, 3b):
+    /// a backend that has them returns `Some(self)`, one that renders still frames only (the
+    /// conformance suite's `static` tier) keeps the default `None`, and every move then
+    /// restarts on it.
+    fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
+        None
+    }
+
     /// What the backend has not compiled or allocated so far because nothing needed it (a
     /// still render needs no move's pipelines), one line each, bytes named: the render's
     /// report lists it under `left_out`.
@@ -284,7 +292,8 @@ pub trait LandingPaths {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError>;
 }
 
-/// A backend that also runs the dynamic passes of compensation photons.
+/// A backend that also runs the dynamic passes of compensation photons and local moves;
+/// [`Backend::dynamic`] hands it to the driver.
 pub trait DynamicBackend:
     Backend + SceneUpdate + HitPointUpdate + RegionPhotonPass + GuidedPhotonPass + LandingPaths
 {

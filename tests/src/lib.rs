@@ -6,7 +6,7 @@ use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Outcome, Schedule, run};
 use ppm_core::compile::{camera_ray, compile_scene};
 use ppm_core::params::{MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 
 /// Renders `scene` at `frame` for `params.passes` iterations on the CPU backend in a pool of
@@ -29,7 +29,7 @@ pub fn render_cpu(
 /// Renders `scene` at `frame` for `params.passes` iterations on `backend`; panics on a pass
 /// error, since a test render must not fail.
 pub fn render_on(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     frame: u32,
     params: &RenderParams,

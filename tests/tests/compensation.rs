@@ -86,7 +86,7 @@ fn cancel(neg_index: u32, pos_index: u32) -> (Image, Image) {
     let compiled = compile_scene(&scene, p.width, p.height);
     let region = emitting_region(&compiled.lights, &tall_block(&scene), region_mode::AREA).unwrap();
     let nc = 65_536;
-    let b = render.backend();
+    let b = render.backend().dynamic().expect("dynamic passes");
     for (index, scale, kind) in [
         (neg_index, -1.0, gather_kind::REGION_NEGATIVE),
         (pos_index, 1.0, gather_kind::REGION_POSITIVE),
@@ -210,7 +210,7 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
     let mut render = warmed(&mut backend, scene.clone(), &p, 1);
     let compiled = compile_scene(&scene, p.width, p.height);
     let region = emitting_region(&compiled.lights, &tall_block(&scene), region_mode::AREA).unwrap();
-    let b = render.backend();
+    let b = render.backend().dynamic().expect("dynamic passes");
     // 200,000 compensation photons against 2,000 emitted: each hit point near the block
     // loses far more than it ever gathered.
     b.region_photon_pass(

@@ -3,7 +3,7 @@
 //! photons of the wrong sign by the moves check alone.
 
 use backend_cpu::CpuBackend;
-use harness::conformance::{ConformanceOptions, run_conformance};
+use harness::conformance::{ConformanceOptions, Tier, run_conformance};
 use harness::diff::{OTHER_SEED_OFFSET, runs_of};
 use harness::diff::{independent, record, same_seed};
 use harness::driver::checkpoint::RenderState;
@@ -11,7 +11,7 @@ use harness::driver::{Budget, Resume, Schedule};
 use ppm_core::compile::CompiledScene;
 use ppm_core::image::Image;
 use ppm_core::layout::*;
-use ppm_core::params::{MoveParams, RenderParams};
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::*;
 
 #[test]
@@ -19,6 +19,7 @@ fn cpu_backend_passes_conformance() {
     let verdict = run_conformance(
         &mut || Ok(Box::new(CpuBackend::new())),
         &ConformanceOptions::quick(),
+        Tier::Dynamic,
     );
     println!("{verdict}");
     assert!(verdict.passed(), "{verdict}");
@@ -32,6 +33,7 @@ fn wgpu_backend_passes_conformance() {
     let verdict = run_conformance(
         &mut || Ok(Box::new(backend_wgpu::WgpuBackend::new()?)),
         &ConformanceOptions::quick(),
+        Tier::Dynamic,
     );
     println!("{verdict}");
     assert!(verdict.passed(), "{verdict}");
@@ -48,6 +50,13 @@ enum Fault {
     /// Compensation photons traced with positive power: still frames are the CPU's exactly,
     /// every move adds what it should remove.
     MisSignsCompensation,
+    /// No fault in what it renders, but it gives no dynamic passes: a still-frame backend,
+    /// which the static tier passes and every move restarts on.
+    StillFramesOnly,
+    /// Negative photons that empty a slot leave its `emitted` as it was, where the gather
+    /// rule starts it over with the statistics: the photons it gathers next are divided by
+    /// everything emitted before the move.
+    SkipsEmptiedReset,
 }
 
 struct Broken(CpuBackend, Fault);
@@ -60,7 +69,7 @@ impl Broken {
                 power_scale: p.power_scale.abs(),
                 ..*p
             },
-            Fault::DropsOneInTen { .. } => *p,
+            Fault::DropsOneInTen { .. } | Fault::StillFramesOnly | Fault::SkipsEmptiedReset => *p,
         }
     }
 }
@@ -95,7 +104,23 @@ impl PhotonPass for Broken {
 }
 impl GatherPass for Broken {
     fn gather_pass(&mut self, p: &GatherParams) -> Result<GatherStats, BackendError> {
-        self.0.gather_pass(p)
+        if !matches!(self.1, Fault::SkipsEmptiedReset) {
+            return self.0.gather_pass(p);
+        }
+        let before = self.0.read_hit_points()?;
+        let stats = self.0.gather_pass(p)?;
+        let mut after = self.0.read_hit_points()?;
+        let mut skipped = false;
+        for (a, b) in after.iter_mut().zip(&before) {
+            if b.n > 0.0 && a.n == 0.0 && b.emitted > 0.0 && a.emitted == 0.0 {
+                a.emitted = b.emitted;
+                skipped = true;
+            }
+        }
+        if skipped {
+            self.0.write_hit_points(&after)?;
+        }
+        Ok(stats)
     }
 }
 impl Resolve for Broken {
@@ -125,6 +150,12 @@ impl RandomSource for Broken {
 impl Backend for Broken {
     fn name(&self) -> &str {
         "broken"
+    }
+    fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
+        match self.1 {
+            Fault::StillFramesOnly => None,
+            _ => Some(self),
+        }
     }
 }
 impl SceneUpdate for Broken {
@@ -288,6 +319,7 @@ fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
             )))
         },
         &ConformanceOptions::quick(),
+        Tier::Dynamic,
     );
     println!("{verdict}");
     assert!(!verdict.check("agreement/same-seed").unwrap().passed);
@@ -310,6 +342,7 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
             )))
         },
         &ConformanceOptions::quick(),
+        Tier::Dynamic,
     );
     println!("{verdict}");
     assert!(!verdict.check("moves/same-seed").unwrap().passed);
@@ -322,4 +355,77 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     ] {
         assert!(verdict.check(still).unwrap().passed, "{still}: {verdict}");
     }
+}
+
+/// A backend that skips the reset of an emptied slot's normaliser renders still frames as the
+/// CPU does (no still pass empties a slot) and fails the moves check that compares slots.
+#[test]
+fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves() {
+    let verdict = run_conformance(
+        &mut || {
+            Ok(Box::new(Broken(
+                CpuBackend::new(),
+                Fault::SkipsEmptiedReset,
+            )))
+        },
+        &ConformanceOptions::quick(),
+        Tier::Dynamic,
+    );
+    println!("{verdict}");
+    assert!(
+        !verdict.check("moves/same-seed").unwrap().passed,
+        "{verdict}"
+    );
+    for still in ["agreement/same-seed", "gather-formulas", "determinism"] {
+        assert!(verdict.check(still).unwrap().passed, "{still}: {verdict}");
+    }
+}
+
+/// A backend without dynamic passes passes the static tier, fails the dynamic tier on
+/// `dynamic-passes` alone among the checks both tiers share, and renders a moving scene: each
+/// of its moves restarts, saying why.
+#[test]
+fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
+    let make = &mut || -> Result<Box<dyn Backend>, BackendError> {
+        Ok(Box::new(Broken(CpuBackend::new(), Fault::StillFramesOnly)))
+    };
+    let options = ConformanceOptions::quick();
+    let still = run_conformance(make, &options, Tier::Static);
+    println!("{still}");
+    assert!(still.passed(), "{still}");
+    assert!(
+        still.check("moves/same-seed").is_none(),
+        "static runs no moves check"
+    );
+    let moving = run_conformance(make, &options, Tier::Dynamic);
+    let dynamic = moving.check("dynamic-passes").unwrap();
+    assert!(!dynamic.passed && dynamic.detail.contains("still frames only"));
+    assert!(!moving.check("moves/same-seed").unwrap().passed);
+
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let mut params = RenderParams::for_scene(&scene);
+    (params.width, params.height, params.photons_per_pass) = (32, 32, 2_000);
+    let mut backend = Broken(CpuBackend::new(), Fault::StillFramesOnly);
+    let mut render = harness::driver::Renderer::start(
+        &mut backend,
+        scene.at_time(0.0),
+        &params,
+        &MoveParams::default(),
+    )
+    .unwrap();
+    render.iteration().unwrap();
+    let report = render.move_to(scene.at_time(1.0), MoveMode::Local).unwrap();
+    let why = report
+        .restarted
+        .expect("a move on a still-frame backend restarts");
+    assert!(why.contains("still frames only"), "{why}");
+    render.iteration().unwrap();
+    assert!(
+        render
+            .resolve()
+            .unwrap()
+            .pixels
+            .iter()
+            .any(|p| p.iter().any(|c| *c > 0.0))
+    );
 }

@@ -3,9 +3,8 @@
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
 // each gathering hit point's radius to its accumulator: power and count, and path weight. Then
-// `gather_apply_main` (the gather pass) folds the accumulator in as the pass's kind says:
-// who gathers, the region scale `emitted / N_c`, eqs 1-3 or 5-7, or a deferred pending sum;
-// and clears it.
+// `gather_apply_main` (the gather pass) folds the accumulator in by update.wgsl's
+// `gather_rule` (ppm_core::update::gather's twin), and clears it.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 // The scene table, of which the gather reads only the materials (scene.wgsl).
@@ -41,14 +40,14 @@ fn bucket_start(b: u32) -> u32 {
 
 // Running sums of the photons a slot found: count, path weight, power, and squared power
 // luminance (the variance of a local move's correction).
-struct Found {
+struct Search {
     m: u32,
     weight: f32,
     flux: vec3<f32>,
     power_sq: f32,
 }
 
-fn visit(found: ptr<function, Found>, hp: HitPoint, r2: f32, p: GridPhoton, k: u32) {
+fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: u32) {
     let d = p.position - hp.position;
     if dot(d, d) < r2 && oct_faces(p.normal_oct, hp.normal) {
         (*found).m++;
@@ -70,7 +69,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     // Only hit points that gather the pass's kind search: a guided pass touches the updated
     // ones alone, as on the CPU.
     let hp = hit_points[slot];
-    if !gathers(hp, params.kind) {
+    if !gathers(hp.flags, params.kind) {
         return;
     }
     let g = grid;
@@ -78,7 +77,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     let r = sqrt(r2);
     let lo = cell_of(hp.position - vec3<f32>(r), g.cell_size);
     let hi = cell_of(hp.position + vec3<f32>(r), g.cell_size);
-    var found = Found(0u, 0.0, vec3<f32>(0.0), 0.0);
+    var found = Search(0u, 0.0, vec3<f32>(0.0), 0.0);
     if scan_instead(lo, hi, g.photon_count) {
         for (var k = 0u; k < g.photon_count; k++) {
             visit(&found, hp, r2, sorted_photon(k), k);
@@ -132,34 +131,15 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     accumulated[2u * slot + 1u] += vec4<f32>(weight, found.power_sq * shrink * shrink, 0.0, 0.0);
 }
 
-// Whether a slot belongs to the set the pass kind serves, visible point or not.
-fn serves(hp: HitPoint, kind: u32) -> bool {
-    let updated = (hp.flags & HIT_UPDATED) != 0u;
-    switch kind & GATHER_KIND_MASK {
-        case GATHER_REGION_NEGATIVE, GATHER_REGION_POSITIVE: {
-            return !updated;
-        }
-        case GATHER_GUIDED: {
-            return updated;
-        }
-        default: {
-            return true;
-        }
-    }
-}
-
-// Whether a slot gathers the pass: served, with a visible point.
-fn gathers(hp: HitPoint, kind: u32) -> bool {
-    return (hp.flags & HIT_VALID) != 0u && serves(hp, kind);
-}
-
 // Writes a slot's new statistics: only the fields an update changes (a whole slot is 24
 // word stores, which lavapipe makes one invocation at a time).
-fn store(slot: u32, s: Statistics, emitted: f32) {
-    hit_points[slot].n = s.n;
-    hit_points[slot].r2 = s.r2;
-    hit_points[slot].tau = s.tau;
-    hit_points[slot].emitted = emitted;
+fn store(slot: u32, hp: HitPoint, s: SlotState) {
+    if s.n != hp.n || s.r2 != hp.r2 || any(s.tau != hp.tau) || s.emitted != hp.emitted {
+        hit_points[slot].n = s.n;
+        hit_points[slot].r2 = s.r2;
+        hit_points[slot].tau = s.tau;
+        hit_points[slot].emitted = s.emitted;
+    }
 }
 
 @compute @workgroup_size(64)
@@ -170,75 +150,30 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     let hp = hit_points[slot];
     let acc = accumulated[2u * slot];
-    let weight_sum = accumulated[2u * slot + 1u].x;
-    let power_sq = accumulated[2u * slot + 1u].y;
+    let extra = accumulated[2u * slot + 1u];
     accumulated[2u * slot] = vec4<f32>(0.0);
     accumulated[2u * slot + 1u] = vec4<f32>(0.0);
-    let kind = params.kind & GATHER_KIND_MASK;
-    let s0 = Statistics(hp.n, hp.r2, hp.tau);
-    if kind == GATHER_REGION_APPLY {
-        let p = pending[slot];
-        pending[slot] = vec4<f32>(0.0);
-        if (hp.flags & HIT_VALID) == 0u || all(p == vec4<f32>(0.0)) {
-            return;
-        }
-        if (params.kind & GATHER_ADD_FLUX) != 0u {
-            // `w` holds the correction's variance: the slot keeps the share of its history
-            // worth keeping against it (backend-cpu's gather_pass.rs).
-            let tau = max(hp.tau + p.xyz, vec3<f32>(0.0));
-            let kept = history_kept(hp.n, tau, p.w);
-            hit_points[slot].tau = tau * kept;
-            hit_points[slot].emitted = hp.emitted * kept;
-            return;
-        }
-        if p.w >= 0.0 {
-            let s = ppm_update(s0, p.w, p.xyz, params.alpha);
-            store(slot, Statistics(s.n, s.r2, max(s.tau, vec3<f32>(0.0))), hp.emitted);
-        } else {
-            let s = compensation_update(s0, -p.w, p.xyz, params.alpha, radii.x);
-            store(slot, s, select(hp.emitted, 0.0, s.n == 0.0));
-        }
-        return;
-    }
-    if !gathers(hp, params.kind) {
-        if serves(hp, params.kind) && params.emitted_increment != 0.0 {
-            hit_points[slot].emitted = hp.emitted + params.emitted_increment;
-        }
-        return;
-    }
-    let found = acc.w;
-    let region = kind == GATHER_REGION_NEGATIVE || kind == GATHER_REGION_POSITIVE;
-    var scale = 1.0;
-    if region {
-        scale = hp.emitted / params.region_photons;
-    }
-    var m = found;
-    if region && (params.kind & GATHER_RAW_COUNT) == 0u {
-        m = weight_sum * scale;
-    }
-    let brdf = scene_material(hp.material).albedo * (1.0 / PI);
-    let factor = hp.throughput * brdf * scale;
-    let dtau = acc.xyz * factor;
-    if found > 0.0 {
+    let found = Found(acc.xyz, acc.w, extra.x, extra.y, vec2<f32>(0.0));
+    let gathering = gathers(hp.flags, params.kind);
+    if gathering && found.count > 0.0 {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
-        atomicAdd(&counters[COUNTER_GATHERED], u32(found));
+        atomicAdd(&counters[COUNTER_GATHERED], u32(found.count));
     }
-    if (params.kind & GATHER_DEFERRED) != 0u {
-        let sign = select(1.0, -1.0, kind == GATHER_REGION_NEGATIVE);
-        // A flux-only correction keeps the variance of its flux where the count would go.
-        let lum = luminance(factor);
-        let count = select(sign * m, power_sq * lum * lum, (params.kind & GATHER_ADD_FLUX) != 0u);
-        pending[slot] += vec4<f32>(dtau, count);
-        return;
+    var reflectance = vec3<f32>(0.0);
+    if gathering {
+        reflectance = hp.throughput * scene_material(hp.material).albedo * (1.0 / PI);
     }
-    var emitted = hp.emitted + params.emitted_increment;
-    if kind == GATHER_REGION_NEGATIVE {
-        let s = compensation_update(s0, m, dtau, params.alpha, radii.x);
-        if m > 0.0 && s.n == 0.0 {
-            emitted = 0.0;
-        }
-        store(slot, s, emitted);
-    } else {
-        store(slot, ppm_update(s0, m, dtau, params.alpha), emitted);
+    // The pending sums may be a placeholder until a pass defers: read and written only by
+    // the kinds that use them.
+    let deferring = uses_pending(params.kind);
+    var pending_before = vec4<f32>(0.0);
+    if deferring {
+        pending_before = pending[slot];
+    }
+    let before = SlotState(hp.tau, hp.n, pending_before, hp.r2, hp.emitted, hp.flags, 0u);
+    let after = gather_rule(params, radii.x, reflectance, before, found);
+    store(slot, hp, after);
+    if deferring && any(after.pending != pending_before) {
+        pending[slot] = after.pending;
     }
 }

@@ -57,3 +57,122 @@ fn history_kept(n: f32, tau: vec3<f32>, variance: f32) -> f32 {
     }
     return clamp(1.0 / (1.0 + n * relative), 0.0, 1.0);
 }
+
+// The gather rule: the twin of ppm_core::update::gather, kind for kind (both reproduce
+// ppm_core::update::gather::test_cases, backend-wgpu's tests/gather_rule.rs).
+
+struct SlotState {
+    tau: vec3<f32>,
+    n: f32,
+    pending: vec4<f32>,
+    r2: f32,
+    emitted: f32,
+    flags: u32,
+    _pad: u32,
+}
+
+struct Found {
+    flux: vec3<f32>,
+    count: f32,
+    weight: f32,
+    power_sq: f32,
+    _pad: vec2<f32>,
+}
+
+fn serves(flags: u32, kind: u32) -> bool {
+    let updated = (flags & HIT_UPDATED) != 0u;
+    switch kind & GATHER_KIND_MASK {
+        case GATHER_REGION_NEGATIVE, GATHER_REGION_POSITIVE: {
+            return !updated;
+        }
+        case GATHER_GUIDED: {
+            return updated;
+        }
+        default: {
+            return true;
+        }
+    }
+}
+
+fn gathers(flags: u32, kind: u32) -> bool {
+    return (flags & HIT_VALID) != 0u && serves(flags, kind);
+}
+
+fn uses_pending(kind: u32) -> bool {
+    return (kind & GATHER_DEFERRED) != 0u || (kind & GATHER_KIND_MASK) == GATHER_REGION_APPLY;
+}
+
+fn gather_rule(p: GatherParams, r2_initial: f32, reflectance: vec3<f32>, slot: SlotState, found: Found) -> SlotState {
+    let kind = p.kind & GATHER_KIND_MASK;
+    if kind == GATHER_REGION_APPLY {
+        return apply_pending(p, r2_initial, slot);
+    }
+    var s = slot;
+    if !gathers(s.flags, p.kind) {
+        if serves(s.flags, p.kind) {
+            s.emitted += p.emitted_increment;
+        }
+        return s;
+    }
+    let region = kind == GATHER_REGION_NEGATIVE || kind == GATHER_REGION_POSITIVE;
+    let scale = select(1.0, s.emitted / p.region_photons, region);
+    var m = found.count;
+    if region && (p.kind & GATHER_RAW_COUNT) == 0u {
+        m = found.weight * scale;
+    }
+    let factor = reflectance * scale;
+    let dtau = found.flux * factor;
+    if (p.kind & GATHER_DEFERRED) != 0u {
+        let sign = select(1.0, -1.0, kind == GATHER_REGION_NEGATIVE);
+        let lum = luminance(factor);
+        let count = select(sign * m, found.power_sq * lum * lum, (p.kind & GATHER_ADD_FLUX) != 0u);
+        s.pending += vec4<f32>(dtau, count);
+        return s;
+    }
+    let before = Statistics(s.n, s.r2, s.tau);
+    var after: Statistics;
+    if kind == GATHER_REGION_NEGATIVE {
+        after = compensation_update(before, m, dtau, p.alpha, r2_initial);
+    } else {
+        after = ppm_update(before, m, dtau, p.alpha);
+    }
+    s.n = after.n;
+    s.r2 = after.r2;
+    s.tau = after.tau;
+    s.emitted += p.emitted_increment;
+    if kind == GATHER_REGION_NEGATIVE && m > 0.0 && after.n == 0.0 {
+        s.emitted = 0.0;
+    }
+    return s;
+}
+
+fn apply_pending(p: GatherParams, r2_initial: f32, slot: SlotState) -> SlotState {
+    var s = slot;
+    let q = s.pending;
+    s.pending = vec4<f32>(0.0);
+    if (s.flags & HIT_VALID) == 0u || all(q == vec4<f32>(0.0)) {
+        return s;
+    }
+    if (p.kind & GATHER_ADD_FLUX) != 0u {
+        let tau = max(s.tau + q.xyz, vec3<f32>(0.0));
+        let kept = history_kept(s.n, tau, q.w);
+        s.tau = tau * kept;
+        s.emitted *= kept;
+        return s;
+    }
+    let before = Statistics(s.n, s.r2, s.tau);
+    var after: Statistics;
+    if q.w >= 0.0 {
+        after = ppm_update(before, q.w, q.xyz, p.alpha);
+        after.tau = max(after.tau, vec3<f32>(0.0));
+    } else {
+        after = compensation_update(before, -q.w, q.xyz, p.alpha, r2_initial);
+        if after.n == 0.0 {
+            s.emitted = 0.0;
+        }
+    }
+    s.n = after.n;
+    s.r2 = after.r2;
+    s.tau = after.tau;
+    return s;
+}

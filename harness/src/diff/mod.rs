@@ -13,7 +13,7 @@ use independent::{TileMeans, tile_means};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 
 /// A render with the slot buffer read back after every iteration and every move.
@@ -31,7 +31,7 @@ pub struct Recording {
 /// Renders `scene` at `frame` for `params.passes` iterations on `backend`, keeping every
 /// iteration's slots (for diagnosis, not speed).
 pub fn record(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     frame: u32,
     params: &RenderParams,
@@ -43,7 +43,7 @@ pub fn record(
 /// Runs `schedule` on `backend`, keeping the slots after every iteration and every move:
 /// two backends that move alike can be compared step by step, moves included.
 pub fn record_schedule(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     moves: &MoveParams,
@@ -55,7 +55,7 @@ pub fn record_schedule(
 /// [`record_schedule`] from a saved state ([`state_after`]) when `resume` gives one: the
 /// steps recorded are those after it.
 pub fn record_schedule_from(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     moves: &MoveParams,
@@ -99,7 +99,7 @@ pub fn record_schedule_from(
 /// `ppm diff --save-state` keeps just before two backends part, and `--replay` starts both
 /// from.
 pub fn state_after(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     iterations: u32,
@@ -135,7 +135,7 @@ pub const OTHER_SEED_OFFSET: u32 = 1000;
 /// `runs` renders of frame 0 for `params.passes` iterations with seeds
 /// `params.seed + offset + k`, reduced to tile means.
 pub fn runs_of(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     runs: u32,
@@ -156,7 +156,7 @@ pub fn runs_of(
 /// `runs` runs of `schedule` with seeds `params.seed + offset + k`, reduced to tile means
 /// of the last pose.
 pub fn runs_of_schedule(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     moves: &MoveParams,

@@ -40,8 +40,8 @@
 //!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
-use super::Renderer;
 use super::moves::{Compensation, MoveReport};
+use super::{Renderer, dynamic};
 use glam::Vec3;
 use ppm_core::compile::{CompiledScene, mover_boxes, object_group};
 use ppm_core::layout::{
@@ -171,12 +171,12 @@ impl Renderer<'_> {
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
         let correction = self.local_correction();
-        self.backend.update_scene(&self.compiled)?;
+        dynamic(self.backend)?.update_scene(&self.compiled)?;
         self.compensate(&correction, gather_kind::REGION_NEGATIVE)?;
         if resets.direct_corrected > 0 {
             self.correct_direct(-1.0)?;
         }
-        self.backend.update_scene(&compiled)?;
+        dynamic(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
         self.counters.frame += 1;
@@ -257,7 +257,7 @@ impl Renderer<'_> {
         moved: &Moved,
     ) -> Result<Resets, BackendError> {
         let mut slots = self.backend.read_hit_points()?;
-        let bounds = self.backend.read_slot_bounds()?;
+        let bounds = dynamic(self.backend)?.read_slot_bounds()?;
         let posed: Vec<[Vec3; 3]> = changed
             .iter()
             .flat_map(|&o| next.objects[o].triangles.iter().copied())
@@ -375,7 +375,7 @@ impl Renderer<'_> {
             })
             .collect();
         self.backend.write_hit_points(&scratch)?;
-        self.backend.update_scene(next)?;
+        dynamic(self.backend)?.update_scene(next)?;
         for path in 0..PROBE_PATHS {
             let params = EyePassParams {
                 seed: self.params.seed ^ PROBE_SEED ^ path,

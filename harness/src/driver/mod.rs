@@ -31,7 +31,7 @@ use ppm_core::layout::{
     gather_kind,
 };
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
-use ppm_core::passes::{BackendError, DynamicBackend, PhotonStats};
+use ppm_core::passes::{Backend, BackendError, DynamicBackend, PhotonStats};
 use ppm_core::scene::Scene;
 use std::time::Instant;
 
@@ -72,7 +72,7 @@ pub(crate) struct Counters {
 
 /// A progressive render on one backend, carried across moves.
 pub struct Renderer<'a> {
-    backend: &'a mut dyn DynamicBackend,
+    backend: &'a mut dyn Backend,
     params: RenderParams,
     moves: MoveParams,
     scene: Scene,
@@ -91,11 +91,20 @@ pub struct Renderer<'a> {
     report: RenderReport,
 }
 
+/// The backend's dynamic passes; an error on a backend without them, whose moves restart
+/// before any of these is called ([`Renderer::move_to`]).
+fn dynamic(backend: &mut dyn Backend) -> Result<&mut dyn DynamicBackend, BackendError> {
+    let name = backend.name().to_owned();
+    backend
+        .dynamic()
+        .ok_or_else(|| BackendError::Unsupported(format!("backend '{name}' has no dynamic passes")))
+}
+
 impl<'a> Renderer<'a> {
     /// Loads `scene` (already posed) on `backend`; `ppm` also traces its hit points and
     /// direct light here.
     pub fn start(
-        backend: &'a mut dyn DynamicBackend,
+        backend: &'a mut dyn Backend,
         scene: Scene,
         params: &RenderParams,
         moves: &MoveParams,
@@ -182,7 +191,7 @@ impl<'a> Renderer<'a> {
                 let n = self.params.photons_per_pass;
                 let params = self.photon_params(self.counters.guided_pass, n, 1.0);
                 let t = Instant::now();
-                let stats = self.backend.guided_photon_pass(&params, &guide, &paths)?;
+                let stats = dynamic(self.backend)?.guided_photon_pass(&params, &guide, &paths)?;
                 self.count_photons(&stats, t);
                 self.counters.guided_pass += 1;
                 self.counts.guided.add(&stats);
@@ -219,7 +228,7 @@ impl<'a> Renderer<'a> {
     }
 
     /// The backend, for read-back between passes.
-    pub fn backend(&mut self) -> &mut dyn DynamicBackend {
+    pub fn backend(&mut self) -> &mut dyn Backend {
         self.backend
     }
 

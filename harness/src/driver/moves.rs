@@ -8,7 +8,7 @@
 //! compensation, testing photons record the emissions that reach the reset slots, and guided
 //! passes alternate with ordinary ones. Restart starts over on the new pose.
 
-use super::Renderer;
+use super::{Renderer, dynamic};
 use glam::Vec3;
 use ppm_core::emission::ordinary_emission;
 use ppm_core::layout::{
@@ -148,6 +148,11 @@ impl Renderer<'_> {
             .collect();
         let plan = if !self.has_image() {
             Err("no iteration has run: nothing to keep".to_owned())
+        } else if self.backend.dynamic().is_none() {
+            Err(format!(
+                "backend '{}' renders still frames only (no dynamic passes)",
+                self.backend.name()
+            ))
         } else {
             self.compensation_plan(mode, &vertices, &changed)
         };
@@ -174,7 +179,7 @@ impl Renderer<'_> {
         // where nothing changed their paths coincide and the two cancel almost exactly.
         self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
         let compiled = recompile_moved(&self.compiled, &next, &changed);
-        self.backend.update_scene(&compiled)?;
+        dynamic(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
         self.counters.frame += 1;
@@ -185,10 +190,11 @@ impl Renderer<'_> {
             Estimator::Ppm => self.counters.frame,
             Estimator::Sppm => self.counters.iteration - 1,
         };
-        let update = self.backend.update_hit_points(
-            &self.eye_params(key, false),
+        let (params, epsilon) = (
+            self.eye_params(key, false),
             self.moves.update_epsilon * self.extent,
-        )?;
+        );
+        let update = dynamic(self.backend)?.update_hit_points(&params, epsilon)?;
         self.report.rays.eye += update.rays;
         report.updated = update.updated;
         report.kept = update.kept;
@@ -227,7 +233,7 @@ impl Renderer<'_> {
         self.count_photons(&stats, t);
         self.counters.photon_pass += 1;
         self.counts.testing.add(&stats);
-        let landed = self.backend.landing_paths()?;
+        let landed = dynamic(self.backend)?.landing_paths()?;
         self.gather(gather_kind::GUIDED, n as f32, 0.0)?;
         let paths = self.recorded_paths(testing_index, &landed);
         report.recorded_paths = paths.len();
@@ -307,7 +313,7 @@ impl Renderer<'_> {
                 for k in 0..self.moves.compensation_passes {
                     let params = self.photon_params(self.counters.region_pass + k, nc, sign);
                     let t = Instant::now();
-                    let stats = self.backend.region_photon_pass(&params, region)?;
+                    let stats = dynamic(self.backend)?.region_photon_pass(&params, region)?;
                     self.count_photons(&stats, t);
                     total_stats.add(&stats);
                     self.count_compensation(kind, &stats);

@@ -9,7 +9,7 @@ use crate::clock::Stopwatch;
 use crate::report::RenderReport;
 use ppm_core::image::Image;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::{BackendError, DynamicBackend};
+use ppm_core::passes::{Backend, BackendError};
 use ppm_core::scene::path::{After, MovePath};
 use ppm_core::scene::{Move, Scene};
 use std::time::Instant;
@@ -268,7 +268,7 @@ pub struct Outcome {
 /// Runs `schedule` on `backend`: `scene` posed at its start, `params` and `moves` for every
 /// pass, `observer` told of every iteration, move and finished step.
 pub fn run(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     moves: &MoveParams,
@@ -282,7 +282,7 @@ pub fn run(
 /// from the state it holds (its budgets count what this run adds), and the report's times
 /// include the seconds before it.
 pub fn run_from(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     params: &RenderParams,
     moves: &MoveParams,

@@ -159,7 +159,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
             state.report.passes
         );
     }
-    let record = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+    let record = |backend: &mut dyn ppm_core::passes::Backend| {
         let resume = replayed.as_ref().map(|(state, dir)| Resume {
             state,
             dir: dir.as_path(),
@@ -176,7 +176,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
             serde_json::to_string_pretty(&rows)?,
         )?;
     } else if args.independent {
-        let runs = |backend: &mut dyn ppm_core::passes::DynamicBackend, offset| {
+        let runs = |backend: &mut dyn ppm_core::passes::Backend, offset| {
             runs_of_schedule(
                 backend, &scene, &params, &moves, &schedule, args.runs, offset,
             )
@@ -209,7 +209,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
 /// recordings `a` and `b` part, if they do.
 fn save_state(
     dir: &std::path::Path,
-    reference: &mut dyn ppm_core::passes::DynamicBackend,
+    reference: &mut dyn ppm_core::passes::Backend,
     scene: &Scene,
     params: &RenderParams,
     a: &Recording,

@@ -10,7 +10,7 @@ use harness::reference::cache::{ReferenceError, ReferenceRequest, cached_referen
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::limits::{MemoryBudget, check_deposits, check_reference_memory, check_render_memory};
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use std::path::PathBuf;
 
@@ -24,7 +24,7 @@ pub enum BackendChoice {
 
 impl BackendChoice {
     /// The backend, started.
-    pub fn start(self) -> Result<Box<dyn DynamicBackend + Send>> {
+    pub fn start(self) -> Result<Box<dyn Backend + Send>> {
         Ok(match self {
             BackendChoice::Cpu => Box::new(CpuBackend::new()),
             BackendChoice::Wgpu => {

@@ -12,7 +12,7 @@ use backend_wgpu::{GpuContext, WgpuBackend};
 use glam::{Quat, Vec3};
 use harness::pick::{DragPlane, Picker, ray};
 use ppm_core::compile::gpu_camera;
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::{Camera, Move, Scene};
 use scenes::file::image::write_png_rgb;
 use std::path::PathBuf;
@@ -290,7 +290,7 @@ impl Running {
         surface.configure(&device, &config);
         let display = Display::new(&device, format, panes, width, height);
 
-        let mut backends: Vec<Box<dyn DynamicBackend + Send>> = Vec::new();
+        let mut backends: Vec<Box<dyn Backend + Send>> = Vec::new();
         let mut targets = Vec::new();
         let context = GpuContext::adopt(device.clone(), queue.clone(), adapter.get_info());
         for i in 0..panes {

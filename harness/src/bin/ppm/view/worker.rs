@@ -9,7 +9,7 @@ use harness::driver::{MoveReport, Renderer};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::{BackendError, DynamicBackend};
+use ppm_core::passes::{Backend, BackendError};
 use ppm_core::scene::path::After;
 use ppm_core::scene::{Camera, Move, Scene};
 use scenes::file::path::{Script, ScriptEvent};
@@ -151,7 +151,7 @@ pub struct Plan {
 /// CPU image is handed over).
 pub struct Setup {
     pub plan: Plan,
-    pub backends: Vec<Box<dyn DynamicBackend + Send>>,
+    pub backends: Vec<Box<dyn Backend + Send>>,
     pub targets: Vec<Option<wgpu::Buffer>>,
 }
 

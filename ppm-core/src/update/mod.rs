@@ -3,6 +3,8 @@
 
 use std::f32::consts::PI;
 
+pub mod gather;
+
 /// A hit point's running statistics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Statistics {
