@@ -116,25 +116,24 @@ impl Renderer<'_> {
                 self.scene.objects[light].name
             ));
         }
-        Ok(self.local_correction())
+        Ok(self.local_correction().1)
     }
 
     /// Local mode's indirect correction: difference passes that store only the deposits of
     /// paths that crossed a moved object's box (the others cancel between the poses),
-    /// gathered within `correction_radii` initial radii at least. A converged slot's disc is
-    /// a fraction of the initial one: the few hundred thousand photons of a correction would
-    /// reach it too sparsely, and their noise would stay in statistics built from millions
-    /// (on cornell-box the kept pixels' error is 0.047 within one initial radius, 0.035
-    /// within two). The wider disc trades that noise for a blur of the change: 15 s after
-    /// warm-up, pixel error 1 s / 8 s after the move within two, three and four radii is
-    /// 0.039 / 0.027, 0.036 / 0.027 and 0.035 / 0.026 on cornell-box, 0.041 / 0.027,
-    /// 0.035 / 0.024 and 0.034 / 0.023 on cornell-bunny, but 0.161 / 0.141, 0.163 / 0.140
-    /// and 0.180 / 0.150 on wedding-band, whose caustics blur. Three is the default.
-    fn local_correction(&self) -> Compensation {
-        Compensation::Difference {
-            changed_only: true,
-            r2_floor: (self.moves.correction_radii * self.params.initial_radius).powi(2),
-        }
+    /// gathered within a disc wider than a converged slot's. Its size follows the history
+    /// the move keeps ([`MoveParams::correction_for`]): a slot keeps the share of its history
+    /// worth keeping against the correction's noise, so a long history is worth more
+    /// photons, and more photons a narrower disc (less blur of the change).
+    ///
+    /// [`MoveParams::correction_for`]: ppm_core::params::MoveParams::correction_for
+    fn local_correction(&self) -> (u32, Compensation) {
+        let (passes, radii) = self.moves.correction_for(self.counters.steps_since_move);
+        let correction = Compensation::Difference {
+            correction_passes: Some(passes),
+            r2_floor: (radii * self.params.initial_radius).powi(2),
+        };
+        (passes, correction)
     }
 
     /// Moves the `changed` objects to their pose in `next`: the resets, then difference
@@ -170,7 +169,7 @@ impl Renderer<'_> {
             self.report.photons_deposited as f64 / self.report.photons_emitted.max(1) as f64;
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
-        let correction = self.local_correction();
+        let (passes, correction) = self.local_correction();
         dynamic(self.backend)?.update_scene(&self.compiled)?;
         self.compensate(&correction, gather_kind::REGION_NEGATIVE)?;
         if resets.direct_corrected > 0 {
@@ -188,8 +187,8 @@ impl Renderer<'_> {
         if positive.emitted > 0 {
             report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
         }
-        self.counters.difference_pass += self.moves.correction_passes;
-        if self.moves.correction_passes > 0 {
+        self.counters.difference_pass += passes;
+        if passes > 0 {
             self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;
         }
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;

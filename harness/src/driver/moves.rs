@@ -93,10 +93,14 @@ pub(super) enum Compensation {
         raw: bool,
     },
     Difference {
-        /// Store only deposits of paths that crossed a mover's box (local mode).
-        changed_only: bool,
+        /// Local mode: ordinary passes' worth of photons in its one correction pass per pose,
+        /// which stores only deposits of paths that crossed a mover's box. `None`: difference
+        /// mode's `difference_passes` passes, storing every deposit.
+        correction_passes: Option<u32>,
         /// Squared radius the passes are gathered within at least (local mode:
-        /// `correction_radii` initial radii; 0: each slot's own).
+        /// [`MoveParams::correction_for`]; 0: each slot's own).
+        ///
+        /// [`MoveParams::correction_for`]: ppm_core::params::MoveParams::correction_for
         r2_floor: f32,
     },
 }
@@ -266,7 +270,7 @@ impl Renderer<'_> {
             MoveMode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
             MoveMode::Difference => {
                 return Ok(Compensation::Difference {
-                    changed_only: false,
+                    correction_passes: None,
                     r2_floor: 0.0,
                 });
             }
@@ -321,27 +325,24 @@ impl Renderer<'_> {
                 }
             }
             Compensation::Difference {
-                changed_only,
+                correction_passes,
                 r2_floor,
             } => {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
                 // Local mode's correction is one pass per pose: a gather per pass over every
                 // kept slot cost more than the photons (MoveParams::correction_passes).
-                let (n, passes) = if *changed_only {
-                    let n = self
-                        .params
-                        .photons_per_pass
-                        .checked_mul(self.moves.correction_passes)
-                        .ok_or_else(|| {
+                let (n, passes) = match *correction_passes {
+                    Some(count) => {
+                        let n = self.params.photons_per_pass.checked_mul(count).ok_or_else(|| {
                             BackendError::Limit(format!(
-                                "correction_passes: {} passes of {} photons exceed 2^32 photons",
-                                self.moves.correction_passes, self.params.photons_per_pass
+                                "correction_passes: {count} passes of {} photons exceed 2^32 photons",
+                                self.params.photons_per_pass
                             ))
                         })?;
-                    (n, 1)
-                } else {
-                    (self.params.photons_per_pass, self.moves.difference_passes)
+                        (n, 1)
+                    }
+                    None => (self.params.photons_per_pass, self.moves.difference_passes),
                 };
                 let total = (n * passes) as f32;
                 // Storing only what follows a box crossing, pose A also records which paths
@@ -349,7 +350,7 @@ impl Renderer<'_> {
                 // those: the others would store nothing.
                 let mut flags = 0;
                 let mut gathered = kind | gather_kind::DEFERRED;
-                if *changed_only {
+                if correction_passes.is_some() {
                     gathered |= gather_kind::ADD_FLUX;
                     flags |= photon_flags::CHANGED_ONLY;
                     if self.moves.cull_uncrossed {

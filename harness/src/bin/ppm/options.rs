@@ -137,12 +137,12 @@ pub struct MoveOptions {
     /// of the ordinary photon count).
     #[arg(long, default_value_t = 8)]
     pub difference_passes: u32,
-    /// Local mode's correction photons per pose, in ordinary passes' worth (traced as one
-    /// pass).
-    #[arg(long, default_value_t = 2)]
+    /// Local mode's correction photons per pose at most, in ordinary passes' worth (traced
+    /// as one pass): a move uses one pass per 64 iterations since the last move, at least one.
+    #[arg(long, default_value_t = 8)]
     pub correction_passes: u32,
-    /// Local mode gathers its correction within at least this many initial radii (0: each
-    /// slot's own radius).
+    /// Local mode gathers a one-pass correction within at least this many initial radii (0:
+    /// each slot's own radius); a correction of P passes within this times P^(-1/6).
     #[arg(long, default_value_t = 3.0)]
     pub correction_radii: f32,
 }
