@@ -7,7 +7,7 @@ use crate::diff::{
     OTHER_SEED_OFFSET, Recording, independent, record, record_schedule, runs_of, runs_of_schedule,
     same_seed,
 };
-use crate::driver::{Budget, Schedule, run};
+use crate::driver::{Budget, Schedule, pass_params, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
 use ppm_core::compile::compile_scene;
@@ -201,16 +201,9 @@ fn params_for(scene: &Scene, o: &ConformanceOptions) -> RenderParams {
     p
 }
 
+/// The first iteration's eye pass, fresh slots, as the driver builds it.
 fn eye_params(p: &RenderParams, extent: f32) -> EyePassParams {
-    EyePassParams {
-        seed: p.seed,
-        spp: p.spp,
-        max_depth: p.max_eye_depth,
-        iteration: 0,
-        r2_initial: p.initial_radius * p.initial_radius,
-        ray_epsilon: 1e-5 * extent,
-        ..Default::default()
-    }
+    pass_params::eye_pass(p, extent, 0, false)
 }
 
 /// The backend's generator and stratified sequences reproduce the fixed vectors bit for bit.
@@ -340,12 +333,9 @@ fn check_photon_power(make: BackendFactory, o: &ConformanceOptions) -> Result<St
     let photons = o.photons_per_pass.max(50_000);
     b.photon_pass(&PhotonPassParams {
         seed: 3,
-        photon_count: photons,
         max_depth: 24,
         first_hit: first_hit::DEPOSIT,
-        ray_epsilon: 1e-5 * compiled.extent,
-        power_scale: 1.0,
-        ..Default::default()
+        ..pass_params::photon_pass(&p, compiled.extent, 0, photons, 1.0)
     })
     .map_err(err)?;
     let deposits = b.read_photons().map_err(err)?;
@@ -375,12 +365,7 @@ fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result
     b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
     b.photon_pass(&PhotonPassParams {
         seed: 5,
-        photon_count: o.photons_per_pass,
-        max_depth: 16,
-        first_hit: first_hit::SKIP,
-        ray_epsilon: 1e-5 * compiled.extent,
-        power_scale: 1.0,
-        ..Default::default()
+        ..pass_params::photon_pass(&p, compiled.extent, 0, o.photons_per_pass, 1.0)
     })
     .map_err(err)?;
     let before = b.read_hit_points().map_err(err)?;

@@ -4,7 +4,7 @@
 //! either estimator; the clamps hold when negative photons outnumber the count.
 
 use backend_cpu::CpuBackend;
-use harness::driver::Renderer;
+use harness::driver::{Renderer, pass_params};
 use harness::reference::{ReferenceBudget, render_reference};
 use ppm_core::compile::{CompiledScene, camera_ray, compile_scene};
 use ppm_core::image::Image;
@@ -97,7 +97,7 @@ fn cancel(neg_index: u32, pos_index: u32) -> (Image, Image) {
             photon_count: nc,
             max_depth: 16,
             first_hit: first_hit::SKIP,
-            ray_epsilon: 1e-5 * compiled.extent,
+            ray_epsilon: pass_params::ray_epsilon(&p, compiled.extent),
             power_scale: scale,
             ..Default::default()
         };
@@ -168,7 +168,7 @@ fn a_move_to_the_same_pose_leaves_the_statistics() {
             photon_count: 40_000,
             max_depth: 16,
             first_hit: first_hit::SKIP,
-            ray_epsilon: 1e-5 * compile_scene(&scene, 64, 64).extent,
+            ray_epsilon: pass_params::ray_epsilon(&p, compile_scene(&scene, 64, 64).extent),
             power_scale: scale,
             ..Default::default()
         };
@@ -220,7 +220,7 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
             photon_count: 200_000,
             max_depth: 16,
             first_hit: first_hit::SKIP,
-            ray_epsilon: 1e-5 * compiled.extent,
+            ray_epsilon: pass_params::ray_epsilon(&p, compiled.extent),
             power_scale: -1.0,
             ..Default::default()
         },

@@ -14,6 +14,7 @@
 pub mod checkpoint;
 mod local;
 pub mod moves;
+pub mod pass_params;
 pub mod schedule;
 
 pub use moves::{MoveReport, PhotonCounts};
@@ -27,22 +28,12 @@ use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
-    PhotonPassParams, RecordedPath, ResolveParams, direct_accumulate, eye_flags, first_hit,
-    gather_kind,
+    PhotonPassParams, RecordedPath, ResolveParams, eye_flags, gather_kind,
 };
-use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
+use ppm_core::params::{Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError, DynamicBackend, PhotonStats};
 use ppm_core::scene::Scene;
 use std::time::Instant;
-
-/// Offset of secondary ray origins, relative to the scene's extent: ~150 f32 ulps at the
-/// largest coordinate, far below any feature of the canonical scenes.
-pub const RAY_EPSILON_RELATIVE: f32 = 1e-5;
-
-/// The largest extent, in initial gather radii, that ray offsets follow: cornell-box spans
-/// 48 radii, so its offsets are the extent's; beyond a thousand, geometry lies far outside
-/// anything the gather resolves.
-pub const OFFSET_RADII: f32 = 1000.0;
 
 /// After a local move, one iteration in this many traces eye paths and direct light only for
 /// the slots with the fewest iterations (the ones the move reset, until they catch up); the
@@ -296,39 +287,17 @@ impl<'a> Renderer<'a> {
         report
     }
 
-    /// Relative to the scene's extent, but never to more of it than [`OFFSET_RADII`] initial
-    /// gather radii: geometry far from the rest (a vertex at 1e8 beside a 0.5 m box) must not
-    /// push every ray offset past the features the gather resolves.
-    fn ray_epsilon(&self) -> f32 {
-        RAY_EPSILON_RELATIVE * self.extent.min(OFFSET_RADII * self.params.initial_radius)
-    }
-
-    /// The eye pass keyed by `key`, starting the slots fresh or keeping their statistics.
+    /// The eye pass keyed by `key` ([`pass_params::eye_pass`]), and after a local move the
+    /// focus on the slots with the fewest iterations.
     fn eye_params(&self, key: u32, keep: bool) -> EyePassParams {
-        let mut flags = if keep { eye_flags::KEEP_STATISTICS } else { 0 };
-        if self.params.estimator == Estimator::Sppm {
-            // What the slots' paths reached is what a local move tests against.
-            flags |= eye_flags::JITTER | eye_flags::RECORD_BOUNDS;
-        }
+        let mut params = pass_params::eye_pass(&self.params, self.extent, key, keep);
         // After a local move the reset slots hold `steps_since_move` iterations: every other
         // iteration, the slots that hold more rest, until those catch up.
-        let rest_at = match self.focus {
-            true if keep && self.counters.steps_since_move.is_multiple_of(FOCUS_PERIOD) => {
-                flags |= eye_flags::FOCUS;
-                self.counters.steps_since_move + 1
-            }
-            _ => 0,
-        };
-        EyePassParams {
-            seed: self.params.seed,
-            spp: self.params.spp,
-            max_depth: self.params.max_eye_depth,
-            iteration: key,
-            r2_initial: self.params.initial_radius * self.params.initial_radius,
-            ray_epsilon: self.ray_epsilon(),
-            flags,
-            rest_at,
+        if self.focus && keep && self.counters.steps_since_move.is_multiple_of(FOCUS_PERIOD) {
+            params.flags |= eye_flags::FOCUS;
+            params.rest_at = self.counters.steps_since_move + 1;
         }
+        params
     }
 
     fn eye_pass(&mut self, key: u32, keep: bool) -> Result<(), BackendError> {
@@ -342,21 +311,7 @@ impl<'a> Renderer<'a> {
     }
 
     fn direct_params(&self, key: u32, accumulate: bool) -> DirectLightParams {
-        DirectLightParams {
-            seed: self.params.seed,
-            samples: match self.params.direct {
-                DirectMode::Explicit => self.params.direct_samples,
-                DirectMode::Photons => 0,
-            },
-            iteration: key,
-            ray_epsilon: self.ray_epsilon(),
-            accumulate: if accumulate {
-                direct_accumulate::ADD
-            } else {
-                direct_accumulate::REPLACE
-            },
-            ..Default::default()
-        }
+        pass_params::direct_light(&self.params, self.extent, key, accumulate)
     }
 
     fn direct_light(&mut self, key: u32, accumulate: bool) -> Result<(), BackendError> {
@@ -378,19 +333,13 @@ impl<'a> Renderer<'a> {
         photon_count: u32,
         power_scale: f32,
     ) -> PhotonPassParams {
-        PhotonPassParams {
-            seed: self.params.seed,
+        pass_params::photon_pass(
+            &self.params,
+            self.extent,
             pass_index,
             photon_count,
-            max_depth: self.params.max_photon_depth,
-            first_hit: match self.params.direct {
-                DirectMode::Explicit => first_hit::SKIP,
-                DirectMode::Photons => first_hit::DEPOSIT,
-            },
-            ray_epsilon: self.ray_epsilon(),
             power_scale,
-            ..Default::default()
-        }
+        )
     }
 
     fn count_photons(&mut self, stats: &PhotonStats, started: Instant) {

@@ -7,6 +7,7 @@ pub mod path_tracer;
 pub mod sampler;
 
 use crate::clock::Stopwatch;
+use crate::driver::pass_params::RAY_EPSILON_RELATIVE;
 use crate::shard::Shard;
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
@@ -20,9 +21,6 @@ use scenes::file::image::{ImageError, ImageFiles};
 use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
-
-/// Offset of new ray origins, relative to the scene's extent (as the photon passes use).
-const RAY_EPSILON_RELATIVE: f32 = 1e-5;
 
 /// How long a reference renders: whichever limit comes first (at least one is set).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -189,6 +187,7 @@ pub fn render_reference_shard(
     let tracer = PathTracer {
         scene: &scene,
         camera,
+        // Relative to the extent, as the passes' offsets (no gather radius caps it here).
         ray_epsilon: RAY_EPSILON_RELATIVE * compiled.extent,
     };
     let (width, height) = (camera.width, camera.height);
