@@ -17,6 +17,7 @@ pub mod layout;
 mod passes;
 mod photon_grid;
 mod scan;
+mod specialise;
 mod table;
 
 /// The assembled WGSL of every pass.
@@ -34,7 +35,7 @@ use passes::{
 };
 use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::check::check_hit_points;
-use ppm_core::compile::CompiledScene;
+use ppm_core::compile::{CompiledScene, SceneFeatures};
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
@@ -49,6 +50,7 @@ use ppm_core::passes::{
 };
 use ppm_core::update::gather::{GatherCase, SlotState};
 use scan::Scan;
+pub use specialise::Specialisation;
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
 /// and (region passes) their paths' weights.
@@ -128,15 +130,20 @@ pub struct WgpuBackend {
     crossed: wgpu::Buffer,
     /// Whether each submission's wall time goes to stderr (`PPM_WGPU_TIMING=1`).
     timing: bool,
+    /// The loaded scene's features, which specialise the eye and photon pipelines.
+    features: Option<SceneFeatures>,
+    /// Every pipeline built with everything compiled in ([`WgpuBackend::set_general`]).
+    general: bool,
 }
 
 impl WgpuBackend {
-    /// Opens the best available adapter and compiles every pass.
+    /// Opens the best available adapter and compiles the passes ([`WgpuBackend::on`]).
     pub fn new() -> Result<Self, BackendError> {
         Self::on(GpuContext::new()?)
     }
 
-    /// Compiles every pass on `ctx` (for instance a [`GpuContext::baseline`] device).
+    /// Compiles the passes of a still render on `ctx` (for instance a [`GpuContext::baseline`]
+    /// device); the eye and photon pipelines a scene needs, and a move's, when first used.
     pub fn on(ctx: GpuContext) -> Result<Self, BackendError> {
         let kernels = ctx.scoped("shader compilation", || Kernels {
             eye: EyePassKernel::new(&ctx),
@@ -174,6 +181,8 @@ impl WgpuBackend {
             photon_buffer_limit: u64::MAX,
             crossed,
             timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
+            features: None,
+            general: false,
         })
     }
 
@@ -182,6 +191,28 @@ impl WgpuBackend {
     /// one gather update; smaller caps trade speed for memory.
     pub fn set_photon_buffer_limit(&mut self, bytes: u64) {
         self.photon_buffer_limit = bytes;
+    }
+
+    /// Builds every pipeline from here on with everything compiled in, whatever the scene
+    /// needs: the general build a benchmark and a test compare the specialised one with.
+    pub fn set_general(&mut self, general: bool) {
+        self.general = general;
+    }
+
+    /// The eye pass's pipelines compiled so far, and the photon pass's per emission kind
+    /// (ordinary, region, guided).
+    pub fn compiled_specialisations(&self) -> (Vec<Specialisation>, [Vec<Specialisation>; 3]) {
+        let photon = [0, 1, 2].map(|e| self.kernels.photon.compiled(e));
+        (self.kernels.eye.compiled(), photon)
+    }
+
+    /// What a pass that does (`movers`) or does not test the movers' boxes needs on the
+    /// loaded scene.
+    fn specialisation(&self, movers: bool) -> Specialisation {
+        match (&self.features, self.general) {
+            (Some(features), false) => Specialisation::for_scene(features, movers),
+            _ => Specialisation::GENERAL,
+        }
     }
 
     /// Batches the last photon pass was split into.
@@ -327,6 +358,7 @@ impl SceneUpload for WgpuBackend {
             .ctx
             .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene))??;
         self.scene = Some(buffers);
+        self.features = Some(scene.features);
         self.hit_points = None;
         self.slot_bounds = None;
         self.accumulated = None;
@@ -386,10 +418,11 @@ impl EyePass for WgpuBackend {
             counters: &self.counters,
             count: slots,
         };
+        let spec = self.specialisation(false);
         let counters = self.run("eye", |encoder| {
             self.kernels
                 .eye
-                .record(&self.ctx, encoder, params, scene, &targets, bounds);
+                .record(&self.ctx, encoder, params, scene, &targets, bounds, spec);
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;
@@ -499,6 +532,10 @@ impl WgpuBackend {
             ..GatherParams::default()
         };
         let emission = emitter.kind;
+        // Only local mode's correction passes test the movers' boxes.
+        let movers =
+            params.flags & (photon_flags::CHANGED_ONLY | photon_flags::RECORD_CROSSED) != 0;
+        let spec = self.specialisation(movers);
         let emitter = buffers::uniform(&self.ctx, "emitter", emitter);
         let recorded = buffers::storage_init(&self.ctx, "recorded", paths);
         let mut stats = PhotonStats {
@@ -544,7 +581,7 @@ impl WgpuBackend {
                 self.run("photon trace", |encoder| {
                     self.kernels
                         .photon
-                        .record(&self.ctx, encoder, &launch, scene, &targets, emission);
+                        .record(&self.ctx, encoder, &launch, scene, &targets, emission, spec);
                     Ok(())
                 })?
             } else {
@@ -697,6 +734,7 @@ impl HitPointUpdate for WgpuBackend {
             pass: "hit-point update",
             needs: "an eye pass",
         })?;
+        let spec = self.specialisation(false);
         let eye = self.run("hit-point update eye", |encoder| {
             // Each slot's last sample again: the re-trace reads the stratum from the copy.
             encoder.copy_buffer_to_buffer(hit_points, 0, &fresh, 0, bytes);
@@ -707,6 +745,7 @@ impl HitPointUpdate for WgpuBackend {
                 scene,
                 &eye_targets,
                 bounds,
+                spec,
             );
             Ok(())
         })?;
@@ -947,9 +986,31 @@ impl Backend for WgpuBackend {
         Some(self)
     }
 
-    /// The move's pipelines until a move, and the pending sums until a deferred gather.
+    /// The move's pipelines until a move, the pending sums until a deferred gather, and the
+    /// code the eye and photon pipelines were specialised without.
     fn not_created(&self) -> Vec<String> {
         let mut out = Vec::new();
+        let (eye, photon) = self.compiled_specialisations();
+        let all_photon: Vec<Specialisation> = photon.iter().flatten().copied().collect();
+        if !eye.is_empty() && !eye.iter().any(|s| s.specular) {
+            out.push("eye pass: mirror and glass code not compiled (the scene has none)".into());
+        }
+        if !all_photon.is_empty() && !all_photon.iter().any(|s| s.specular) {
+            out.push("photon pass: mirror and glass code not compiled (the scene has none)".into());
+        }
+        if !all_photon.is_empty() && !all_photon.iter().any(|s| s.movers) {
+            out.push("photon pass: mover-box tests not compiled (no local move)".into());
+        }
+        for (kind, name) in [
+            (emission_kind::REGION, "region"),
+            (emission_kind::GUIDED, "guided"),
+        ] {
+            if photon[kind as usize].is_empty() {
+                out.push(format!(
+                    "photon pass, {name} emission: not compiled (no move used it)"
+                ));
+            }
+        }
         if self.kernels.update.is_none() {
             out.push("hit-point update pipeline: not compiled (no move)".to_owned());
         }

@@ -5,9 +5,11 @@ use crate::buffers::{SceneBuffers, uniform};
 use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
 use crate::shaders;
+use crate::specialise::Specialisation;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
 };
+use std::sync::OnceLock;
 
 use Slot::{Read, ReadWrite, Table, Uniform, WordTable};
 
@@ -21,27 +23,52 @@ pub struct Slots<'a> {
     pub count: u32,
 }
 
-/// eye_pass.wgsl.
-pub struct EyePassKernel(Kernel);
+/// eye_pass.wgsl, one pipeline per [`Specialisation`] a scene has needed.
+pub struct EyePassKernel {
+    module: wgpu::ShaderModule,
+    variants: [OnceLock<Kernel>; 4],
+}
 
 impl EyePassKernel {
-    /// Compiles the shader.
+    /// Parses the shader; its pipelines are compiled when first recorded.
     pub fn new(ctx: &GpuContext) -> Self {
-        let module = shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS);
-        let slots = [
-            Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite,
-        ];
-        Self(Kernel::new(
-            &ctx.device,
-            &module,
-            "eye_pass_main",
-            &slots,
-            WORKGROUP,
-        ))
+        Self {
+            module: shader_module(&ctx.device, "eye_pass", shaders::EYE_PASS),
+            variants: Default::default(),
+        }
+    }
+
+    /// The variants compiled so far.
+    pub fn compiled(&self) -> Vec<Specialisation> {
+        compiled(&self.variants)
+    }
+
+    fn kernel(&self, ctx: &GpuContext, spec: Specialisation) -> &Kernel {
+        // The eye pass has no mover tests: one pipeline serves both.
+        let spec = Specialisation {
+            movers: false,
+            ..spec
+        };
+        self.variants[spec.index()].get_or_init(|| {
+            let slots = [
+                Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite,
+            ];
+            // The eye pass declares only SPECULAR.
+            let constants = [("SPECULAR", f64::from(u8::from(spec.specular)))];
+            Kernel::specialised(
+                &ctx.device,
+                &self.module,
+                "eye_pass_main",
+                &slots,
+                WORKGROUP,
+                &constants,
+            )
+        })
     }
 
     /// Records the eye pass over every hit-point slot; `bounds` holds a box per slot, which
     /// the pass extends with [`ppm_core::layout::eye_flags::RECORD_BOUNDS`].
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -50,9 +77,11 @@ impl EyePassKernel {
         scene: &SceneBuffers,
         slots: &Slots,
         bounds: &wgpu::Buffer,
+        spec: Specialisation,
     ) {
+        let kernel = self.kernel(ctx, spec);
         let params = uniform(ctx, "eye params", params);
-        let group = self.0.bind(
+        let group = kernel.bind(
             &ctx.device,
             &[
                 &params,
@@ -64,8 +93,17 @@ impl EyePassKernel {
                 bounds,
             ],
         );
-        self.0.dispatch(encoder, &group, slots.count);
+        kernel.dispatch(encoder, &group, slots.count);
     }
+}
+
+/// The specialisations of `variants` compiled so far.
+fn compiled(variants: &[OnceLock<Kernel>; 4]) -> Vec<Specialisation> {
+    [false, true]
+        .into_iter()
+        .flat_map(|specular| [false, true].map(|movers| Specialisation { specular, movers }))
+        .filter(|s| variants[s.index()].get().is_some())
+        .collect()
 }
 
 /// direct_light.wgsl.
@@ -109,10 +147,11 @@ impl DirectLightKernel {
     }
 }
 
-/// photon_pass.wgsl: one trace appending its deposits, specialised per emission kind
-/// (ordinary, region, guided).
+/// photon_pass.wgsl: one trace appending its deposits, one pipeline per emission kind
+/// (ordinary, region, guided) and [`Specialisation`], each compiled when first needed.
 pub struct PhotonPassKernel {
-    trace: [Kernel; 3],
+    module: wgpu::ShaderModule,
+    trace: [[OnceLock<Kernel>; 4]; 3],
 }
 
 /// The buffers a photon pass binds besides the scene.
@@ -134,29 +173,40 @@ pub struct PhotonTargets<'a> {
 }
 
 impl PhotonPassKernel {
-    /// Compiles the shader.
+    /// Parses the shader; its pipelines are compiled when first recorded.
     pub fn new(ctx: &GpuContext) -> Self {
-        let module = shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS);
-        let slots = [
-            Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite,
-            ReadWrite,
-        ];
-        let kernel = |entry, kind: u32| {
-            Kernel::specialised(
-                &ctx.device,
-                &module,
-                entry,
-                &slots,
-                WORKGROUP,
-                &[("EMISSION", f64::from(kind))],
-            )
-        };
         Self {
-            trace: [0, 1, 2].map(|k| kernel("photon_trace_main", k)),
+            module: shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS),
+            trace: Default::default(),
         }
     }
 
+    /// The variants compiled so far, per emission kind (`layout::emission_kind`).
+    pub fn compiled(&self, emission: u32) -> Vec<Specialisation> {
+        compiled(&self.trace[emission as usize])
+    }
+
+    fn kernel(&self, ctx: &GpuContext, emission: u32, spec: Specialisation) -> &Kernel {
+        self.trace[emission as usize][spec.index()].get_or_init(|| {
+            let slots = [
+                Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite,
+                ReadWrite,
+            ];
+            let mut constants = spec.constants();
+            constants.push(("EMISSION", f64::from(emission)));
+            Kernel::specialised(
+                &ctx.device,
+                &self.module,
+                "photon_trace_main",
+                &slots,
+                WORKGROUP,
+                &constants,
+            )
+        })
+    }
+
     /// Records the trace of photons emitted as `emission` says (`layout::emission_kind`).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -165,8 +215,9 @@ impl PhotonPassKernel {
         scene: &SceneBuffers,
         targets: &PhotonTargets,
         emission: u32,
+        spec: Specialisation,
     ) {
-        let kernel = &self.trace[emission as usize];
+        let kernel = self.kernel(ctx, emission, spec);
         let uniform_params = uniform(ctx, "photon params", params);
         let group = kernel.bind(
             &ctx.device,

@@ -50,3 +50,83 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
         report.left_out
     );
 }
+
+/// The eye and photon pipelines are specialised to the scene: without mirrors or glass their
+/// specular code is not compiled, ordinary photon passes carry no mover-box tests, and the
+/// report says so. Through a still warm-up and a local move, the specialised build renders
+/// the general build's image bit for bit, on a diffuse scene and on one with mirrors.
+#[test]
+fn specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_same_image() {
+    let test =
+        "specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_same_image";
+    if backend_wgpu::backend_or_skip(test).is_none() {
+        return;
+    }
+    for (name, specular) in [("cornell-box", false), ("wedding-band", true)] {
+        let scene = scenes::builtin(name).unwrap().load().unwrap();
+        let mut p = RenderParams::for_scene(&scene);
+        (p.width, p.height, p.photons_per_pass) = (40, 30, 10_000);
+        let render = |general: bool| {
+            let mut backend = backend_wgpu::WgpuBackend::new().unwrap();
+            backend.set_general(general);
+            let schedule = Schedule::after_move(
+                Budget::iterations(3),
+                MoveMode::Local,
+                Budget::iterations(2),
+            );
+            let still = Schedule::frame(0, Budget::iterations(2));
+            let before = run(
+                &mut backend,
+                &scene,
+                &p,
+                &MoveParams::default(),
+                &still,
+                &mut (),
+            )
+            .unwrap()
+            .report
+            .left_out;
+            let outcome = run(
+                &mut backend,
+                &scene,
+                &p,
+                &MoveParams::default(),
+                &schedule,
+                &mut (),
+            )
+            .unwrap();
+            assert!(outcome.error.is_none(), "{name}: {:?}", outcome.error);
+            let compiled = backend.compiled_specialisations();
+            (outcome.image, before, compiled)
+        };
+        let (special, left_out, (eye, photon)) = render(false);
+        let (general, general_left_out, (general_eye, _)) = render(true);
+        assert_eq!(
+            special.pixels, general.pixels,
+            "{name}: specialised and general images"
+        );
+        assert!(special.pixels.iter().flatten().any(|c| *c > 0.0));
+        assert!(
+            eye.iter().all(|s| s.specular == specular),
+            "{name}: {eye:?}"
+        );
+        assert!(general_eye.iter().all(|s| s.specular), "{general_eye:?}");
+        // The ordinary passes test no mover box; the local move's correction does.
+        assert!(photon[0].iter().any(|s| !s.movers) && photon[0].iter().any(|s| s.movers));
+        let says = |lines: &[String], what: &str| lines.iter().any(|l| l.contains(what));
+        assert_eq!(
+            says(&left_out, "eye pass: mirror and glass code not compiled"),
+            !specular,
+            "{name}: {left_out:?}"
+        );
+        assert!(
+            says(&left_out, "mover-box tests not compiled"),
+            "{left_out:?}"
+        );
+        assert!(
+            !says(&general_left_out, "not compiled (the scene has none)")
+                && !says(&general_left_out, "mover-box tests not compiled"),
+            "{general_left_out:?}"
+        );
+    }
+}

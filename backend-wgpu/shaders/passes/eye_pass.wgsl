@@ -12,6 +12,10 @@
 
 const DIM_GLASS: u32 = 2u;
 
+// False for a scene without mirrors or glass: every surface is diffuse, and the specular
+// bounce (Fresnel, refraction) is compiled out (backend_wgpu::Specialisation).
+override SPECULAR: bool = true;
+
 // The slot before this iteration's eye path: fresh, or its statistics without a visible point.
 fn cleared_slot(slot: u32, pixel: u32) -> HitPoint {
     var hp: HitPoint;
@@ -83,7 +87,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         hi = max(hi, position);
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
-        if material.kind == MATERIAL_DIFFUSE {
+        if material.kind == MATERIAL_DIFFUSE || !SPECULAR {
             out.position = position;
             out.normal = facing;
             out.material = tri.material;

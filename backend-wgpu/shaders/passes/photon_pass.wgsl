@@ -37,6 +37,13 @@ struct Emitter {
 // carry no region or guided code.
 override EMISSION: u32 = 0u;
 
+// False for a scene without mirrors or glass: the specular bounce is compiled out.
+override SPECULAR: bool = true;
+
+// False for passes that never test the movers' boxes (all but local mode's correction): the
+// box tests are compiled out (backend_wgpu::Specialisation).
+override MOVERS: bool = true;
+
 // Bounces start after the emission's dimensions (ppm_core::emission::EMISSION_DIMS).
 const DIM_BOUNCE: u32 = 8u;
 const DIMS_PER_BOUNCE: u32 = 3u;
@@ -111,13 +118,15 @@ fn trace_photon(path: u32) -> Traced {
     let rank_base = (path - params.first_path) * params.max_depth;
     // Whether the path has crossed a mover's box so far; the boxes are tested only when a
     // flag needs the answer (ordinary passes start it true and skip the test).
-    let tests_movers = (params.flags & (PHOTON_CHANGED_ONLY | PHOTON_RECORD_CROSSED)) != 0u;
+    let tests_movers = MOVERS && (params.flags & (PHOTON_CHANGED_ONLY | PHOTON_RECORD_CROSSED)) != 0u;
     var crossed_box = !tests_movers;
     let stores_all = (params.flags & PHOTON_CHANGED_ONLY) == 0u;
     for (var bounce = 0u; bounce < params.max_depth; bounce++) {
         rays++;
         let hit = closest_hit(origin, dir, T_MISS);
-        crossed_box = crossed_box || near_mover(origin, dir, hit.t);
+        if MOVERS {
+            crossed_box = crossed_box || near_mover(origin, dir, hit.t);
+        }
         if hit.triangle == 0xffffffffu {
             break;
         }
@@ -127,7 +136,7 @@ fn trace_photon(path: u32) -> Traced {
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
-        if material.kind == MATERIAL_DIFFUSE {
+        if material.kind == MATERIAL_DIFFUSE || !SPECULAR {
             if (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
                 let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
                 if slot < arrayLength(&photons) {
