@@ -1,0 +1,295 @@
+//! A backend for still frames, written only against ppm-core's public API: one thread, plain
+//! loops, no acceleration beyond the scene's own BVH. It is the executable specification of
+//! the `static` tier of the contract (README, "Writing a backend"): copy it, then make each
+//! pass fast. Every pass follows docs/algorithm.md section 1, and draws its random numbers
+//! exactly as the passes key them ([`ppm_core::rng`]), so a same-seed render matches the CPU
+//! backend's slot by slot.
+//!
+//! What each trait asks, and where this file answers it:
+//! - [`SceneUpload`]: keep the compiled scene (its buffers are already GPU-shaped).
+//! - [`EyePass`]: one eye path per slot to its visible point ([`paths::eye_path`]).
+//! - [`DirectLight`]: emission seen plus light from the lights ([`paths::direct_light`]).
+//! - [`PhotonPass`]: photons from the lights, their deposits in path order
+//!   ([`paths::photon_path`]).
+//! - [`GatherPass`]: each slot's photons within its radius, folded in by
+//!   [`gather_rule`], which decides every gather kind's policy.
+//! - [`Resolve`], [`ReadBack`], [`RandomSource`]: the image, the buffers, the generator.
+//!
+//! [`Backend::dynamic`] stays `None`: a move restarts on this backend, saying why.
+
+#![warn(missing_docs)]
+
+pub mod paths;
+
+use ppm_core::check::check_hit_points;
+use ppm_core::compile::CompiledScene;
+use ppm_core::emission::ordinary_emission;
+use ppm_core::geometry::oct_faces;
+use ppm_core::image::Image;
+use ppm_core::layout::{
+    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ResolveParams, direct_accumulate, eye_flags,
+};
+use ppm_core::passes::{
+    Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
+    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
+};
+use ppm_core::rng::{PassKind, StreamKey, random_bits};
+use ppm_core::update::gather::{Found, SlotState, gather_rule};
+use ppm_core::update::radiance;
+use std::f32::consts::FRAC_1_PI;
+
+/// The backend's state: the scene, one hit point per slot, and the current photon map.
+#[derive(Default)]
+pub struct MinimalBackend {
+    scene: Option<paths::Scene>,
+    hit_points: Vec<HitPoint>,
+    /// Each slot's deferred sum; a still frame never defers, so it stays zero.
+    pending: Vec<[f32; 4]>,
+    photons: Vec<Photon>,
+    /// The last photon pass's `gather_r2_floor`.
+    r2_floor: f32,
+    /// The initial squared radius of the last fresh eye pass.
+    r2_initial: f32,
+}
+
+impl MinimalBackend {
+    /// An empty backend; `load_scene` comes first.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// The loaded scene, or the error for a pass called before `load_scene`.
+fn loaded<'a>(
+    scene: &'a Option<paths::Scene>,
+    pass: &'static str,
+) -> Result<&'a paths::Scene, BackendError> {
+    scene.as_ref().ok_or(BackendError::OutOfOrder {
+        pass,
+        needs: "load_scene",
+    })
+}
+
+impl SceneUpload for MinimalBackend {
+    fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        self.scene = Some(paths::Scene::new(scene));
+        self.hit_points.clear();
+        self.photons.clear();
+        Ok(())
+    }
+}
+
+impl EyePass for MinimalBackend {
+    fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
+        let scene = loaded(&self.scene, "eye")?;
+        let camera = &scene.camera;
+        let slots = (camera.width * camera.height * params.spp) as usize;
+        let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
+        if keep && self.hit_points.len() != slots {
+            return Err(BackendError::OutOfOrder {
+                pass: "eye",
+                needs: "an eye pass that starts the slots fresh",
+            });
+        }
+        if !keep {
+            self.hit_points = vec![HitPoint::default(); slots];
+            self.pending = vec![[0.0; 4]; slots];
+            self.r2_initial = params.r2_initial;
+        }
+        let mut stats = EyeStats::default();
+        for (slot, hp) in self.hit_points.iter_mut().enumerate() {
+            stats.rays += paths::eye_path(params, scene, slot as u32, hp);
+            stats.hit_points += u64::from(hp.is_valid());
+        }
+        check_hit_points("eye", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl DirectLight for MinimalBackend {
+    fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
+        let scene = loaded(&self.scene, "direct light")?;
+        if params.accumulate == direct_accumulate::CORRECT {
+            return Err(BackendError::Unsupported(
+                "direct-light corrections belong to local moves (the dynamic tier)".into(),
+            ));
+        }
+        let mut stats = DirectStats::default();
+        for (slot, hp) in self.hit_points.iter_mut().enumerate() {
+            let (estimate, rays) = match hp.is_valid() {
+                true => paths::direct_light(params, scene, hp, slot as u32),
+                false => ([0.0; 3], 0),
+            };
+            stats.rays += rays;
+            if params.accumulate == direct_accumulate::ADD {
+                hp.direct = [0, 1, 2].map(|c| hp.direct[c] + estimate[c]);
+                hp.iterations += 1;
+            } else {
+                hp.direct = estimate;
+                hp.iterations = 1;
+            }
+        }
+        check_hit_points("direct light", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl PhotonPass for MinimalBackend {
+    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+        let scene = loaded(&self.scene, "photon")?;
+        let mut stats = PhotonStats {
+            emitted: u64::from(params.photon_count),
+            ..Default::default()
+        };
+        let mut photons = Vec::new();
+        // No light, no photon: the pass emits its count and deposits nothing.
+        if !scene.lights.is_empty() {
+            for local in 0..params.photon_count {
+                let key = StreamKey {
+                    seed: params.seed,
+                    kind: PassKind::Photon,
+                    pass_index: params.pass_index,
+                    path: params.first_path + local,
+                };
+                let emission = ordinary_emission(&scene.lights, &scene.materials, &key);
+                if emission.weight > 0.0 {
+                    stats.rays += paths::photon_path(params, scene, &key, &emission, &mut photons);
+                }
+            }
+        }
+        if let Some((index, p)) = photons
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.power.iter().chain(&p.position).all(|v| v.is_finite()))
+        {
+            return Err(BackendError::NonFinitePhoton {
+                pass: "photon",
+                index,
+                path: p.path,
+                value: format!("power {:?} at {:?}", p.power, p.position),
+            });
+        }
+        stats.deposited = photons.len() as u64;
+        self.photons = photons;
+        self.r2_floor = params.gather_r2_floor;
+        Ok(stats)
+    }
+}
+
+impl GatherPass for MinimalBackend {
+    fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
+        let materials = &loaded(&self.scene, "gather")?.materials;
+        let mut stats = GatherStats::default();
+        for (hp, pending) in self.hit_points.iter_mut().zip(&mut self.pending) {
+            let mut found = Found::default();
+            let mut reflectance = [0.0; 3];
+            if ppm_core::update::gather::gathers(hp.flags, params.kind) {
+                // Every photon, one by one, within the slot's disc (or the map's wider floor
+                // disc, whose photons then stand for their density over the slot's own).
+                let r2 = hp.r2.max(self.r2_floor);
+                for p in &self.photons {
+                    let d = [0, 1, 2].map(|c| p.position[c] - hp.position[c]);
+                    let inside = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r2;
+                    if inside && oct_faces(p.normal_oct, hp.normal.into()) {
+                        found.count += 1.0;
+                        found.weight += 1.0;
+                        found.flux = [0, 1, 2].map(|c| found.flux[c] + p.power[c]);
+                    }
+                }
+                let shrink = if self.r2_floor > hp.r2 {
+                    hp.r2 / self.r2_floor
+                } else {
+                    1.0
+                };
+                found.flux = found.flux.map(|f| f * shrink);
+                found.weight *= shrink;
+                stats.hit_points_reached += u64::from(found.count > 0.0);
+                stats.photons_gathered += found.count as u64;
+                let albedo = materials[hp.material as usize].albedo;
+                reflectance = [0, 1, 2].map(|c| hp.throughput[c] * albedo[c] * FRAC_1_PI);
+            }
+            let before = SlotState {
+                tau: hp.tau,
+                n: hp.n,
+                pending: *pending,
+                r2: hp.r2,
+                emitted: hp.emitted,
+                flags: hp.flags,
+                _pad: 0,
+            };
+            let after = gather_rule(params, self.r2_initial, reflectance, before, &found);
+            (hp.n, hp.r2, hp.tau, hp.emitted) = (after.n, after.r2, after.tau, after.emitted);
+            *pending = after.pending;
+        }
+        check_hit_points("gather", &self.hit_points)?;
+        Ok(stats)
+    }
+}
+
+impl Resolve for MinimalBackend {
+    fn resolve(&mut self, params: &ResolveParams) -> Result<Image, BackendError> {
+        let spp = params.spp.max(1) as usize;
+        let pixels = self
+            .hit_points
+            .chunks(spp)
+            .map(|slots| {
+                let mut sum = [0.0f32; 3];
+                for hp in slots {
+                    let (direct, flux) = (hp.direct_mean(), radiance(hp.tau, hp.r2, hp.emitted));
+                    sum = [0, 1, 2].map(|c| sum[c] + (direct[c] + flux[c]));
+                }
+                sum.map(|s| s / spp as f32)
+            })
+            .collect();
+        Ok(Image {
+            width: params.width,
+            height: params.height,
+            pixels,
+        })
+    }
+}
+
+impl ReadBack for MinimalBackend {
+    fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError> {
+        Ok(self.hit_points.clone())
+    }
+
+    fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
+        Ok(self.photons.clone())
+    }
+
+    fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError> {
+        if hit_points.len() != self.hit_points.len() {
+            return Err(BackendError::Unsupported(format!(
+                "{} slots written, {} held",
+                hit_points.len(),
+                self.hit_points.len()
+            )));
+        }
+        self.hit_points = hit_points.to_vec();
+        Ok(())
+    }
+}
+
+impl RandomSource for MinimalBackend {
+    fn random_bits(&mut self, keys: &[[u32; 5]]) -> Result<Vec<u32>, BackendError> {
+        Ok(keys
+            .iter()
+            .map(|k| random_bits(k[0], k[1], k[2], k[3], k[4]))
+            .collect())
+    }
+
+    fn stratified_bits(&mut self, keys: &[[u32; 2]]) -> Result<Vec<[u32; 2]>, BackendError> {
+        Ok(keys
+            .iter()
+            .map(|k| ppm_core::qmc::sobol_pair_bits(k[0], k[1]))
+            .collect())
+    }
+}
+
+impl Backend for MinimalBackend {
+    fn name(&self) -> &str {
+        "minimal"
+    }
+}

@@ -1,0 +1,297 @@
+//! One path of each kind, keyed exactly as the contract keys it (`ppm_core::rng`): an eye path
+//! to its visible point, a slot's direct light, a photon's deposits. The passes in `lib.rs` run
+//! them slot by slot and photon by photon.
+
+use glam::Vec3;
+use obvhs::bvh2::Bvh2;
+use obvhs::ray::{Ray, RayHit};
+use ppm_core::compile::{CompiledScene, camera_ray};
+use ppm_core::emission::{EMISSION_DIMS, Emission};
+use ppm_core::geometry::{Transport, intersect_triangle, oct_encode, specular_bounce, to_world};
+use ppm_core::layout::{
+    DirectLightParams, EyePassParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, HitPoint,
+    NO_MATERIAL, Photon, PhotonPassParams, direct_accumulate, eye_flags, first_hit, hit_flags,
+    material_kind,
+};
+use ppm_core::rng::{PassKind, StratifiedStream, StreamKey, stratified_pair};
+use ppm_core::sampling::{
+    cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle,
+};
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// An eye path's dimension `DIM_GLASS + depth` picks reflection or refraction at glass.
+const DIM_GLASS: u32 = 2;
+/// A direct-light sample's stratified pairs: the point on the light, the cosine direction,
+/// and (first number) which light.
+const PAIR_LIGHT_POINT: u32 = 0;
+const PAIR_DIRECTION: u32 = 1;
+const PAIR_LIGHT_CHOICE: u32 = 2;
+/// A photon's dimensions: the emission's, then three per bounce (roulette, direction).
+const DIMS_PER_BOUNCE: u32 = 3;
+
+/// The compiled scene's buffers the paths read.
+pub struct Scene {
+    /// The camera.
+    pub camera: GpuCamera,
+    /// Triangles, in the BVH's leaf order.
+    pub triangles: Vec<GpuTriangle>,
+    /// obvhs's BVH over them.
+    pub bvh: Bvh2,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Emitting triangles, with the distribution that picks one by power.
+    pub lights: Vec<GpuLight>,
+}
+
+impl Scene {
+    /// The buffers of `scene`, copied.
+    pub fn new(scene: &CompiledScene) -> Self {
+        Self {
+            camera: scene.camera,
+            triangles: scene.triangles.clone(),
+            bvh: scene.bvh.clone(),
+            materials: scene.materials.clone(),
+            lights: scene.lights.clone(),
+        }
+    }
+}
+
+/// The nearest triangle a ray meets before `tmax`, and where.
+fn closest_hit(scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(f32, u32)> {
+    let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+    let mut hit = RayHit::none();
+    let found = scene.bvh.ray_traverse(ray, &mut hit, |r, id| {
+        intersect_triangle(origin, dir, &scene.triangles[id], r.tmin, r.tmax)
+    });
+    found.then_some((hit.t, hit.primitive_id))
+}
+
+/// Whether anything lies on the segment from `origin` along `dir` to `tmax`.
+fn occluded(scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+    closest_hit(scene, origin, dir, tmax).is_some()
+}
+
+/// Traces slot `slot`'s eye path (docs/algorithm.md 1.1) and writes its visible point into
+/// `hp`: fresh statistics, or with [`eye_flags::KEEP_STATISTICS`] the slot's own, which then
+/// continues its own sample sequence. Returns the rays traced.
+pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPoint) -> u64 {
+    let camera = &scene.camera;
+    let pixel = slot / params.spp;
+    let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
+    let start = if keep {
+        hp.iterations
+    } else {
+        params.iteration
+    };
+    *hp = if keep {
+        HitPoint {
+            position: [0.0; 3],
+            normal: [0.0; 3],
+            material: NO_MATERIAL,
+            throughput: [0.0; 3],
+            flags: hp.flags & hit_flags::KEPT,
+            ..*hp
+        }
+    } else {
+        HitPoint {
+            r2: params.r2_initial,
+            ..HitPoint::empty(pixel)
+        }
+    };
+    let key = StreamKey {
+        seed: params.seed,
+        kind: PassKind::Eye,
+        pass_index: params.iteration,
+        path: slot,
+    };
+    // The point in the pixel: its centre for one fixed sample, else the slot's stratified
+    // sequence over all its samples so far.
+    let (jx, jy) = if params.spp == 1 && params.flags & eye_flags::JITTER == 0 {
+        (0.5, 0.5)
+    } else {
+        let sample = start * params.spp + slot % params.spp;
+        stratified_pair(params.seed, PassKind::Eye, pixel, 0, sample)
+    };
+    let x = (pixel % camera.width) as f32 + jx;
+    let y = (pixel / camera.width) as f32 + jy;
+    let mut dir = camera_ray(camera, x, y);
+    let mut origin = Vec3::from(camera.eye);
+    let mut throughput = Vec3::ONE;
+    for depth in 0..=params.max_depth {
+        let Some((t, index)) = closest_hit(scene, origin, dir, f32::INFINITY) else {
+            return u64::from(depth) + 1;
+        };
+        let tri = &scene.triangles[index as usize];
+        hp.eye_met |= tri.group;
+        let material = &scene.materials[tri.material as usize];
+        let position = origin + dir * t;
+        let normal = Vec3::from(tri.normal);
+        let front = dir.dot(normal) < 0.0;
+        let facing = if front { normal } else { -normal };
+        if material.kind == material_kind::DIFFUSE {
+            hp.position = position.into();
+            hp.normal = facing.into();
+            hp.material = tri.material;
+            hp.throughput = throughput.into();
+            hp.flags |= hit_flags::VALID
+                | if front { hit_flags::FRONT } else { 0 }
+                | (tri.object << hit_flags::OBJECT_SHIFT);
+            return u64::from(depth) + 1;
+        }
+        // Mirror or glass: follow the bounce.
+        hp.flags |= hit_flags::EYE_CHAINED;
+        let u = key.uniform(DIM_GLASS + depth);
+        let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
+        throughput *= bounce.weight;
+        dir = bounce.dir;
+        let side = if bounce.transmitted { -facing } else { facing };
+        origin = position + side * params.ray_epsilon;
+    }
+    u64::from(params.max_depth) + 1
+}
+
+/// A visible point's direct radiance towards the eye, throughput included (docs/algorithm.md
+/// 1.2): the emission it shows, plus per sample a shadow ray to a point on a light and a
+/// cosine-sampled ray that may meet one, weighted by the power heuristic. Returns it and the
+/// rays traced.
+pub fn direct_light(
+    params: &DirectLightParams,
+    scene: &Scene,
+    hp: &HitPoint,
+    slot: u32,
+) -> ([f32; 3], u64) {
+    let material = &scene.materials[hp.material as usize];
+    let mut radiance = match hp.flags & hit_flags::FRONT != 0 {
+        true => Vec3::from(material.emission),
+        false => Vec3::ZERO,
+    };
+    let albedo = Vec3::from(material.albedo);
+    let mut rays = 0;
+    if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
+        radiance += irradiance(params, scene, hp, slot) * albedo * FRAC_1_PI;
+        rays = u64::from(params.samples) * 2;
+    }
+    ((Vec3::from(hp.throughput) * radiance).into(), rays)
+}
+
+/// Irradiance from the lights at a visible point, `params.samples` samples of both
+/// strategies. A slot that adds to its sum continues its own sequence from its iteration
+/// count, so its samples over all iterations are stratified together.
+fn irradiance(params: &DirectLightParams, scene: &Scene, hp: &HitPoint, slot: u32) -> Vec3 {
+    let x = Vec3::from(hp.position);
+    let n = Vec3::from(hp.normal);
+    let origin = x + n * params.ray_epsilon;
+    let first = match params.accumulate == direct_accumulate::ADD {
+        true => hp.iterations,
+        false => params.iteration,
+    };
+    let stream = StratifiedStream::new(params.seed, PassKind::DirectLight, slot);
+    let emission = |light: u32| Vec3::from(scene.materials[light as usize].emission);
+    let mut sum = Vec3::ZERO;
+    for s in 0..params.samples {
+        let index = first * params.samples + s;
+        // Light sampling: a light by power, a point on it by area.
+        let (choice, _) = stream.pair(PAIR_LIGHT_CHOICE, index);
+        let light = &scene.lights[sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice)];
+        let (u1, u2) = stream.pair(PAIR_LIGHT_POINT, index);
+        let (b1, b2) = uniform_triangle(u1, u2);
+        let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
+        let to_light = y - origin;
+        let dist2 = to_light.length_squared();
+        if dist2 > 0.0 {
+            let dist = dist2.sqrt();
+            let w = to_light / dist;
+            let (cos_x, cos_l) = (n.dot(w), -Vec3::from(light.normal).dot(w));
+            if cos_x > 0.0
+                && cos_l > 0.0
+                && !occluded(scene, origin, w, dist - 2.0 * params.ray_epsilon)
+            {
+                let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
+                sum += emission(light.material)
+                    * (cos_x / pl * power_heuristic(pl, cos_x * FRAC_1_PI));
+            }
+        }
+        // Cosine sampling: light only where the ray meets an emitter's front first.
+        let (v1, v2) = stream.pair(PAIR_DIRECTION, index);
+        let local = cosine_hemisphere(v1, v2);
+        let w = to_world(local, n);
+        if let Some((t, index)) = closest_hit(scene, origin, w, f32::INFINITY) {
+            let tri = &scene.triangles[index as usize];
+            let cos_l = -Vec3::from(tri.normal).dot(w);
+            if tri.light != NO_MATERIAL && cos_l > 0.0 {
+                let light = &scene.lights[tri.light as usize];
+                let pl = light_pdf(light.pdf, light.area, t * t, cos_l);
+                sum += emission(light.material) * (PI * power_heuristic(local.z * FRAC_1_PI, pl));
+            }
+        }
+    }
+    sum / params.samples as f32
+}
+
+/// Traces one photon from `emission` (docs/algorithm.md 1.3), appending a deposit at each
+/// diffuse surface it meets (but the first when shadow rays count direct light), with
+/// Russian roulette at each; returns the ray segments traced.
+pub fn photon_path(
+    params: &PhotonPassParams,
+    scene: &Scene,
+    key: &StreamKey,
+    emission: &Emission,
+    out: &mut Vec<Photon>,
+) -> u64 {
+    let mut dir = emission.direction;
+    let mut origin = emission.origin + emission.normal * params.ray_epsilon;
+    let mut power = emission.power * params.power_scale;
+    let mut rays = 0;
+    for bounce in 0..params.max_depth {
+        rays += 1;
+        let Some((t, index)) = closest_hit(scene, origin, dir, f32::INFINITY) else {
+            break;
+        };
+        let tri = &scene.triangles[index as usize];
+        let material = &scene.materials[tri.material as usize];
+        let position = origin + dir * t;
+        let normal = Vec3::from(tri.normal);
+        let facing = if dir.dot(normal) < 0.0 {
+            normal
+        } else {
+            -normal
+        };
+        let d = EMISSION_DIMS + bounce * DIMS_PER_BOUNCE;
+        if material.kind != material_kind::DIFFUSE {
+            let front = facing == normal;
+            let b = specular_bounce(
+                material,
+                dir,
+                facing,
+                front,
+                key.uniform(d),
+                Transport::Importance,
+            );
+            power *= b.weight;
+            dir = b.dir;
+            let side = if b.transmitted { -facing } else { facing };
+            origin = position + side * params.ray_epsilon;
+            continue;
+        }
+        if bounce > 0 || params.first_hit == first_hit::DEPOSIT {
+            out.push(Photon {
+                position: position.into(),
+                path: key.path,
+                power: power.into(),
+                normal_oct: oct_encode(facing),
+            });
+        }
+        let albedo = Vec3::from(material.albedo);
+        let survive = albedo.max_element();
+        if key.uniform(d) >= survive {
+            break;
+        }
+        power *= albedo / survive;
+        dir = to_world(
+            cosine_hemisphere(key.uniform(d + 1), key.uniform(d + 2)),
+            facing,
+        );
+        origin = position + facing * params.ray_epsilon;
+    }
+    rays
+}
