@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod chart;
+pub mod cli;
 pub mod clock;
 pub mod conformance;
 pub mod convergence;
@@ -15,6 +16,7 @@ pub mod error_report;
 pub mod merge;
 pub mod pick;
 pub mod reference;
+pub mod registry;
 pub mod report;
 pub mod shard;
 pub mod stats;

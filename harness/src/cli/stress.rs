@@ -1,7 +1,7 @@
 //! `ppm stress`: the stress family on one or both backends.
 
-use crate::options::BackendChoice;
-use crate::render::output_folder;
+use crate::cli::options::BackendChoice;
+use crate::cli::render::output_folder;
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use scenes::file::output::write_bytes;
@@ -40,22 +40,22 @@ pub fn run(args: StressArgs) -> Result<()> {
     };
     let folder = args.output.parent().unwrap_or(Path::new(""));
     output_folder(folder, &format!("-o {}", args.output.display()))?;
-    let choices: &[BackendChoice] = match args.backend {
-        StressBackends::Cpu => &[BackendChoice::Cpu],
-        StressBackends::Wgpu => &[BackendChoice::Wgpu],
-        StressBackends::Both => &[BackendChoice::Cpu, BackendChoice::Wgpu],
+    let names: &[&str] = match args.backend {
+        StressBackends::Cpu => &["cpu"],
+        StressBackends::Wgpu => &["wgpu"],
+        StressBackends::Both => &["cpu", "wgpu"],
     };
-    let mut backends = choices
+    let mut backends = names
         .iter()
-        .map(|c| c.start())
+        .map(|name| BackendChoice(name.to_string()).start())
         .collect::<Result<Vec<_>>>()?;
     let mut results = Vec::new();
     for case in cases {
         for backend in &mut backends {
-            results.push(harness::stress::run_case(backend.as_mut(), case));
+            results.push(crate::stress::run_case(backend.as_mut(), case));
         }
     }
-    print!("{}", harness::stress::table(&results));
+    print!("{}", crate::stress::table(&results));
     write_bytes(&args.output, serde_json::to_string_pretty(&results)?)
         .with_context(|| format!("{}: cannot write", args.output.display()))?;
     let failed = results.iter().filter(|r| !r.passed).count();

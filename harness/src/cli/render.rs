@@ -1,17 +1,17 @@
 //! `ppm render`, `ppm reference` and `ppm compare`: one image, its truth, and the distance
 //! between two images.
 
-use crate::interrupt::{self, Interrupted};
-use crate::options::{BackendChoice, RenderOptions, check_frame, spp_bar};
-use anyhow::{Context, Result, bail};
-use harness::convergence;
-use harness::driver::checkpoint::RenderState;
-use harness::driver::{
+use crate::cli::interrupt::{self, Interrupted};
+use crate::cli::options::{BackendChoice, RenderOptions, check_frame, spp_bar};
+use crate::convergence;
+use crate::driver::checkpoint::RenderState;
+use crate::driver::{
     Budget, Observer, ObserverResult, Progress, Renderer, Resume, Schedule, Stoppable, run_from,
 };
-use harness::reference::{ReferenceBudget, Truth, render_reference_shard, variance_path};
-use harness::report::RenderReport;
-use harness::shard::Shard;
+use crate::reference::{ReferenceBudget, Truth, render_reference_shard, variance_path};
+use crate::report::RenderReport;
+use crate::shard::Shard;
+use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::image::Image;
 use ppm_core::limits::{MemoryBudget, check_reference_memory};
@@ -25,8 +25,8 @@ pub struct RenderArgs {
     /// Built-in scene name (see `ppm scenes`) or path to a scene file: TOML, Mitsuba 3 (.xml)
     /// or pbrt-v4 (.pbrt).
     scene: String,
-    /// Backend that runs the passes.
-    #[arg(long, value_enum, default_value = "cpu")]
+    /// Backend that runs the passes: cpu, wgpu, or another registered one (`ppm backends`).
+    #[arg(long, default_value = "cpu")]
     backend: BackendChoice,
     #[command(flatten)]
     options: RenderOptions,
@@ -62,7 +62,7 @@ pub struct RenderArgs {
 
 pub fn render(args: RenderArgs) -> Result<()> {
     interrupt::install()?;
-    let scene = harness::load_scene(&args.scene)?;
+    let scene = crate::load_scene(&args.scene)?;
     let mut params = args.options.params(&scene, None)?;
     if let Some(shard) = args.shard {
         params.seed = shard.seed(params.seed);
@@ -387,7 +387,7 @@ pub struct ReferenceArgs {
 
 pub fn reference(args: ReferenceArgs) -> Result<()> {
     interrupt::install()?;
-    let scene = harness::load_scene(&args.scene)?;
+    let scene = crate::load_scene(&args.scene)?;
     check_frame(args.frame)?;
     let width = args.width.unwrap_or(scene.camera.width);
     let height = args.height.unwrap_or(scene.camera.height);
@@ -474,7 +474,7 @@ pub fn compare(args: CompareArgs) -> Result<()> {
     let image = scenes::file::image::read_exr(&args.image, width, height)?;
     let p = convergence::measure(&image, &truth, 0.0, 0);
     if let Some(path) = &args.heatmap {
-        let heat = harness::diff::same_seed::heat(&truth.image, &image);
+        let heat = crate::diff::same_seed::heat(&truth.image, &image);
         heat.write_exr(&path.with_extension("exr"))?;
         heat.write_png(&path.with_extension("png"), 10.0)?;
     }

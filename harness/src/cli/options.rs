@@ -1,12 +1,10 @@
 //! Options shared by several commands, and the one place they become render settings.
 
-use crate::interrupt::{self, Interrupted};
+use crate::cli::interrupt::{self, Interrupted};
+use crate::reference::Truth;
+use crate::reference::cache::{ReferenceError, ReferenceRequest, cached_reference};
 use anyhow::{Context, Result, bail};
-use backend_cpu::CpuBackend;
-use backend_wgpu::WgpuBackend;
 use clap::ValueEnum;
-use harness::reference::Truth;
-use harness::reference::cache::{ReferenceError, ReferenceRequest, cached_reference};
 use indicatif::{ProgressBar, ProgressStyle};
 use ppm_core::limits::{MemoryBudget, check_deposits, check_reference_memory, check_render_memory};
 use ppm_core::params::{DirectMode, Estimator, MoveParams, RenderParams};
@@ -14,25 +12,37 @@ use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use std::path::PathBuf;
 
-#[derive(Clone, Copy, ValueEnum)]
-pub enum BackendChoice {
-    /// rayon on this machine's cores.
-    Cpu,
-    /// WGSL compute shaders on the best wgpu adapter (a GPU, or lavapipe on the CPU).
-    Wgpu,
-}
+/// A backend named on the command line: one of the registry's ([`crate::registry`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BackendChoice(pub String);
 
 impl BackendChoice {
     /// The backend, started.
-    pub fn start(self) -> Result<Box<dyn Backend + Send>> {
-        Ok(match self {
-            BackendChoice::Cpu => Box::new(CpuBackend::new()),
-            BackendChoice::Wgpu => {
-                let b = WgpuBackend::new().context("the wgpu backend cannot start")?;
-                eprintln!("wgpu adapter: {}", b.adapter_name());
-                Box::new(b)
-            }
-        })
+    pub fn start(&self) -> Result<Box<dyn Backend + Send>> {
+        super::registry()
+            .start(&self.0)
+            .with_context(|| format!("the {} backend cannot start", self.0))
+    }
+
+    /// Its name.
+    pub fn name(&self) -> &str {
+        &self.0
+    }
+}
+
+impl std::str::FromStr for BackendChoice {
+    type Err = String;
+
+    /// A registered name; the error lists them.
+    fn from_str(name: &str) -> Result<Self, String> {
+        let names = super::registry().names();
+        match names.contains(&name) {
+            true => Ok(Self(name.to_owned())),
+            false => Err(format!(
+                "no backend called '{name}' (registered: {})",
+                names.join(", ")
+            )),
+        }
     }
 }
 

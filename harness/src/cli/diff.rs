@@ -2,17 +2,17 @@
 //! or through moves, prints the comparison as a table, writes `diff.json` and a heat map, and
 //! fails when they disagree.
 
-use crate::options::BackendChoice;
-use crate::render::output_folder;
-use anyhow::{Result, bail};
-use harness::diff::history::{self, pixel_history};
-use harness::diff::independent;
-use harness::diff::same_seed;
-use harness::diff::{
+use crate::cli::options::BackendChoice;
+use crate::cli::render::output_folder;
+use crate::diff::history::{self, pixel_history};
+use crate::diff::independent;
+use crate::diff::same_seed;
+use crate::diff::{
     OTHER_SEED_OFFSET, Recording, record_schedule_from, runs_of_schedule, state_after,
 };
-use harness::driver::checkpoint::RenderState;
-use harness::driver::{Budget, Resume, Schedule};
+use crate::driver::checkpoint::RenderState;
+use crate::driver::{Budget, Resume, Schedule};
+use anyhow::{Result, bail};
 use ppm_core::limits::{MemoryBudget, check_render_memory};
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::scene::Scene;
@@ -53,9 +53,9 @@ pub struct DiffArgs {
     /// Eye samples (slots) per pixel.
     #[arg(long, default_value_t = 1)]
     spp: u32,
-    /// The two backends compared, the reference first (`cpu,cpu` checks one backend against
-    /// itself).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu,wgpu")]
+    /// The two backends compared, the reference first, by registered name (`ppm backends`;
+    /// `cpu,cpu` checks one backend against itself).
+    #[arg(long, value_delimiter = ',', default_value = "cpu,wgpu")]
     backends: Vec<BackendChoice>,
     /// Compare through the scene's move in this mode: `--passes` iterations on frame 0, the
     /// move, `--passes` more; the slots are compared after every iteration and the move.
@@ -106,7 +106,7 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
 
 /// Runs the comparison; `Err` when the backends disagree or cannot run.
 pub fn run(args: DiffArgs) -> Result<()> {
-    let scene = harness::load_scene(&args.scene)?;
+    let scene = crate::load_scene(&args.scene)?;
     let mut params = RenderParams::for_scene(&scene);
     if let Some(e) = args.estimator {
         params.estimator = e;
@@ -121,7 +121,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
     params.initial_radius = args.radius.unwrap_or(params.initial_radius);
     params.spp = args.spp;
     params.validate("command line")?;
-    let [first, second] = args.backends[..] else {
+    let [first, second] = &args.backends[..] else {
         bail!(
             "--backends: expected two backends, A,B (got {})",
             args.backends.len()

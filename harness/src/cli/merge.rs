@@ -1,8 +1,8 @@
-//! `ppm merge`: joins the shards of a reference or of a render (harness::merge).
+//! `ppm merge`: joins the shards of a reference or of a render (crate::merge).
 
-use crate::render::OutputPaths;
+use crate::cli::render::OutputPaths;
+use crate::reference::variance_path;
 use anyhow::{Context, Result};
-use harness::reference::variance_path;
 use scenes::file::image::ImageFiles;
 use scenes::file::output::write_bytes;
 use std::path::PathBuf;
@@ -23,7 +23,7 @@ pub struct MergeArgs {
 
 pub fn merge(args: MergeArgs) -> Result<()> {
     let paths = OutputPaths::new(&args.output)?;
-    let merged = harness::merge::merge(&args.inputs)?;
+    let merged = crate::merge::merge(&args.inputs)?;
     merged.image.write_exr(&paths.exr)?;
     merged.image.write_png(&paths.png, args.exposure)?;
     if let Some(variance) = &merged.variance {

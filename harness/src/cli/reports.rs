@@ -1,10 +1,10 @@
 //! `ppm report convergence`: a render from scratch against the truth over time.
 
-use crate::interrupt::{self, Interrupted};
-use crate::options::{BackendChoice, RenderOptions, TruthOptions, check_frame};
-use crate::render::output_folder;
+use crate::cli::interrupt::{self, Interrupted};
+use crate::cli::options::{BackendChoice, RenderOptions, TruthOptions, check_frame};
+use crate::cli::render::output_folder;
+use crate::convergence;
 use anyhow::{Result, bail};
-use harness::convergence;
 use scenes::file::output::write_bytes;
 use std::path::PathBuf;
 
@@ -12,8 +12,8 @@ use std::path::PathBuf;
 pub struct ConvergenceArgs {
     /// Built-in scene name or path to a scene file (.toml, .xml, .pbrt).
     scene: String,
-    /// Backend.
-    #[arg(long, value_enum, default_value = "cpu")]
+    /// Backend that runs the passes: cpu, wgpu, or another registered one (`ppm backends`).
+    #[arg(long, default_value = "cpu")]
     backend: BackendChoice,
     /// Frame: 0 before the scene's move, 1 after it.
     #[arg(long, default_value_t = 1)]
@@ -35,7 +35,7 @@ const SHOWN_SECONDS: [f64; 10] = [0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128
 
 pub fn convergence(args: ConvergenceArgs) -> Result<()> {
     interrupt::install()?;
-    let scene = harness::load_scene(&args.scene)?;
+    let scene = crate::load_scene(&args.scene)?;
     check_frame(args.frame)?;
     if !(args.seconds.is_finite() && args.seconds > 0.0) {
         bail!("--seconds = {}: must be a positive number", args.seconds);

@@ -1,5 +1,6 @@
-//! `ppm`: render the canonical scenes, measure them against the truth, move them, and compare
-//! backends.
+//! The `ppm` command: render the canonical scenes, measure them against the truth, move them,
+//! and compare backends. [`main`] runs it with the backends of a [`Registry`]: the `ppm`
+//! binary passes [`Registry::in_tree`], a crate with a backend of its own adds it.
 
 /// Report lines on stdout. A reader that stops early (`ppm ... | head`) closes it; a render
 /// must not panic there, before or after writing its files: what it cannot show is dropped.
@@ -29,9 +30,19 @@ mod reports;
 mod stress;
 mod view;
 
+use crate::registry::Registry;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
+use std::sync::OnceLock;
+
+/// The backends this run of the command knows ([`main`] sets it before parsing).
+static REGISTRY: OnceLock<Registry> = OnceLock::new();
+
+/// The registry [`main`] was given.
+fn registry() -> &'static Registry {
+    REGISTRY.get_or_init(Registry::in_tree)
+}
 
 #[derive(Parser)]
 #[command(
@@ -50,6 +61,8 @@ enum Command {
     Render(render::RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// List the backends this `ppm` can run (`--backend NAME`).
+    Backends,
     /// Render the ground truth with the unbiased reference path tracer (CPU).
     Reference(render::ReferenceArgs),
     /// Join the shards of a reference (bit for bit one run) or of a render (averaged).
@@ -80,7 +93,13 @@ enum ReportCommand {
     Convergence(reports::ConvergenceArgs),
 }
 
-fn main() -> ExitCode {
+/// Parses the command line and runs the command with `registry`'s backends; the exit code
+/// says how it ended (an interrupted render has its own, after writing what it rendered).
+pub fn main(registry: Registry) -> ExitCode {
+    if REGISTRY.set(registry).is_err() {
+        eprintln!("error: the ppm command runs once per process");
+        return ExitCode::FAILURE;
+    }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.is::<interrupt::Interrupted>() => {
@@ -99,6 +118,12 @@ fn run(cli: Cli) -> Result<()> {
         Command::Scenes => {
             for s in scenes::BUILTIN {
                 println!("{:<14} {}", s.name, s.description);
+            }
+            Ok(())
+        }
+        Command::Backends => {
+            for e in registry().entries() {
+                println!("{:<14} {}", e.name, e.about);
             }
             Ok(())
         }

@@ -3,9 +3,9 @@
 //! up while another runs are merged into one); plays the script; and hands every new image to
 //! the window.
 
-use crate::render::{OutputPaths, write_render};
+use crate::cli::render::{OutputPaths, write_render};
+use crate::driver::{MoveReport, Renderer};
 use backend_wgpu::WgpuBackend;
-use harness::driver::{MoveReport, Renderer};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -179,7 +179,7 @@ struct Pane<'a> {
     error: Option<String>,
     /// Whether a move ran (the report's `left_out` then keeps the compensation passes).
     moved: bool,
-    previous_times: harness::report::PassTimes,
+    previous_times: crate::report::PassTimes,
 }
 
 /// Runs the panes until told to quit (or until the script ends, with `exit_after`), then

@@ -1,6 +1,6 @@
 //! `ppm export`: a scene for Mitsuba 3 or pbrt-v4, to check us against another renderer.
 
-use crate::options::check_frame;
+use crate::cli::options::check_frame;
 use anyhow::{Result, bail};
 use clap::ValueEnum;
 use scenes::file::ExportOptions;
@@ -43,7 +43,7 @@ pub fn export(args: ExportArgs) -> Result<()> {
     if args.spp == 0 {
         bail!("--spp = 0: must be at least 1");
     }
-    let mut scene = harness::load_scene(&args.scene)?.at_frame(args.frame);
+    let mut scene = crate::load_scene(&args.scene)?.at_frame(args.frame);
     for (option, value, size) in [
         ("--width", args.width, &mut scene.camera.width),
         ("--height", args.height, &mut scene.camera.height),

@@ -1,13 +1,13 @@
 //! `ppm animate` and `ppm report error-vs-time`: scenes whose objects move.
 
-use crate::interrupt::{self, Interrupted};
-use crate::options::{BackendChoice, MoveOptions, RenderOptions, TruthOptions};
-use crate::render::output_folder;
-use anyhow::{Result, bail};
-use harness::driver::{
+use crate::cli::interrupt::{self, Interrupted};
+use crate::cli::options::{BackendChoice, MoveOptions, RenderOptions, TruthOptions};
+use crate::cli::render::output_folder;
+use crate::driver::{
     Budget, MoveReport, Observer, ObserverResult, Progress, Renderer, Schedule, run,
 };
-use harness::error_report::{self, ErrorSettings};
+use crate::error_report::{self, ErrorSettings};
+use anyhow::{Result, bail};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::scene::Scene;
 use ppm_core::scene::path::{After, MovePath};
@@ -22,8 +22,8 @@ pub struct MovingArgs {
     /// Built-in scene name or path to a scene file (its `[[moves]]` define the motion unless
     /// --path or --random-path give another).
     scene: String,
-    /// Backend.
-    #[arg(long, value_enum, default_value = "cpu")]
+    /// Backend that runs the passes: cpu, wgpu, or another registered one (`ppm backends`).
+    #[arg(long, default_value = "cpu")]
     backend: BackendChoice,
     #[command(flatten)]
     options: RenderOptions,
@@ -43,7 +43,7 @@ impl MovingArgs {
     /// The scene, its settings (256x256 unless the options say) and the settings of its
     /// moves.
     fn setup(&self) -> Result<(Scene, RenderParams, MoveParams)> {
-        let scene = harness::load_scene(&self.scene)?;
+        let scene = crate::load_scene(&self.scene)?;
         let params = self.options.params(&scene, Some((256, 256)))?;
         let moves = self.moves.params(&scene, &params)?;
         Ok((scene, params, moves))

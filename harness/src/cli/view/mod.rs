@@ -8,9 +8,9 @@ mod display;
 mod panel;
 mod worker;
 
-use crate::interrupt::{self, Interrupted};
-use crate::options::{BackendChoice, MoveOptions, RenderOptions};
-use crate::render::{OutputPaths, output_folder, thread_pool};
+use crate::cli::interrupt::{self, Interrupted};
+use crate::cli::options::{BackendChoice, MoveOptions, RenderOptions};
+use crate::cli::render::{OutputPaths, output_folder, thread_pool};
 use anyhow::{Context, Result, bail};
 use ppm_core::params::MoveMode;
 use scenes::file::path::load_script_file;
@@ -23,7 +23,7 @@ pub struct ViewArgs {
     scene: String,
     /// Backend that runs the passes. With wgpu, the image goes from the resolve pass to the
     /// screen on the device.
-    #[arg(long, value_enum, default_value = "cpu")]
+    #[arg(long, default_value = "cpu")]
     backend: BackendChoice,
     /// How the render follows a move.
     #[arg(long, default_value = "local", value_parser = clap::value_parser!(MoveMode))]
@@ -62,7 +62,7 @@ pub struct ViewArgs {
 
 pub fn view(args: ViewArgs) -> Result<()> {
     interrupt::install()?;
-    let scene = harness::load_scene(&args.scene)?;
+    let scene = crate::load_scene(&args.scene)?;
     if args.options.passes.is_some() || args.options.time_budget.is_some() {
         bail!(
             "--passes / --time-budget: ppm view renders until its window closes; to stop after \

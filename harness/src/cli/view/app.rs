@@ -4,13 +4,12 @@
 use super::display::Display;
 use super::panel::{self, PANEL_WIDTH, Settings};
 use super::worker::{self, Command, Inbox, PaneView, Plan, Setup, Shared, UiEvent};
-use crate::interrupt;
-use crate::options::BackendChoice;
+use crate::cli::interrupt;
+use crate::cli::options::BackendChoice;
+use crate::pick::{DragPlane, Picker, ray};
 use anyhow::{Context, Result, anyhow};
-use backend_cpu::CpuBackend;
 use backend_wgpu::{GpuContext, WgpuBackend};
 use glam::{Quat, Vec3};
-use harness::pick::{DragPlane, Picker, ray};
 use ppm_core::compile::gpu_camera;
 use ppm_core::passes::Backend;
 use ppm_core::scene::{Camera, Move, Scene};
@@ -294,14 +293,16 @@ impl Running {
         let mut targets = Vec::new();
         let context = GpuContext::adopt(device.clone(), queue.clone(), adapter.get_info());
         for i in 0..panes {
-            match setup.backend {
-                BackendChoice::Cpu => {
-                    backends.push(Box::new(CpuBackend::new()));
-                    targets.push(None);
-                }
-                BackendChoice::Wgpu => {
+            // The window draws the wgpu backend's image on its own device; any other
+            // backend uploads its image.
+            match setup.backend.name() {
+                "wgpu" => {
                     backends.push(Box::new(WgpuBackend::on(context.clone())?));
                     targets.push(Some(display.panes[i].image.clone()));
+                }
+                _ => {
+                    backends.push(setup.backend.start()?);
+                    targets.push(None);
                 }
             }
         }
