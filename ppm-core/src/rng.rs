@@ -5,6 +5,34 @@
 //! result never depends on scheduling. The mixer is `pcg4d` (Jarzynski and Olano, "Hash
 //! Functions for GPU Rendering", JCGT 2020), applied twice; it needs only 32-bit integer
 //! multiply, add, xor and shift, which WGSL has, so the WGSL twin gives identical bits.
+//!
+//! # How each pass keys its numbers (part of the contract)
+//!
+//! A backend that keys its numbers as below traces the CPU backend's paths with the same
+//! seed, which the conformance suite's same-seed checks require (`examples/minimal-backend`
+//! follows it line by line). `p` is the pass's parameter struct, `slot` the slot index.
+//!
+//! - **Eye pass** ([`PassKind::Eye`]). The point in the pixel is
+//!   `stratified_pair(p.seed, Eye, pixel, 0, start * p.spp + slot % p.spp)`, where `start`
+//!   is the slot's `iterations` when it keeps its statistics, `iterations - 1` for a
+//!   re-trace, and `p.iteration` otherwise: a slot continues its own sequence. The pixel
+//!   centre instead when `p.spp == 1` without `JITTER`. At glass, depth `d` reflects when
+//!   `StreamKey { seed: p.seed, kind: Eye, pass_index: p.iteration, path: slot }.uniform(2 +
+//!   d)` is below the Fresnel reflectance.
+//! - **Direct light** ([`PassKind::DirectLight`]). Sample `s` of the pass is point `start *
+//!   p.samples + s` of the stream `StratifiedStream::new(p.seed, DirectLight, slot)`, with
+//!   `start` the slot's `iterations` when the pass adds to its sum and `p.iteration`
+//!   otherwise; pair 2 picks the light (its first number, by power), pair 0 the point on it,
+//!   pair 1 the cosine-sampled direction.
+//! - **Photon passes** ([`PassKind::Photon`] for ordinary and testing photons,
+//!   [`PassKind::Region`] for compensation and region photons, [`PassKind::Guided`]). Path
+//!   `p.first_path + i` draws from `StreamKey { seed: p.seed, kind, pass_index:
+//!   p.pass_index, path }`: dimensions `0..EMISSION_DIMS` for its emission
+//!   ([`crate::emission`]), then three per bounce `b` from `EMISSION_DIMS + 3 b`: the first
+//!   decides Russian roulette at a diffuse surface (survive below the largest albedo
+//!   channel) or reflection at glass, the next two the cosine-weighted direction. A
+//!   negative pass and its positive twin use the same indices, so their unchanged paths
+//!   cancel; difference passes start at [`DIFFERENCE_PASS_BASE`].
 
 /// Which pass draws the number: keeps the streams of different passes apart.
 #[repr(u32)]

@@ -312,13 +312,13 @@ pub fn format(r: &SameSeedReport) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<8} {:>12} {:>16}",
+        "{:<10} {:>12} {:>16}",
         "field", "within tol.", "worst relative"
     );
     for f in &r.fields {
         let _ = writeln!(
             s,
-            "{:<8} {:>11.4}% {:>16.3e}",
+            "{:<10} {:>11.4}% {:>16.3e}",
             f.field,
             100.0 * f.share,
             f.worst_relative
