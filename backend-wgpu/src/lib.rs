@@ -1001,21 +1001,32 @@ impl Backend for WgpuBackend {
         if !all_photon.is_empty() && !all_photon.iter().any(|s| s.movers) {
             out.push("photon pass: mover-box tests not compiled (no local move)".into());
         }
-        for (kind, name) in [
-            (emission_kind::REGION, "region"),
-            (emission_kind::GUIDED, "guided"),
+        // Only the thesis's modes (thesis, area, difference) re-trace the slots, test and
+        // guide photons; thesis and area modes emit through a region. Local mode needs none.
+        for (kind, name, modes) in [
+            (emission_kind::REGION, "region", "thesis or area"),
+            (
+                emission_kind::GUIDED,
+                "guided",
+                "thesis, area or difference",
+            ),
         ] {
             if photon[kind as usize].is_empty() {
                 out.push(format!(
-                    "photon pass, {name} emission: not compiled (no move used it)"
+                    "photon pass, {name} emission: not compiled (no {modes} move)"
                 ));
             }
         }
+        let thesis_modes = "no thesis, area or difference move";
         if self.kernels.update.is_none() {
-            out.push("hit-point update pipeline: not compiled (no move)".to_owned());
+            out.push(format!(
+                "hit-point update pipeline: not compiled ({thesis_modes})"
+            ));
         }
         if self.kernels.landing.is_none() {
-            out.push("landing-path pipeline: not compiled (no move)".to_owned());
+            out.push(format!(
+                "landing-path pipeline: not compiled ({thesis_modes})"
+            ));
         }
         if let (None, Some((_, slots))) = (&self.pending, &self.hit_points) {
             out.push(format!(

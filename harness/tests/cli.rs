@@ -650,6 +650,13 @@ fn animate_follows_a_path_file() {
             assert!(report["move"]["restarted"].is_null(), "{report}");
             assert!(report["move"]["updated"].as_u64().unwrap() > 0, "{report}");
         }
+        // An animation's frames do not claim that no move runs.
+        let left_out = report["left_out"].to_string();
+        assert!(
+            !left_out.contains("a single frame is rendered"),
+            "{left_out}"
+        );
+        assert!(left_out.contains("no mirror or glass"), "{left_out}");
     }
     assert!(!frames.join("frame-003.exr").exists());
     std::fs::remove_dir_all(&dir).ok();

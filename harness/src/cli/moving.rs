@@ -127,7 +127,7 @@ impl Observer for FrameWriter<'_> {
             "scene": self.scene, "frame": frame, "steps": self.steps,
             "mode": self.args.mode, "estimator": r.params().estimator, "iterations": iterations,
             "seconds": seconds, "move": self.last_move.take(), "photons": r.counts,
-            "left_out": r.report().left_out,
+            "left_out": r.final_report(self.steps > 0).left_out,
         });
         write_bytes(
             &stem.with_extension("json"),
