@@ -992,11 +992,18 @@ impl Backend for WgpuBackend {
         let mut out = Vec::new();
         let (eye, photon) = self.compiled_specialisations();
         let all_photon: Vec<Specialisation> = photon.iter().flatten().copied().collect();
-        if !eye.is_empty() && !eye.iter().any(|s| s.specular) {
-            out.push("eye pass: mirror and glass code not compiled (the scene has none)".into());
-        }
-        if !all_photon.is_empty() && !all_photon.iter().any(|s| s.specular) {
-            out.push("photon pass: mirror and glass code not compiled (the scene has none)".into());
+        for (pass, built) in [("eye", &eye), ("photon", &all_photon)] {
+            if built.is_empty() || built.iter().any(|s| s.glass) {
+                continue;
+            }
+            out.push(match built.iter().any(|s| s.specular) {
+                true => {
+                    format!("{pass} pass: refraction code not compiled (the scene has no glass)")
+                }
+                false => {
+                    format!("{pass} pass: mirror and glass code not compiled (the scene has none)")
+                }
+            });
         }
         if !all_photon.is_empty() && !all_photon.iter().any(|s| s.movers) {
             out.push("photon pass: mover-box tests not compiled (no local move)".into());

@@ -5,7 +5,7 @@ use crate::buffers::{SceneBuffers, uniform};
 use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
 use crate::shaders;
-use crate::specialise::Specialisation;
+use crate::specialise::{Specialisation, VARIANTS};
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
 };
@@ -26,7 +26,7 @@ pub struct Slots<'a> {
 /// eye_pass.wgsl, one pipeline per [`Specialisation`] a scene has needed.
 pub struct EyePassKernel {
     module: wgpu::ShaderModule,
-    variants: [OnceLock<Kernel>; 4],
+    variants: [OnceLock<Kernel>; VARIANTS],
 }
 
 impl EyePassKernel {
@@ -53,8 +53,9 @@ impl EyePassKernel {
             let slots = [
                 Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite,
             ];
-            // The eye pass declares only SPECULAR.
-            let constants = [("SPECULAR", f64::from(u8::from(spec.specular)))];
+            // The eye pass declares SPECULAR and GLASS, not MOVERS.
+            let mut constants = spec.constants();
+            constants.retain(|(name, _)| *name != "MOVERS");
             Kernel::specialised(
                 &ctx.device,
                 &self.module,
@@ -98,10 +99,8 @@ impl EyePassKernel {
 }
 
 /// The specialisations of `variants` compiled so far.
-fn compiled(variants: &[OnceLock<Kernel>; 4]) -> Vec<Specialisation> {
-    [false, true]
-        .into_iter()
-        .flat_map(|specular| [false, true].map(|movers| Specialisation { specular, movers }))
+fn compiled(variants: &[OnceLock<Kernel>; VARIANTS]) -> Vec<Specialisation> {
+    Specialisation::all()
         .filter(|s| variants[s.index()].get().is_some())
         .collect()
 }
@@ -151,7 +150,7 @@ impl DirectLightKernel {
 /// (ordinary, region, guided) and [`Specialisation`], each compiled when first needed.
 pub struct PhotonPassKernel {
     module: wgpu::ShaderModule,
-    trace: [[OnceLock<Kernel>; 4]; 3],
+    trace: [[OnceLock<Kernel>; VARIANTS]; 3],
 }
 
 /// The buffers a photon pass binds besides the scene.

@@ -106,11 +106,15 @@ fn specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_sa
             "{name}: specialised and general images"
         );
         assert!(special.pixels.iter().flatten().any(|c| *c > 0.0));
+        // Neither scene has glass: no refraction code either way.
         assert!(
-            eye.iter().all(|s| s.specular == specular),
+            eye.iter().all(|s| s.specular == specular && !s.glass),
             "{name}: {eye:?}"
         );
-        assert!(general_eye.iter().all(|s| s.specular), "{general_eye:?}");
+        assert!(
+            general_eye.iter().all(|s| s.specular && s.glass),
+            "{general_eye:?}"
+        );
         // The ordinary passes test no mover box; the local move's correction does.
         assert!(photon[0].iter().any(|s| !s.movers) && photon[0].iter().any(|s| s.movers));
         let says = |lines: &[String], what: &str| lines.iter().any(|l| l.contains(what));
@@ -119,12 +123,17 @@ fn specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_sa
             !specular,
             "{name}: {left_out:?}"
         );
+        assert_eq!(
+            says(&left_out, "eye pass: refraction code not compiled"),
+            specular,
+            "{name}: {left_out:?}"
+        );
         assert!(
             says(&left_out, "mover-box tests not compiled"),
             "{left_out:?}"
         );
         assert!(
-            !says(&general_left_out, "not compiled (the scene has none)")
+            !says(&general_left_out, "not compiled (the scene has")
                 && !says(&general_left_out, "mover-box tests not compiled"),
             "{general_left_out:?}"
         );

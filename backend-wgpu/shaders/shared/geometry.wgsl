@@ -80,9 +80,13 @@ struct SpecularBounce {
     weight: vec3<f32>,
 }
 
+// False for a scene without glass: the refraction half of the specular bounce is compiled
+// out (backend_wgpu::Specialisation); a pipeline that does not set it keeps it.
+override GLASS: bool = true;
+
 fn specular_bounce(material: GpuMaterial, dir: vec3<f32>, facing: vec3<f32>, front: bool, u: f32, transport: u32) -> SpecularBounce {
     let reflected = reflect(dir, facing);
-    if material.kind == MATERIAL_MIRROR {
+    if material.kind == MATERIAL_MIRROR || !GLASS {
         return SpecularBounce(reflected, false, material.albedo);
     }
     let eta = select(material.ior, 1.0 / material.ior, front);
