@@ -53,11 +53,12 @@ use scan::Scan;
 pub use specialise::Specialisation;
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
-/// and (region passes) their paths' weights.
+/// and their paths' weights, allocated when a region pass first needs them (other passes
+/// bind `WgpuBackend::no_weights`).
 struct DepositBuffers {
     photons: wgpu::Buffer,
     ranks: wgpu::Buffer,
-    weights: wgpu::Buffer,
+    weights: Option<wgpu::Buffer>,
     capacity: u32,
 }
 
@@ -110,6 +111,9 @@ pub struct WgpuBackend {
     /// Bound where `pending` would be by the passes that never touch it (every kind of
     /// gather but the deferred ones and their apply).
     placeholder: wgpu::Buffer,
+    /// Bound where the deposits' weights would be by passes that neither write nor read them
+    /// (all but region passes and their gathers).
+    no_weights: wgpu::Buffer,
     /// The initial squared radius of the last eye pass.
     r2_initial: Option<f32>,
     /// Where photon passes append their deposits, kept from pass to pass.
@@ -161,6 +165,7 @@ impl WgpuBackend {
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
         let crossed = buffers::storage_init(&ctx, "crossed", &[u32::MAX; 4]);
         let placeholder = buffers::storage_init(&ctx, "pending placeholder", &[0.0f32; 4]);
+        let no_weights = buffers::storage_init(&ctx, "weights placeholder", &[0.0f32; 4]);
         Ok(Self {
             ctx,
             kernels,
@@ -171,6 +176,7 @@ impl WgpuBackend {
             accumulated: None,
             pending: None,
             placeholder,
+            no_weights,
             r2_initial: None,
             deposits: None,
             deposits_per_path: 1.5,
@@ -467,16 +473,21 @@ impl DirectLight for WgpuBackend {
 
 impl WgpuBackend {
     /// Deposit buffers holding at least `capacity` records (reused when large enough).
-    fn deposit_buffers(&mut self, capacity: u32) -> Result<&DepositBuffers, BackendError> {
+    fn deposit_buffers(&mut self, capacity: u32, weighted: bool) -> Result<(), BackendError> {
         if self.deposits.as_ref().is_none_or(|d| d.capacity < capacity) {
             self.deposits = Some(DepositBuffers {
                 photons: storage_zeroed(&self.ctx, "photons", photon_bytes(capacity))?,
                 ranks: storage_zeroed(&self.ctx, "ranks", u64::from(capacity.max(1)) * 4)?,
-                weights: storage_zeroed(&self.ctx, "weights", u64::from(capacity.max(1)) * 4)?,
+                weights: None,
                 capacity,
             });
         }
-        Ok(self.deposits.as_ref().expect("allocated above"))
+        let held = self.deposits.as_ref().expect("allocated above").capacity;
+        if weighted && self.deposits.as_ref().is_some_and(|d| d.weights.is_none()) {
+            let weights = storage_zeroed(&self.ctx, "weights", u64::from(held.max(1)) * 4)?;
+            self.deposits.as_mut().expect("allocated above").weights = Some(weights);
+        }
+        Ok(())
     }
 
     /// Grows the crossed-path mask, keeping its bits and setting the new ones, to hold those
@@ -559,7 +570,7 @@ impl WgpuBackend {
             };
             let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
             let capacity = expected.min(max_deposits as f64) as u32;
-            self.deposit_buffers(capacity)?;
+            self.deposit_buffers(capacity, emission == emission_kind::REGION)?;
             self.grid_buffers = Some(GridBuffers::fit(
                 &self.ctx,
                 self.grid_buffers.take(),
@@ -568,13 +579,14 @@ impl WgpuBackend {
             let grid_buffers = self.grid_buffers.as_ref().expect("fitted above");
             let scene = self.scene("photon")?;
             let deposits = self.deposits.as_ref().expect("allocated above");
+            let weights = deposits.weights.as_ref().unwrap_or(&self.no_weights);
             let targets = PhotonTargets {
                 ranks: &deposits.ranks,
                 photons: &deposits.photons,
                 counters: &self.counters,
                 emitter: &emitter,
                 recorded: &recorded,
-                weights: &deposits.weights,
+                weights,
                 crossed: &self.crossed,
             };
             let traced = if lit {
@@ -627,7 +639,7 @@ impl WgpuBackend {
                     grid_buffers,
                     (
                         deposits.photons.clone(),
-                        deposits.weights.clone(),
+                        weights.clone(),
                         &deposits.ranks,
                         deposited,
                     ),
@@ -1033,6 +1045,12 @@ impl Backend for WgpuBackend {
         if self.kernels.landing.is_none() {
             out.push(format!(
                 "landing-path pipeline: not compiled ({thesis_modes})"
+            ));
+        }
+        if let Some(d) = self.deposits.as_ref().filter(|d| d.weights.is_none()) {
+            out.push(format!(
+                "photon path weights: {} bytes not allocated (no region pass)",
+                u64::from(d.capacity.max(1)) * 4
             ));
         }
         if let (None, Some((_, slots))) = (&self.pending, &self.hit_points) {

@@ -1,6 +1,7 @@
 //! What a render leaves out is what it did not compile, allocate or run: the wgpu backend
-//! compiles a move's pipelines and allocates the pending sums only when a move needs them,
-//! and the report says so, with the bytes, until then and not after.
+//! compiles a move's pipelines and allocates the pending sums and the photon path weights
+//! only when a move needs them, and the report says so, with the bytes, until then and not
+//! after.
 
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -36,6 +37,11 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
     ));
     let bytes = format!("pending sums: {} bytes not allocated", 32 * 24 * 16);
     assert!(listed(&report.left_out, &bytes), "{:?}", report.left_out);
+    assert!(
+        listed(&report.left_out, "photon path weights: "),
+        "{:?}",
+        report.left_out
+    );
 
     // Area mode's move re-traces the slots and defers its region passes.
     let moved = Schedule::after_move(Budget::iterations(2), MoveMode::Area, Budget::iterations(2));
@@ -45,7 +51,8 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
     assert!(
         !listed(&report.left_out, "hit-point update pipeline")
             && !listed(&report.left_out, "landing-path pipeline")
-            && !listed(&report.left_out, "pending sums"),
+            && !listed(&report.left_out, "pending sums")
+            && !listed(&report.left_out, "photon path weights"),
         "{:?}",
         report.left_out
     );
