@@ -60,7 +60,7 @@ impl Specialisation {
         ]
     }
 
-    /// Index of this variant among the [`VARIANTS`].
+    /// Index of this variant among the eight.
     pub fn index(&self) -> usize {
         usize::from(self.glass) * 4 + usize::from(self.specular) * 2 + usize::from(self.movers)
     }
