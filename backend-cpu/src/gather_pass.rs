@@ -36,12 +36,11 @@ pub fn gather_pass_main(
             };
             let mut stats = (0, 0);
             for ((hp, pending), found) in slots.iter_mut().zip(pending).zip(found) {
-                if gathers(hp.flags, params.kind) {
-                    stats.0 += u64::from(found.count > 0);
-                    stats.1 += u64::from(found.count);
-                }
-                let reflectance = match hp.is_valid() {
+                // Only a gathering slot reads its BRDF (as the WGSL twin).
+                let reflectance = match gathers(hp.flags, params.kind) {
                     true => {
+                        stats.0 += u64::from(found.count > 0);
+                        stats.1 += u64::from(found.count);
                         Vec3::from(hp.throughput)
                             * Vec3::from(materials[hp.material as usize].albedo)
                             * FRAC_1_PI

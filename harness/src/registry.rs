@@ -4,12 +4,14 @@
 //! reports, diff) then runs it too:
 //!
 //! ```no_run
+//! use backend_cpu::CpuBackend;
 //! use harness::registry::Registry;
-//! # struct MyBackend;
-//! # impl MyBackend { fn new() -> Self { MyBackend } }
-//! # fn boxed(_: MyBackend) -> Box<dyn ppm_core::passes::Backend + Send> { unimplemented!() }
+//!
 //! fn main() -> std::process::ExitCode {
-//!     let registry = Registry::in_tree().with("mine", "my backend", || Ok(boxed(MyBackend::new())));
+//!     // The CPU backend under a second name stands in for a crate's own backend.
+//!     let registry = Registry::in_tree().with("mine", "my backend", || {
+//!         Ok(Box::new(CpuBackend::new()))
+//!     });
 //!     harness::cli::main(registry)
 //! }
 //! ```
