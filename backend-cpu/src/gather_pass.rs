@@ -47,7 +47,7 @@ pub fn gather_pass_main(
                     }
                     false => Vec3::ZERO,
                 };
-                let before = slot_state(hp, *pending);
+                let before = SlotState::of(hp, *pending);
                 let after = gather_rule(
                     params,
                     r2_initial,
@@ -64,19 +64,6 @@ pub fn gather_pass_main(
     GatherStats {
         hit_points_reached: reached,
         photons_gathered: gathered,
-    }
-}
-
-/// The gather rule's view of a slot.
-fn slot_state(hp: &HitPoint, pending: Pending) -> SlotState {
-    SlotState {
-        tau: hp.tau,
-        n: hp.n,
-        pending,
-        r2: hp.r2,
-        emitted: hp.emitted,
-        flags: hp.flags,
-        _pad: 0,
     }
 }
 

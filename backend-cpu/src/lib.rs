@@ -22,24 +22,18 @@ use photon_pass::{Deposits, photon_pass_main};
 use photon_search::{PhotonMap, for_photons_in_disc};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
-use ppm_core::emission::{guided_emission, ordinary_emission, region_emission};
+use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
     ResolveParams, SlotBounds,
 };
-use ppm_core::layout::{
-    EmissionRegion, GuidedEmission, RecordedPath, eye_flags, hit_flags, photon_flags,
-};
+use ppm_core::layout::{eye_flags, hit_flags, photon_flags};
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
-use ppm_core::passes::{
-    DynamicBackend, GuidedPhotonPass, HitPointUpdate, LandingPaths, RegionPhotonPass, SceneUpdate,
-    UpdateStats, crossed_mask_words,
-};
-use ppm_core::rng::PassKind;
+use ppm_core::passes::{DynamicBackend, UpdateStats, check_gather_kind, crossed_mask_words};
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 use trace::SceneData;
@@ -59,6 +53,9 @@ pub struct CpuBackend {
     weights: Option<Vec<f32>>,
     /// The last photon pass's `gather_r2_floor`.
     r2_floor: f32,
+    /// The gather kind the last photon pass named (none since the scene was loaded or
+    /// updated).
+    map_kind: Option<u32>,
     /// Deferred region photons per hit point (area mode).
     pending: Vec<gather_pass::Pending>,
     /// The photon map's grid: `Indexed` once built from the last pass's deposits (at the first
@@ -141,21 +138,8 @@ impl SceneUpload for CpuBackend {
         self.photons.clear();
         self.weights = None;
         self.grid = PhotonIndex::NoPass;
+        self.map_kind = None;
         Ok(())
-    }
-}
-
-impl SceneUpdate for CpuBackend {
-    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        self.scene = Some((SceneData::new(scene), scene.camera));
-        self.photons.clear();
-        self.weights = None;
-        self.grid = PhotonIndex::NoPass;
-        Ok(())
-    }
-
-    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        Ok(self.slot_bounds.clone())
     }
 }
 
@@ -193,6 +177,7 @@ impl CpuBackend {
             });
         }
         self.grid = PhotonIndex::Pending;
+        self.map_kind = Some(params.gather_kind);
         self.r2_floor = params.gather_r2_floor;
         self.photons = deposits.photons;
         self.weights = deposits.weights;
@@ -241,54 +226,52 @@ impl DirectLight for CpuBackend {
 }
 
 impl PhotonPass for CpuBackend {
-    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+    fn photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        source: &PhotonSource<'_>,
+    ) -> Result<PhotonStats, BackendError> {
         self.fit_crossed_mask(params)?;
         let (scene, _) = loaded(&self.scene, "photon")?;
-        let emit = |key: &ppm_core::rng::StreamKey| {
-            ordinary_emission(&scene.lights, &scene.materials, key)
-        };
-        let deposits =
-            photon_pass_main(params, scene, PassKind::Photon, &emit, false, &self.crossed);
+        let deposits = photon_pass_main(params, scene, source, &self.crossed);
         self.store(params, deposits)
     }
 }
 
-impl RegionPhotonPass for CpuBackend {
-    fn region_photon_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        region: &EmissionRegion,
-    ) -> Result<PhotonStats, BackendError> {
-        self.fit_crossed_mask(params)?;
-        let (scene, _) = loaded(&self.scene, "region photon")?;
-        let emit = |key: &ppm_core::rng::StreamKey| {
-            region_emission(&scene.lights, &scene.materials, region, key)
-        };
-        let deposits =
-            photon_pass_main(params, scene, PassKind::Region, &emit, true, &self.crossed);
-        self.store(params, deposits)
+/// The last photon pass's grid, built now if it is not yet.
+fn indexed<'a>(
+    index: &'a mut PhotonIndex,
+    photons: &[Photon],
+    hit_points: &[HitPoint],
+    r2_floor: f32,
+    pass: &'static str,
+) -> Result<&'a PhotonGrid, BackendError> {
+    if let PhotonIndex::Pending = index {
+        *index = PhotonIndex::Indexed(build_photon_grid(photons, hit_points, r2_floor));
+    }
+    match index {
+        PhotonIndex::Indexed(grid) => Ok(grid),
+        _ => Err(BackendError::OutOfOrder {
+            pass,
+            needs: "a photon pass",
+        }),
     }
 }
 
-impl GuidedPhotonPass for CpuBackend {
-    fn guided_photon_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        guide: &GuidedEmission,
-        paths: &[RecordedPath],
-    ) -> Result<PhotonStats, BackendError> {
-        self.fit_crossed_mask(params)?;
-        let (scene, _) = loaded(&self.scene, "guided photon")?;
-        let emit = |key: &ppm_core::rng::StreamKey| {
-            guided_emission(&scene.lights, &scene.materials, guide, paths, key)
-        };
-        let deposits =
-            photon_pass_main(params, scene, PassKind::Guided, &emit, false, &self.crossed);
-        self.store(params, deposits)
+impl DynamicBackend for CpuBackend {
+    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        self.scene = Some((SceneData::new(scene), scene.camera));
+        self.photons.clear();
+        self.weights = None;
+        self.grid = PhotonIndex::NoPass;
+        self.map_kind = None;
+        Ok(())
     }
-}
 
-impl HitPointUpdate for CpuBackend {
+    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        Ok(self.slot_bounds.clone())
+    }
+
     fn update_hit_points(
         &mut self,
         params: &EyePassParams,
@@ -313,29 +296,7 @@ impl HitPointUpdate for CpuBackend {
         check_slots("hit-point update", &self.hit_points)?;
         Ok(stats)
     }
-}
 
-/// The last photon pass's grid, built now if it is not yet.
-fn indexed<'a>(
-    index: &'a mut PhotonIndex,
-    photons: &[Photon],
-    hit_points: &[HitPoint],
-    r2_floor: f32,
-    pass: &'static str,
-) -> Result<&'a PhotonGrid, BackendError> {
-    if let PhotonIndex::Pending = index {
-        *index = PhotonIndex::Indexed(build_photon_grid(photons, hit_points, r2_floor));
-    }
-    match index {
-        PhotonIndex::Indexed(grid) => Ok(grid),
-        _ => Err(BackendError::OutOfOrder {
-            pass,
-            needs: "a photon pass",
-        }),
-    }
-}
-
-impl LandingPaths for CpuBackend {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         let grid = indexed(
             &mut self.grid,
@@ -368,6 +329,7 @@ impl LandingPaths for CpuBackend {
 impl GatherPass for CpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "gather")?;
+        check_gather_kind(self.map_kind, params)?;
         let grid = indexed(
             &mut self.grid,
             &self.photons,

@@ -3,11 +3,11 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::emission::{EMISSION_DIMS, Emission};
+use ppm_core::emission::{EMISSION_DIMS, Emission, PhotonSource};
 use ppm_core::geometry::{Transport, oct_encode, specular_bounce, to_world};
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind, photon_flags};
 use ppm_core::passes::PhotonStats;
-use ppm_core::rng::{PassKind, StreamKey};
+use ppm_core::rng::StreamKey;
 use ppm_core::sampling::cosine_hemisphere;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -29,17 +29,15 @@ pub struct Deposits {
     pub stats: PhotonStats,
 }
 
-/// Traces paths `first_path .. first_path + photon_count`, each starting where `emit` says;
-/// deposits come back in path order whatever the threads. `keep_weights` stores each
-/// deposit's path weight (region passes count `M` in ordinary-photon units with it).
+/// Traces paths `first_path .. first_path + photon_count`, each starting where `source` says;
+/// deposits come back in path order whatever the threads, with their path weights for a
+/// source that keeps them (region passes count `M` in ordinary-photon units with them).
 /// `crossed` is the crossed-path mask that [`photon_flags::RECORD_CROSSED`] writes and
 /// [`photon_flags::CULL_UNCROSSED`] reads; it must hold the bits a recording pass writes.
 pub fn photon_pass_main(
     params: &PhotonPassParams,
     scene: &SceneData,
-    kind: PassKind,
-    emit: &(dyn Fn(&StreamKey) -> Emission + Sync),
-    keep_weights: bool,
+    source: &PhotonSource<'_>,
     crossed: &[AtomicU32],
 ) -> Deposits {
     // No light, no photon: the pass emits its count and deposits nothing.
@@ -63,11 +61,11 @@ pub fn photon_pass_main(
                 }
                 let key = StreamKey {
                     seed: params.seed,
-                    kind,
+                    kind: source.pass_kind(),
                     pass_index: params.pass_index,
                     path,
                 };
-                let emission = emit(&key);
+                let emission = source.emit(&scene.lights, &scene.materials, &key);
                 let before = deposits.len();
                 let path_crossed = if emission.weight > 0.0 {
                     let (path_rays, path_crossed) =
@@ -80,7 +78,7 @@ pub fn photon_pass_main(
                 if record {
                     set_mask_bit(crossed, params.mask_offset + path, path_crossed);
                 }
-                if keep_weights {
+                if source.keeps_weights() {
                     weights.resize(weights.len() + deposits.len() - before, emission.weight);
                 }
             }
@@ -103,7 +101,7 @@ pub fn photon_pass_main(
     };
     Deposits {
         photons,
-        weights: keep_weights.then_some(weights),
+        weights: source.keeps_weights().then_some(weights),
         stats,
     }
 }

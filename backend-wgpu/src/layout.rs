@@ -31,34 +31,6 @@ pub struct GridBuildParams {
     pub r2_floor: f32,
 }
 
-/// photon_pass.wgsl's `Emitter`: where this pass's photons start. 96 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Emitter {
-    /// One of [`emission_kind`].
-    pub kind: u32,
-    /// Padding.
-    pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
-    /// Padding.
-    pub _pad2: u32,
-    /// The emitting region (region passes).
-    pub region: ppm_core::layout::EmissionRegion,
-    /// The guide (guided passes).
-    pub guide: ppm_core::layout::GuidedEmission,
-}
-
-/// Values of [`Emitter::kind`] (`EMISSION_*` in emission.wgsl).
-pub mod emission_kind {
-    /// Ordinary photons.
-    pub const ORDINARY: u32 = 0;
-    /// Through the emitting region.
-    pub const REGION: u32 = 1;
-    /// Around recorded paths.
-    pub const GUIDED: u32 = 2;
-}
-
 /// hit_point_update.wgsl's parameters. 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -27,26 +27,25 @@ pub mod shaders {
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
-use layout::{Emitter, UpdateParams, emission_kind};
+use layout::UpdateParams;
 use passes::{
-    CheckKernel, DirectLightKernel, EyePassKernel, GatherInputs, GatherKernel,
+    CheckKernel, DirectLightKernel, EyePassKernel, GatherInputs, GatherKernel, GatherStage,
     HitPointUpdateKernel, LandingPathsKernel, PhotonPassKernel, PhotonTargets, ResolveKernel,
     RngVectorsKernel, Slots,
 };
 use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::{CompiledScene, SceneFeatures};
+use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams, SlotBounds, eye_flags, gather_kind,
-    photon_flags,
+    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ResolveParams, SlotBounds, emission_kind, eye_flags, gather_kind, photon_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, DynamicBackend, EyePass, EyeStats, GatherPass,
-    GatherStats, GuidedPhotonPass, HitPointUpdate, LandingPaths, PhotonPass, PhotonStats,
-    RandomSource, ReadBack, RegionPhotonPass, Resolve, SceneUpdate, SceneUpload, UpdateStats,
-    crossed_mask_words,
+    GatherStats, PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
+    UpdateStats, check_gather_kind, crossed_mask_words,
 };
 use ppm_core::update::gather::{GatherCase, SlotState};
 use scan::Scan;
@@ -123,6 +122,8 @@ pub struct WgpuBackend {
     /// The photon grid's working buffers, kept from pass to pass.
     grid_buffers: Option<GridBuffers>,
     map: Option<PhotonMap>,
+    /// The gather kind the photon pass that built `map` named.
+    map_kind: u32,
     /// Batches the last photon pass took.
     batches: u32,
     /// Path indices of the last photon pass end here.
@@ -182,6 +183,7 @@ impl WgpuBackend {
             deposits_per_path: 1.5,
             grid_buffers: None,
             map: None,
+            map_kind: 0,
             batches: 0,
             last_pass_paths: 0,
             photon_buffer_limit: u64::MAX,
@@ -374,24 +376,6 @@ impl SceneUpload for WgpuBackend {
     }
 }
 
-impl SceneUpdate for WgpuBackend {
-    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        let buffers = self
-            .ctx
-            .scoped("scene update", || SceneBuffers::new(&self.ctx, scene))??;
-        self.scene = Some(buffers);
-        self.map = None;
-        Ok(())
-    }
-
-    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        match (&self.slot_bounds, &self.hit_points) {
-            (Some(buffer), Some((_, slots))) => read_back(&self.ctx, buffer, *slots as usize),
-            _ => Ok(Vec::new()),
-        }
-    }
-}
-
 impl EyePass for WgpuBackend {
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
         let camera = self.scene("eye")?.camera_value;
@@ -516,15 +500,14 @@ impl WgpuBackend {
         Ok(())
     }
 
-    /// Traces a pass whose photons start as `emitter` says, in as few batches as the device's
+    /// Traces a pass whose photons start as `source` says, in as few batches as the device's
     /// binding limit allows (one, unless the deposits would not fit one buffer), and
-    /// accumulates each batch into the hit points' accumulators, so the gather that follows
-    /// makes one update for the whole pass.
+    /// accumulates each batch into the accumulators of the slots that gather the kind the
+    /// pass names, so the gather that follows makes one update for the whole pass.
     fn trace_pass(
         &mut self,
         params: &PhotonPassParams,
-        emitter: &Emitter,
-        paths: &[RecordedPath],
+        source: &PhotonSource<'_>,
     ) -> Result<PhotonStats, BackendError> {
         self.fit_crossed_mask(params)?;
         let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
@@ -535,20 +518,18 @@ impl WgpuBackend {
         // No light, no photon: the pass emits its count and its map stays empty.
         let lit = self.scene("photon")?.light_count > 0;
         let accumulate = GatherParams {
-            kind: match emitter.kind {
-                emission_kind::REGION => gather_kind::REGION_POSITIVE,
-                emission_kind::GUIDED => gather_kind::GUIDED,
-                _ => gather_kind::ORDINARY,
-            },
+            kind: params.gather_kind,
             ..GatherParams::default()
         };
+        let emitter = source.emitter();
         let emission = emitter.kind;
+        let weighted = source.keeps_weights();
         // Only local mode's correction passes test the movers' boxes.
         let movers =
             params.flags & (photon_flags::CHANGED_ONLY | photon_flags::RECORD_CROSSED) != 0;
         let spec = self.specialisation(movers);
-        let emitter = buffers::uniform(&self.ctx, "emitter", emitter);
-        let recorded = buffers::storage_init(&self.ctx, "recorded", paths);
+        let emitter = buffers::uniform(&self.ctx, "emitter", &emitter);
+        let recorded = buffers::storage_init(&self.ctx, "recorded", source.paths());
         let mut stats = PhotonStats {
             emitted: u64::from(params.photon_count),
             ..Default::default()
@@ -570,7 +551,7 @@ impl WgpuBackend {
             };
             let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
             let capacity = expected.min(max_deposits as f64) as u32;
-            self.deposit_buffers(capacity, emission == emission_kind::REGION)?;
+            self.deposit_buffers(capacity, weighted)?;
             self.grid_buffers = Some(GridBuffers::fit(
                 &self.ctx,
                 self.grid_buffers.take(),
@@ -646,9 +627,10 @@ impl WgpuBackend {
                     (hit_points, slots.count),
                     params.gather_r2_floor,
                 )?;
+                let stage = GatherStage::Accumulate { weighted };
                 self.kernels
                     .gather
-                    .record(&self.ctx, encoder, &gather, &built, &slots, false);
+                    .record(&self.ctx, encoder, &gather, &built, &slots, stage);
                 map = Some(built);
                 Ok(())
             })?;
@@ -663,6 +645,7 @@ impl WgpuBackend {
                 (stats.deposited as f64 / f64::from(params.photon_count)).max(0.1);
         }
         self.map = map;
+        self.map_kind = params.gather_kind;
         self.batches = batches;
         self.last_pass_paths = params.first_path + params.photon_count;
         Ok(stats)
@@ -670,46 +653,32 @@ impl WgpuBackend {
 }
 
 impl PhotonPass for WgpuBackend {
-    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
-        self.trace_pass(params, &Emitter::default(), &[])
-    }
-}
-
-impl RegionPhotonPass for WgpuBackend {
-    fn region_photon_pass(
+    fn photon_pass(
         &mut self,
         params: &PhotonPassParams,
-        region: &EmissionRegion,
+        source: &PhotonSource<'_>,
     ) -> Result<PhotonStats, BackendError> {
-        let emitter = Emitter {
-            kind: emission_kind::REGION,
-            region: *region,
-            ..Default::default()
-        };
-        self.trace_pass(params, &emitter, &[])
+        self.trace_pass(params, source)
     }
 }
 
-impl GuidedPhotonPass for WgpuBackend {
-    fn guided_photon_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        guide: &GuidedEmission,
-        paths: &[RecordedPath],
-    ) -> Result<PhotonStats, BackendError> {
-        let emitter = Emitter {
-            kind: emission_kind::GUIDED,
-            guide: GuidedEmission {
-                paths: paths.len() as u32,
-                ..*guide
-            },
-            ..Default::default()
-        };
-        self.trace_pass(params, &emitter, paths)
+impl DynamicBackend for WgpuBackend {
+    fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        let buffers = self
+            .ctx
+            .scoped("scene update", || SceneBuffers::new(&self.ctx, scene))??;
+        self.scene = Some(buffers);
+        self.map = None;
+        Ok(())
     }
-}
 
-impl HitPointUpdate for WgpuBackend {
+    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        match (&self.slot_bounds, &self.hit_points) {
+            (Some(buffer), Some((_, slots))) => read_back(&self.ctx, buffer, *slots as usize),
+            _ => Ok(Vec::new()),
+        }
+    }
+
     fn update_hit_points(
         &mut self,
         params: &EyePassParams,
@@ -784,9 +753,7 @@ impl HitPointUpdate for WgpuBackend {
             rays: u64::from(eye[COUNTER_RAYS]),
         })
     }
-}
 
-impl LandingPaths for WgpuBackend {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         if self.batches > 1 {
             return Err(BackendError::Limit(format!(
@@ -838,6 +805,7 @@ impl GatherPass for WgpuBackend {
             pass: "gather",
             needs: "a photon pass",
         };
+        check_gather_kind(self.map.as_ref().map(|_| self.map_kind), params)?;
         let map = self.map.as_ref().ok_or(needs_photons)?;
         let (accumulated, pending, r2_initial) = self.gather_state("gather")?;
         let radii = radii(&self.ctx, r2_initial, 0.0);
@@ -854,9 +822,14 @@ impl GatherPass for WgpuBackend {
             radii: &radii,
         };
         let counters = self.run("gather", |encoder| {
-            self.kernels
-                .gather
-                .record(&self.ctx, encoder, &inputs, map, &targets, true);
+            self.kernels.gather.record(
+                &self.ctx,
+                encoder,
+                &inputs,
+                map,
+                &targets,
+                GatherStage::Apply,
+            );
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;

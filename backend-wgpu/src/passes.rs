@@ -180,7 +180,7 @@ impl PhotonPassKernel {
         }
     }
 
-    /// The variants compiled so far, per emission kind (`layout::emission_kind`).
+    /// The variants compiled so far, per emission kind (`ppm_core::layout::emission_kind`).
     pub fn compiled(&self, emission: u32) -> Vec<Specialisation> {
         compiled(&self.trace[emission as usize])
     }
@@ -204,7 +204,7 @@ impl PhotonPassKernel {
         })
     }
 
-    /// Records the trace of photons emitted as `emission` says (`layout::emission_kind`).
+    /// Records the trace of photons emitted as `emission` says (`ppm_core::layout::emission_kind`).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -259,6 +259,20 @@ pub struct GatherInputs<'a> {
     pub radii: &'a wgpu::Buffer,
 }
 
+/// Which half of the gather a record runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GatherStage {
+    /// Inside the photon pass: one batch's photons into the accumulators of the slots that
+    /// gather the named kind; `weighted` when the deposits carry path weights (a region
+    /// source's).
+    Accumulate {
+        /// Whether the deposits carry path weights.
+        weighted: bool,
+    },
+    /// The gather pass: each slot's update from its accumulator, by the gather rule.
+    Apply,
+}
+
 impl GatherKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
@@ -282,8 +296,7 @@ impl GatherKernel {
         }
     }
 
-    /// Records the accumulation of photon map `map` into every hit point's accumulator
-    /// (`apply == false`), or the update of every hit point from its accumulator.
+    /// Records `stage` of the gather of photon map `map`.
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -291,14 +304,11 @@ impl GatherKernel {
         inputs: &GatherInputs,
         map: &crate::photon_grid::PhotonMap,
         slots: &Slots,
-        apply: bool,
+        stage: GatherStage,
     ) {
-        let weighted = inputs.params.kind & ppm_core::layout::gather_kind::KIND_MASK
-            == ppm_core::layout::gather_kind::REGION_POSITIVE;
-        let kernel = if apply {
-            &self.apply
-        } else {
-            &self.accumulate[usize::from(weighted)]
+        let kernel = match stage {
+            GatherStage::Apply => &self.apply,
+            GatherStage::Accumulate { weighted } => &self.accumulate[usize::from(weighted)],
         };
         let params = uniform(ctx, "gather params", inputs.params);
         let group = kernel.bind(

@@ -180,7 +180,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         first_path,
         flags,
         mask_offset,
-        _pad1,
+        gather_kind,
         gather_r2_floor
     });
     same_layout!(GatherParams {
@@ -211,7 +211,7 @@ fn pass_parameters_match_their_wgsl_twins() {
 
 #[test]
 fn dynamic_pass_structs_match_their_wgsl_twins() {
-    use backend_wgpu::layout::{Emitter, UpdateParams};
+    use backend_wgpu::layout::UpdateParams;
     same_layout!(EmissionRegion {
         light_point,
         mode,
@@ -304,6 +304,9 @@ fn shared_constants_agree() {
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),
         ("REGION_AREA", region_mode::AREA),
         ("REGION_POINT", region_mode::POINT),
+        ("EMISSION_ORDINARY", emission_kind::ORDINARY),
+        ("EMISSION_REGION", emission_kind::REGION),
+        ("EMISSION_GUIDED", emission_kind::GUIDED),
         ("GATHER_ORDINARY", gather_kind::ORDINARY),
         ("GATHER_REGION_NEGATIVE", gather_kind::REGION_NEGATIVE),
         ("GATHER_REGION_POSITIVE", gather_kind::REGION_POSITIVE),

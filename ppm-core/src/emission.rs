@@ -5,9 +5,10 @@
 
 use crate::geometry::to_world;
 use crate::layout::{
-    EmissionRegion, GpuLight, GpuMaterial, GuidedEmission, RecordedPath, region_mode,
+    EmissionRegion, Emitter, GpuLight, GpuMaterial, GuidedEmission, RecordedPath, emission_kind,
+    region_mode,
 };
-use crate::rng::StreamKey;
+use crate::rng::{PassKind, StreamKey};
 use crate::sampling::{cosine_hemisphere, sample_cdf, uniform_cone, uniform_triangle};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -30,6 +31,97 @@ pub struct Emission {
     pub normal: Vec3,
     /// Weight relative to an ordinary photon (1 for ordinary photons, 0 for a wasted one).
     pub weight: f32,
+}
+
+/// Where a photon pass's photons start: the one argument besides its parameters that tells
+/// the passes of docs/algorithm.md 1.3, 2.2, 2.5 and 2.6 apart. A backend traces every source
+/// with the same path code, keyed by [`PhotonSource::pass_kind`] and started by
+/// [`PhotonSource::emit`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhotonSource<'a> {
+    /// Ordinary photons ([`ordinary_emission`]): every iteration's, testing and difference
+    /// photons.
+    Lights,
+    /// Compensation (power scale -1) and region photons through the emitting region
+    /// ([`region_emission`]); each deposit keeps its path's weight for `M`.
+    Region(EmissionRegion),
+    /// Guided photons around recorded paths ([`guided_emission`]).
+    Guided {
+        /// Cone, mixture and weighting; its `paths` field is ignored for `paths.len()`.
+        guide: GuidedEmission,
+        /// The recorded emissions to draw around.
+        paths: &'a [RecordedPath],
+    },
+}
+
+impl PhotonSource<'_> {
+    /// The source's name in errors and reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PhotonSource::Lights => "ordinary",
+            PhotonSource::Region(_) => "region",
+            PhotonSource::Guided { .. } => "guided",
+        }
+    }
+
+    /// The random streams its paths draw from ([`crate::rng`] module docs).
+    pub fn pass_kind(&self) -> PassKind {
+        match self {
+            PhotonSource::Lights => PassKind::Photon,
+            PhotonSource::Region(_) => PassKind::Region,
+            PhotonSource::Guided { .. } => PassKind::Guided,
+        }
+    }
+
+    /// Whether deposits keep their path's weight: region photons count in `M` as the ordinary
+    /// photons their weights stand for; every other source's weights are 1.
+    pub fn keeps_weights(&self) -> bool {
+        matches!(self, PhotonSource::Region(_))
+    }
+
+    /// The photon that path `key` emits.
+    pub fn emit(
+        &self,
+        lights: &[GpuLight],
+        materials: &[GpuMaterial],
+        key: &StreamKey,
+    ) -> Emission {
+        match self {
+            PhotonSource::Lights => ordinary_emission(lights, materials, key),
+            PhotonSource::Region(region) => region_emission(lights, materials, region, key),
+            PhotonSource::Guided { guide, paths } => {
+                guided_emission(lights, materials, guide, paths, key)
+            }
+        }
+    }
+
+    /// The uniform a GPU backend uploads (with the recorded paths in a buffer of their own).
+    pub fn emitter(&self) -> Emitter {
+        match *self {
+            PhotonSource::Lights => Emitter::default(),
+            PhotonSource::Region(region) => Emitter {
+                kind: emission_kind::REGION,
+                region,
+                ..Default::default()
+            },
+            PhotonSource::Guided { guide, paths } => Emitter {
+                kind: emission_kind::GUIDED,
+                guide: GuidedEmission {
+                    paths: paths.len() as u32,
+                    ..guide
+                },
+                ..Default::default()
+            },
+        }
+    }
+
+    /// The recorded paths a guided source draws around (none for the others).
+    pub fn paths(&self) -> &[RecordedPath] {
+        match self {
+            PhotonSource::Guided { paths, .. } => paths,
+            _ => &[],
+        }
+    }
 }
 
 /// The light chosen by `u` (by power) and the power an ordinary photon from it carries:

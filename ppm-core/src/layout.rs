@@ -410,8 +410,12 @@ pub struct PhotonPassParams {
     /// [`photon_flags::RECORD_CROSSED`] or [`photon_flags::CULL_UNCROSSED`]): each of a move's
     /// difference passes has its own slot, read in pose B where pose A wrote it.
     pub mask_offset: u32,
-    /// Padding.
-    pub _pad1: u32,
+    /// The [`gather_kind`], flags included, of the gather pass that will consume this map,
+    /// which must name the same (pbrt-v4's SPPM has one photon pass too; here a map is
+    /// gathered once, by one kind). A backend that searches while it traces, as the wgpu
+    /// backend folds each batch into per-slot sums, searches only for the slots that kind
+    /// gathers ([`crate::update::gather::gathers`]).
+    pub gather_kind: u32,
     /// Squared radius within which every slot gathers this pass's photons at least: a slot
     /// whose `r2` is smaller searches this disc and scales what it finds by `r2 / floor`
     /// (local mode's correction, which a small converged disc would gather too noisily).
@@ -481,6 +485,35 @@ pub struct GatherParams {
     /// Photons of all the region passes that together make one compensation (`N_c`), each
     /// standing for `emitted / N_c` ordinary photons times its weight; unused otherwise.
     pub region_photons: f32,
+}
+
+/// Where one photon pass's photons start, as a GPU backend uploads it: the plain form of
+/// [`crate::emission::PhotonSource`], which builds it. 96 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Emitter {
+    /// One of [`emission_kind`].
+    pub kind: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
+    /// The emitting region (region passes).
+    pub region: EmissionRegion,
+    /// The guide (guided passes), its `paths` the recorded paths passed beside it.
+    pub guide: GuidedEmission,
+}
+
+/// Values of [`Emitter::kind`].
+pub mod emission_kind {
+    /// Ordinary photons, from the lights (docs/algorithm.md 1.3).
+    pub const ORDINARY: u32 = 0;
+    /// Through the emitting region (docs/algorithm.md 2.2, 2.5).
+    pub const REGION: u32 = 1;
+    /// Around recorded paths (docs/algorithm.md 2.6).
+    pub const GUIDED: u32 = 2;
 }
 
 /// The emitting region of compensation and region photons (docs/algorithm.md 2.1, 3). 64 bytes.
@@ -603,6 +636,7 @@ mod tests {
             ("EmissionRegion", size_of::<EmissionRegion>(), 64),
             ("RecordedPath", size_of::<RecordedPath>(), 32),
             ("GuidedEmission", size_of::<GuidedEmission>(), 16),
+            ("Emitter", size_of::<Emitter>(), 96),
             ("Photon", size_of::<Photon>(), 32),
             ("GpuTriangle", size_of::<GpuTriangle>(), 64),
             ("BvhNode", size_of::<BvhNode>(), 32),

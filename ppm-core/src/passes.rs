@@ -1,17 +1,18 @@
 //! The pass contract every backend implements (docs/algorithm.md section 1).
 //!
-//! One trait per pass, so that a harness, a conformance check or a debugging tool can name
-//! exactly the pass it drives. Each pass takes its `#[repr(C)]` parameter struct from
+//! One trait per static pass, so that a harness, a conformance check or a debugging tool can
+//! name exactly the pass it drives. Each pass takes its `#[repr(C)]` parameter struct from
 //! [`crate::layout`], the same bytes a GPU backend uploads as a uniform, and returns counters.
-//! The dynamic passes of docs/algorithm.md section 2 arrive as further parameter fields (emission
-//! region, which hit points gather, sign of the power) and further traits beside these; the
-//! static passes keep their shape.
+//! A move's photons are the one photon pass with another [`PhotonSource`] and gather kind;
+//! the other dynamic passes of docs/algorithm.md section 2 are the methods of
+//! [`DynamicBackend`], which a backend that renders still frames only leaves out.
 
 use crate::compile::CompiledScene;
+use crate::emission::PhotonSource;
 use crate::image::Image;
 use crate::layout::{
-    DirectLightParams, EmissionRegion, EyePassParams, GatherParams, GuidedEmission, HitPoint,
-    Photon, PhotonPassParams, RecordedPath, ResolveParams, SlotBounds,
+    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ResolveParams, SlotBounds, gather_kind,
 };
 use thiserror::Error;
 
@@ -51,6 +52,17 @@ pub enum BackendError {
         pass: &'static str,
         /// What must run first.
         needs: &'static str,
+    },
+    /// A gather pass named another kind than the photon pass that traced its map
+    /// ([`PhotonPassParams::gather_kind`]).
+    #[error(
+        "gather pass of kind {gather:#x} on a photon map traced for kind {map:#x}: a photon pass names the gather that consumes it"
+    )]
+    GatherKind {
+        /// The kind the photon pass named.
+        map: u32,
+        /// The kind the gather pass was given.
+        gather: u32,
     },
     /// The backend does not implement what the parameters ask for.
     #[error("unsupported: {0}")]
@@ -161,20 +173,63 @@ pub trait DirectLight {
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError>;
 }
 
-/// Photon pass (docs/algorithm.md 1.3): emits, traces and stores this pass's photon map.
+/// Photon pass (docs/algorithm.md 1.3, and 2.2, 2.5, 2.6 for a move's photons): emits,
+/// traces and stores this pass's photon map, for the gather that `params.gather_kind` names.
 pub trait PhotonPass {
-    /// Replaces the photon map with this pass's deposits, indexed for gathering.
-    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError>;
+    /// Replaces the photon map with the deposits of paths started by `source`, indexed for
+    /// gathering. A backend that renders still frames only may refuse every source but
+    /// [`PhotonSource::Lights`] ([`PhotonSource::lights_only`]).
+    fn photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        source: &PhotonSource<'_>,
+    ) -> Result<PhotonStats, BackendError>;
 }
 
-/// Gather pass (docs/algorithm.md 1.4): folds the current photon map into the slots.
+impl PhotonSource<'_> {
+    /// Refuses every source but ordinary photons, naming the backend: for a backend whose
+    /// [`Backend::dynamic`] is `None`, which the driver never asks for others.
+    pub fn lights_only(&self, backend: &str) -> Result<(), BackendError> {
+        match self {
+            PhotonSource::Lights => Ok(()),
+            _ => Err(BackendError::Unsupported(format!(
+                "backend '{backend}' traces ordinary photons only, not {} photons",
+                self.name()
+            ))),
+        }
+    }
+}
+
+/// Gather pass (docs/algorithm.md 1.4): folds the current photon map into the slots, by
+/// [`crate::update::gather::gather_rule`].
 pub trait GatherPass {
     /// Updates `n`, `r2` and `tau` of the slots that gather this pass's kind and have a
     /// visible point (flux times throughput times BRDF), and adds the pass's photons to
     /// `emitted` of every slot the kind serves, visible point or not (a slot whose eye path
     /// escaped this iteration still counts the photons: its estimate averages over
-    /// iterations); fails on a non-finite result.
+    /// iterations); fails on a non-finite result, and on a kind other than the one the photon
+    /// pass named ([`check_gather_kind`]).
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError>;
+}
+
+/// Whether a gather of `params.kind` may consume the map of a photon pass that named
+/// `map_kind` (`None`: no photon pass yet). Only [`gather_kind::REGION_APPLY`], which reads
+/// no photons, needs no map of its own kind.
+pub fn check_gather_kind(map_kind: Option<u32>, params: &GatherParams) -> Result<(), BackendError> {
+    if params.kind & gather_kind::KIND_MASK == gather_kind::REGION_APPLY {
+        return Ok(());
+    }
+    match map_kind {
+        None => Err(BackendError::OutOfOrder {
+            pass: "gather",
+            needs: "a photon pass",
+        }),
+        Some(map) if map != params.kind => Err(BackendError::GatherKind {
+            map,
+            gather: params.kind,
+        }),
+        Some(_) => Ok(()),
+    }
 }
 
 /// Resolve (docs/algorithm.md 1.5): the image from the slots' statistics.
@@ -235,71 +290,77 @@ pub trait Backend:
     }
 }
 
-/// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3).
-pub trait SceneUpdate {
-    /// Replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
+/// The passes of compensation photons and local moves (docs/algorithm.md 2, 3b), besides the
+/// photon pass's other sources: a backend that has them returns `Some(self)` from
+/// [`Backend::dynamic`].
+pub trait DynamicBackend: Backend {
+    /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3):
+    /// replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
     /// statistics.
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
+
     /// The box of each slot's eye-path vertices, slot by slot, that eye passes with
     /// [`crate::layout::eye_flags::RECORD_BOUNDS`] keep: where a local move looks for what
     /// the slot may have seen ([`crate::layout::SlotBounds`]).
     fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError>;
-}
 
-/// Hit-point update after a move (docs/algorithm.md 2.4).
-pub trait HitPointUpdate {
-    /// Re-runs the eye pass on the current geometry (with `params` keyed as the last
-    /// iteration's, so each slot traces the same sample); a slot whose visible point changed
-    /// object, validity, or moved more than `epsilon` starts fresh and is flagged `UPDATED`;
-    /// the others keep `n`, `r2`, `tau` and `emitted`. Every slot's direct sum restarts
-    /// (direct light is recomputed for all). Flags of earlier updates are cleared.
+    /// Hit-point update after a move (docs/algorithm.md 2.4): re-runs the eye pass on the
+    /// current geometry (with `params` keyed as the last iteration's, so each slot traces the
+    /// same sample); a slot whose visible point changed object, validity, or moved more than
+    /// `epsilon` starts fresh and is flagged `UPDATED`; the others keep `n`, `r2`, `tau` and
+    /// `emitted`. Every slot's direct sum restarts (direct light is recomputed for all).
+    /// Flags of earlier updates are cleared.
     fn update_hit_points(
         &mut self,
         params: &EyePassParams,
         epsilon: f32,
     ) -> Result<UpdateStats, BackendError>;
-}
 
-/// Compensation and region photons (docs/algorithm.md 2.2, 2.5).
-pub trait RegionPhotonPass {
-    /// Replaces the photon map with photons emitted through `region`; `params.power_scale`
-    /// is -1 for compensation photons. Each deposit keeps its path's weight for `M`. The map
-    /// is for the hit points that region passes reach (the kept ones, docs/algorithm.md 3): gather
-    /// it with a region kind.
-    fn region_photon_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        region: &EmissionRegion,
-    ) -> Result<PhotonStats, BackendError>;
-}
-
-/// Guided photons around recorded paths (docs/algorithm.md 2.6).
-pub trait GuidedPhotonPass {
-    /// Replaces the photon map with guided photons, for the updated hit points alone: gather
-    /// it with the guided kind.
-    fn guided_photon_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        guide: &GuidedEmission,
-        paths: &[RecordedPath],
-    ) -> Result<PhotonStats, BackendError>;
-}
-
-/// Which testing photons reached updated hit points (docs/algorithm.md 2.6).
-pub trait LandingPaths {
-    /// Distinct path indices, ascending, of the current map's photons that lie within the
-    /// radius of an updated hit point.
+    /// Which testing photons reached updated hit points (docs/algorithm.md 2.6): distinct
+    /// path indices, ascending, of the current map's photons that lie within the radius of
+    /// an updated hit point.
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError>;
 }
 
-/// A backend that also runs the dynamic passes of compensation photons and local moves;
-/// [`Backend::dynamic`] hands it to the driver.
-pub trait DynamicBackend:
-    Backend + SceneUpdate + HitPointUpdate + RegionPhotonPass + GuidedPhotonPass + LandingPaths
-{
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-impl<T> DynamicBackend for T where
-    T: Backend + SceneUpdate + HitPointUpdate + RegionPhotonPass + GuidedPhotonPass + LandingPaths
-{
+    #[test]
+    fn a_gather_consumes_only_the_map_of_the_kind_its_photon_pass_named() {
+        let gather = |kind| GatherParams {
+            kind,
+            ..Default::default()
+        };
+        let deferred = gather_kind::REGION_NEGATIVE | gather_kind::DEFERRED;
+        assert!(check_gather_kind(Some(deferred), &gather(deferred)).is_ok());
+        assert!(matches!(
+            check_gather_kind(Some(gather_kind::REGION_NEGATIVE), &gather(deferred)),
+            Err(BackendError::GatherKind {
+                map: 1,
+                gather: 0x201
+            })
+        ));
+        assert!(matches!(
+            check_gather_kind(None, &gather(gather_kind::ORDINARY)),
+            Err(BackendError::OutOfOrder { .. })
+        ));
+        // An apply reads the pending sums, not the map.
+        let apply = gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX);
+        assert!(check_gather_kind(Some(deferred), &apply).is_ok());
+        assert!(check_gather_kind(None, &apply).is_ok());
+    }
+
+    #[test]
+    fn a_still_frame_backend_refuses_a_move_s_photon_sources_by_name() {
+        assert!(PhotonSource::Lights.lights_only("mine").is_ok());
+        let refused = PhotonSource::Region(Default::default())
+            .lights_only("mine")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            refused,
+            "unsupported: backend 'mine' traces ordinary photons only, not region photons"
+        );
+    }
 }

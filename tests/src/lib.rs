@@ -4,10 +4,42 @@
 
 use backend_cpu::CpuBackend;
 use harness::driver::{Budget, Outcome, Schedule, run};
+use harness::registry::Registry;
 use ppm_core::compile::{camera_ray, compile_scene};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
+
+/// The backends a cross-backend test runs on, by name: each one [`Registry::in_tree`]
+/// registers that starts here, so a backend registered there joins every test that calls
+/// this. One that cannot start (wgpu without an adapter) is skipped with a loud message, or
+/// fails the test where `PPM_REQUIRE_<NAME>=1` (CI sets `PPM_REQUIRE_WGPU=1`).
+pub fn backends(test: &str) -> Vec<(String, Box<dyn Backend + Send>)> {
+    let registry = Registry::in_tree();
+    let started = registry.names().into_iter().filter_map(|name| {
+        let required = format!("PPM_REQUIRE_{}", name.to_uppercase());
+        match registry.start(name) {
+            Ok(backend) => Some((name.to_owned(), backend)),
+            Err(e) if std::env::var(&required).as_deref() == Ok("1") => {
+                panic!("{test}: {required}=1 but backend '{name}' cannot start: {e}")
+            }
+            Err(e) => {
+                eprintln!(
+                    "\n!!!! SKIPPED {test} on '{name}': it cannot start ({e}); set {required}=1 to make this fail !!!!\n"
+                );
+                None
+            }
+        }
+    });
+    started.collect()
+}
+
+/// [`backends`] besides the CPU backend, the reference each is compared with.
+pub fn compared_with_cpu(test: &str) -> Vec<(String, Box<dyn Backend + Send>)> {
+    let mut all = backends(test);
+    all.retain(|(name, _)| name != "cpu");
+    all
+}
 
 /// Renders `scene` at `frame` for `params.passes` iterations on the CPU backend in a pool of
 /// `threads` workers; panics on a pass error, since a test render must not fail.

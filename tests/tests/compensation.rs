@@ -7,12 +7,14 @@ use backend_cpu::CpuBackend;
 use harness::driver::{Renderer, pass_params};
 use harness::reference::{ReferenceBudget, render_reference};
 use ppm_core::compile::{CompiledScene, camera_ray, compile_scene};
+use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     GatherParams, PhotonPassParams, first_hit, gather_kind, hit_flags, material_kind, region_mode,
 };
 use ppm_core::metrics::relative_rmse;
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
+use ppm_core::passes::Backend;
 use ppm_core::region::emitting_region;
 use ppm_core::scene::Scene;
 use std::ops::ControlFlow;
@@ -99,9 +101,11 @@ fn cancel(neg_index: u32, pos_index: u32) -> (Image, Image) {
             first_hit: first_hit::SKIP,
             ray_epsilon: pass_params::ray_epsilon(&p, compiled.extent),
             power_scale: scale,
+            gather_kind: kind,
             ..Default::default()
         };
-        b.region_photon_pass(&params, &region).unwrap();
+        b.photon_pass(&params, &PhotonSource::Region(region))
+            .unwrap();
         b.gather_pass(&GatherParams {
             alpha: p.alpha,
             emitted_increment: 0.0,
@@ -170,9 +174,10 @@ fn a_move_to_the_same_pose_leaves_the_statistics() {
             first_hit: first_hit::SKIP,
             ray_epsilon: pass_params::ray_epsilon(&p, compile_scene(&scene, 64, 64).extent),
             power_scale: scale,
+            gather_kind: kind | gather_kind::DEFERRED,
             ..Default::default()
         };
-        let stats = b.photon_pass(&params).unwrap();
+        let stats = b.photon_pass(&params, &PhotonSource::Lights).unwrap();
         assert!(stats.deposited > 0);
         b.gather_pass(&GatherParams {
             alpha: p.alpha,
@@ -213,7 +218,7 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
     let b = render.backend().dynamic().expect("dynamic passes");
     // 200,000 compensation photons against 2,000 emitted: each hit point near the block
     // loses far more than it ever gathered.
-    b.region_photon_pass(
+    b.photon_pass(
         &PhotonPassParams {
             seed: p.seed,
             pass_index: 0,
@@ -222,9 +227,10 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
             first_hit: first_hit::SKIP,
             ray_epsilon: pass_params::ray_epsilon(&p, compiled.extent),
             power_scale: -1.0,
+            gather_kind: gather_kind::REGION_NEGATIVE,
             ..Default::default()
         },
-        &region,
+        &PhotonSource::Region(region),
     )
     .unwrap();
     b.gather_pass(&GatherParams {
@@ -305,15 +311,12 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
     }
 }
 
-/// The harness's same-seed comparison passes on a compensated frame: both backends run the
-/// same move (area, thesis and difference modes: compensation, testing and guided photons;
-/// local mode: its resets) and agree.
+/// The harness's same-seed comparison passes on a compensated frame: every backend runs the
+/// same move as the CPU (area, thesis and difference modes: compensation, testing and guided
+/// photons; local mode: its resets) and agrees with it.
 #[test]
-fn both_backends_agree_on_a_compensated_frame() {
-    let Some(mut gpu) = backend_wgpu::backend_or_skip("both_backends_agree_on_a_compensated_frame")
-    else {
-        return;
-    };
+fn every_backend_agrees_with_the_cpu_on_a_compensated_frame() {
+    let test = "every_backend_agrees_with_the_cpu_on_a_compensated_frame";
     let (scene, mut p) = cornell(48, 20_000);
     p.direct_samples = 8;
     let dynamic = MoveParams {
@@ -321,7 +324,7 @@ fn both_backends_agree_on_a_compensated_frame() {
         region_photons: 16_384,
         ..MoveParams::default()
     };
-    let run = |backend: &mut dyn ppm_core::passes::DynamicBackend, mode: MoveMode| {
+    let run = |backend: &mut dyn Backend, mode: MoveMode| {
         let name = backend.name().to_owned();
         let mut render = Renderer::start(backend, scene.at_frame(0), &p, &dynamic).unwrap();
         for _ in 0..3 {
@@ -343,36 +346,39 @@ fn both_backends_agree_on_a_compensated_frame() {
             moved,
         )
     };
-    for mode in [
+    let modes = [
         MoveMode::Area,
         MoveMode::Thesis,
         MoveMode::Difference,
         MoveMode::Local,
-    ] {
-        let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
-        let (wgpu, wgpu_move) = run(&mut gpu, mode);
-        assert_eq!(
-            (cpu_move.updated, cpu_move.direct_corrected),
-            (wgpu_move.updated, wgpu_move.direct_corrected),
-            "{mode:?}: different hit points reset"
-        );
-        assert_eq!(
-            cpu_move.culled_share, wgpu_move.culled_share,
-            "{mode:?}: different difference paths culled"
-        );
-        assert_eq!(
-            cpu_move.culled_share.is_some(),
-            mode == MoveMode::Local,
-            "{mode:?}: {cpu_move:?}"
-        );
-        let report = harness::diff::same_seed::compare(&cpu, &wgpu, &p, 5);
-        println!(
-            "{mode:?}: recorded {} vs {} paths\n{}",
-            cpu_move.recorded_paths,
-            wgpu_move.recorded_paths,
-            harness::diff::same_seed::format(&report)
-        );
-        assert!(report.agree, "{mode:?}");
+    ];
+    for (name, mut other) in tests::compared_with_cpu(test) {
+        for mode in modes {
+            let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
+            let (theirs, other_move) = run(other.as_mut(), mode);
+            assert_eq!(
+                (cpu_move.updated, cpu_move.direct_corrected),
+                (other_move.updated, other_move.direct_corrected),
+                "{mode:?}: different hit points reset"
+            );
+            assert_eq!(
+                cpu_move.culled_share, other_move.culled_share,
+                "{mode:?}: different difference paths culled"
+            );
+            assert_eq!(
+                cpu_move.culled_share.is_some(),
+                mode == MoveMode::Local,
+                "{mode:?}: {cpu_move:?}"
+            );
+            let report = harness::diff::same_seed::compare(&cpu, &theirs, &p, 5);
+            println!(
+                "{name} {mode:?}: recorded {} vs {} paths\n{}",
+                cpu_move.recorded_paths,
+                other_move.recorded_paths,
+                harness::diff::same_seed::format(&report)
+            );
+            assert!(report.agree, "{mode:?}");
+        }
     }
 }
 
@@ -437,7 +443,7 @@ fn a_local_move_resets_the_pixels_the_object_newly_covers() {
 /// After a local move, every other iteration the kept slots rest (no eye path, no direct
 /// light; their last visible points gather the photons), while the slots the move reset
 /// iterate every time; once those hold as many iterations as the kept ones, no slot rests.
-/// On both backends.
+/// On every backend.
 #[test]
 fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up() {
     use ppm_core::layout::HitPoint;
@@ -445,7 +451,7 @@ fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up() {
     let (scene, p) = cornell(32, 10_000);
     let reset = |hp: &HitPoint| hp.flags & hit_flags::UPDATED != 0;
     let resting = |hp: &HitPoint| hp.flags & hit_flags::RESTING != 0;
-    let check = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+    let check = |backend: &mut dyn Backend| {
         let name = backend.name().to_owned();
         let moves = MoveParams::default();
         let mut render = Renderer::start(backend, scene.at_frame(0), &p, &moves).unwrap();
@@ -494,11 +500,9 @@ fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up() {
             "{name}"
         );
     };
-    check(&mut CpuBackend::new());
-    if let Some(mut gpu) = backend_wgpu::backend_or_skip(
-        "after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up",
-    ) {
-        check(&mut gpu);
+    let test = "after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up";
+    for (_, mut backend) in tests::backends(test) {
+        check(backend.as_mut());
     }
 }
 
@@ -534,7 +538,7 @@ fn local_mode_moves_several_objects_at_once() {
     };
     let truth =
         render_reference(&compiled, 99, budget, &mut |_, _| ControlFlow::Continue(())).image;
-    let run = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+    let run = |backend: &mut dyn Backend| {
         let name = backend.name().to_owned();
         let moves = MoveParams::default();
         let mut render = Renderer::start(backend, a.clone(), &p, &moves).unwrap();
@@ -559,12 +563,12 @@ fn local_mode_moves_several_objects_at_once() {
         moved
     };
     let cpu = run(&mut CpuBackend::new());
-    if let Some(mut gpu) = backend_wgpu::backend_or_skip("local_mode_moves_several_objects_at_once")
-    {
-        let wgpu = run(&mut gpu);
+    for (name, mut other) in tests::compared_with_cpu("local_mode_moves_several_objects_at_once") {
+        let theirs = run(other.as_mut());
         assert_eq!(
             (cpu.updated, cpu.direct_corrected),
-            (wgpu.updated, wgpu.direct_corrected)
+            (theirs.updated, theirs.direct_corrected),
+            "{name}"
         );
     }
 }
@@ -606,20 +610,17 @@ fn culling_leaves_a_local_move_bit_for_bit() {
     );
 }
 
-/// With independent seeds, the CPU and wgpu backends' locally compensated frames are samples
+/// With independent seeds, every backend's locally compensated frames and the CPU's are samples
 /// of the same estimator: no tile's radiance, radius, count or direct light differs
 /// significantly (Welch's t over runs, Holm-corrected at 1%).
 #[test]
-fn both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds() {
+fn every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds() {
     use harness::diff::independent;
     const RUNS: u32 = 6;
-    let Some(mut gpu) = backend_wgpu::backend_or_skip(
-        "both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds",
-    ) else {
-        return;
-    };
+    let test =
+        "every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds";
     let (scene, p) = cornell(32, 10_000);
-    let runs = |backend: &mut dyn ppm_core::passes::DynamicBackend, first_seed: u32| {
+    let runs = |backend: &mut dyn Backend, first_seed: u32| {
         (first_seed..first_seed + RUNS)
             .map(|seed| {
                 let p = RenderParams { seed, ..p.clone() };
@@ -639,10 +640,12 @@ fn both_backends_agree_on_a_locally_compensated_frame_with_independent_seeds() {
             .collect::<Vec<_>>()
     };
     let cpu = runs(&mut CpuBackend::new(), 0);
-    let wgpu = runs(&mut gpu, 1000);
-    let report = independent::compare(("cpu", &cpu), ("wgpu", &wgpu), &p, 3);
-    println!("{}", independent::format(&report));
-    assert!(report.agree, "{}", independent::format(&report));
+    for (name, mut other) in tests::compared_with_cpu(test) {
+        let other = runs(other.as_mut(), 1000);
+        let report = independent::compare(("cpu", &cpu), (&name, &other), &p, 3);
+        println!("{}", independent::format(&report));
+        assert!(report.agree, "{}", independent::format(&report));
+    }
 }
 
 /// Local mode keeps the pixels whose eye rays crossed the box the tall block sweeps but met
@@ -767,7 +770,7 @@ fn a_local_move_probes_mirrored_paths_in_the_new_pose() {
     let meets_b: Vec<u32> = (0..SIZE * SIZE)
         .map(|i| mirrored_paths_meeting(&compiled_b, &data_b, ring, i, p.max_eye_depth))
         .collect();
-    let run = |backend: &mut dyn ppm_core::passes::DynamicBackend| {
+    let run = |backend: &mut dyn Backend| {
         let mut render = Renderer::start(backend, a.clone(), &p, &MoveParams::default()).unwrap();
         for _ in 0..8 {
             render.iteration().unwrap();
@@ -801,14 +804,13 @@ fn a_local_move_probes_mirrored_paths_in_the_new_pose() {
         "kept, yet meet the ring in pose B: {missed:?}"
     );
     assert!(chained_kept > 0, "the probe kept no mirrored slot");
-    if let Some(mut gpu) =
-        backend_wgpu::backend_or_skip("a_local_move_probes_mirrored_paths_in_the_new_pose")
-    {
-        let (wgpu, _) = run(&mut gpu);
-        let differ = cpu.iter().zip(&wgpu).filter(|(c, w)| c != w).count();
+    let test = "a_local_move_probes_mirrored_paths_in_the_new_pose";
+    for (name, mut other) in tests::compared_with_cpu(test) {
+        let (theirs, _) = run(other.as_mut());
+        let differ = cpu.iter().zip(&theirs).filter(|(c, o)| c != o).count();
         assert!(
             differ * 1000 <= cpu.len(),
-            "{differ} slots reset on one backend only"
+            "{name}: {differ} slots reset on one backend only"
         );
     }
 }

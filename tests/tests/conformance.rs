@@ -9,34 +9,25 @@ use harness::diff::{independent, record, same_seed};
 use harness::driver::checkpoint::RenderState;
 use harness::driver::{Budget, Resume, Schedule};
 use ppm_core::compile::CompiledScene;
+use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::*;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::*;
 
+/// Every in-tree backend ([`tests::backends`]) passes both tiers.
 #[test]
-fn cpu_backend_passes_conformance() {
-    let verdict = run_conformance(
-        &mut || Ok(Box::new(CpuBackend::new())),
-        &ConformanceOptions::quick(),
-        Tier::Dynamic,
-    );
-    println!("{verdict}");
-    assert!(verdict.passed(), "{verdict}");
-}
-
-#[test]
-fn wgpu_backend_passes_conformance() {
-    if backend_wgpu::backend_or_skip("wgpu_backend_passes_conformance").is_none() {
-        return;
+fn every_backend_passes_conformance() {
+    let registry = harness::registry::Registry::in_tree();
+    for (name, _) in tests::backends("every_backend_passes_conformance") {
+        let verdict = run_conformance(
+            &mut || registry.start(&name).map(|b| b as Box<dyn Backend>),
+            &ConformanceOptions::quick(),
+            Tier::Dynamic,
+        );
+        println!("{verdict}");
+        assert!(verdict.passed(), "{verdict}");
     }
-    let verdict = run_conformance(
-        &mut || Ok(Box::new(backend_wgpu::WgpuBackend::new()?)),
-        &ConformanceOptions::quick(),
-        Tier::Dynamic,
-    );
-    println!("{verdict}");
-    assert!(verdict.passed(), "{verdict}");
 }
 
 /// The CPU backend with one fault.
@@ -57,6 +48,8 @@ enum Fault {
     /// rule starts it over with the statistics: the photons it gathers next are divided by
     /// everything emitted before the move.
     SkipsEmptiedReset,
+    /// A gather of this kind (flags included) leaves every slot's flux 1% too high.
+    SkewsKind(u32),
 }
 
 struct Broken(CpuBackend, Fault);
@@ -69,7 +62,10 @@ impl Broken {
                 power_scale: p.power_scale.abs(),
                 ..*p
             },
-            Fault::DropsOneInTen { .. } | Fault::StillFramesOnly | Fault::SkipsEmptiedReset => *p,
+            Fault::DropsOneInTen { .. }
+            | Fault::StillFramesOnly
+            | Fault::SkipsEmptiedReset
+            | Fault::SkewsKind(_) => *p,
         }
     }
 }
@@ -90,8 +86,15 @@ impl DirectLight for Broken {
     }
 }
 impl PhotonPass for Broken {
-    fn photon_pass(&mut self, p: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
-        let stats = self.0.photon_pass(&self.misread(p))?;
+    fn photon_pass(
+        &mut self,
+        p: &PhotonPassParams,
+        source: &PhotonSource<'_>,
+    ) -> Result<PhotonStats, BackendError> {
+        if let Fault::StillFramesOnly = self.1 {
+            source.lights_only("broken")?;
+        }
+        let stats = self.0.photon_pass(&self.misread(p), source)?;
         if let Fault::DropsOneInTen { from_pass } = self.1
             && p.pass_index >= from_pass
         {
@@ -104,6 +107,17 @@ impl PhotonPass for Broken {
 }
 impl GatherPass for Broken {
     fn gather_pass(&mut self, p: &GatherParams) -> Result<GatherStats, BackendError> {
+        if let Fault::SkewsKind(kind) = self.1
+            && kind == p.kind
+        {
+            let stats = self.0.gather_pass(p)?;
+            let mut slots = self.0.read_hit_points()?;
+            for hp in &mut slots {
+                hp.tau = hp.tau.map(|t| t * 1.01);
+            }
+            self.0.write_hit_points(&slots)?;
+            return Ok(stats);
+        }
         if !matches!(self.1, Fault::SkipsEmptiedReset) {
             return self.0.gather_pass(p);
         }
@@ -158,15 +172,13 @@ impl Backend for Broken {
         }
     }
 }
-impl SceneUpdate for Broken {
+impl DynamicBackend for Broken {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.0.update_scene(scene)
     }
     fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
         self.0.read_slot_bounds()
     }
-}
-impl HitPointUpdate for Broken {
     fn update_hit_points(
         &mut self,
         p: &EyePassParams,
@@ -174,27 +186,6 @@ impl HitPointUpdate for Broken {
     ) -> Result<UpdateStats, BackendError> {
         self.0.update_hit_points(p, epsilon)
     }
-}
-impl RegionPhotonPass for Broken {
-    fn region_photon_pass(
-        &mut self,
-        p: &PhotonPassParams,
-        region: &EmissionRegion,
-    ) -> Result<PhotonStats, BackendError> {
-        self.0.region_photon_pass(&self.misread(p), region)
-    }
-}
-impl GuidedPhotonPass for Broken {
-    fn guided_photon_pass(
-        &mut self,
-        p: &PhotonPassParams,
-        guide: &GuidedEmission,
-        paths: &[RecordedPath],
-    ) -> Result<PhotonStats, BackendError> {
-        self.0.guided_photon_pass(p, guide, paths)
-    }
-}
-impl LandingPaths for Broken {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         self.0.landing_paths()
     }
@@ -331,7 +322,8 @@ fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
 }
 
 /// A backend whose compensation photons carry positive power renders every still frame as
-/// the CPU does, so the still-frame checks pass it; both moves checks fail it.
+/// the CPU does, so the still-frame checks pass it; both moves checks fail it, and the gather
+/// check at the first negative kind.
 #[test]
 fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     let verdict = run_conformance(
@@ -347,6 +339,11 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     println!("{verdict}");
     assert!(!verdict.check("moves/same-seed").unwrap().passed);
     assert!(!verdict.check("moves/independent").unwrap().passed);
+    let kinds = verdict.check("gather-kinds").unwrap();
+    assert!(
+        !kinds.passed && kinds.detail.contains("(thesis compensation)"),
+        "{verdict}"
+    );
     for still in [
         "agreement/same-seed",
         "agreement/independent",
@@ -358,7 +355,8 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
 }
 
 /// A backend that skips the reset of an emptied slot's normaliser renders still frames as the
-/// CPU does (no still pass empties a slot) and fails the moves check that compares slots.
+/// CPU does (no still pass empties a slot) and fails the moves check that compares slots, and
+/// the gather check at the first kind that empties slots.
 #[test]
 fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves() {
     let verdict = run_conformance(
@@ -374,6 +372,11 @@ fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves(
     println!("{verdict}");
     assert!(
         !verdict.check("moves/same-seed").unwrap().passed,
+        "{verdict}"
+    );
+    let kinds = verdict.check("gather-kinds").unwrap();
+    assert!(
+        !kinds.passed && kinds.detail.contains("(thesis compensation)"),
         "{verdict}"
     );
     for still in ["agreement/same-seed", "gather-formulas", "determinism"] {
@@ -400,6 +403,11 @@ fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
     let moving = run_conformance(make, &options, Tier::Dynamic);
     let dynamic = moving.check("dynamic-passes").unwrap();
     assert!(!dynamic.passed && dynamic.detail.contains("still frames only"));
+    let kinds = moving.check("gather-kinds").unwrap();
+    assert!(
+        !kinds.passed && kinds.detail.contains("ordinary photons only"),
+        "{moving}"
+    );
     assert!(!moving.check("moves/same-seed").unwrap().passed);
 
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
@@ -428,4 +436,47 @@ fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
             .iter()
             .any(|p| p.iter().any(|c| *c > 0.0))
     );
+}
+
+/// A gather that goes wrong for one kind alone fails the gather checks naming that kind: every
+/// kind, in turn (the ordinary one fails the static `gather-formulas`, the others the dynamic
+/// `gather-kinds`).
+#[test]
+fn the_gather_checks_name_the_one_kind_a_backend_gets_wrong() {
+    use gather_kind::*;
+    let check = |name: &str| {
+        harness::conformance::CHECKS
+            .iter()
+            .find(|c| c.0 == name)
+            .expect("a named check")
+            .2
+    };
+    let kinds = [
+        ORDINARY,
+        GUIDED,
+        REGION_NEGATIVE | RAW_COUNT,
+        REGION_POSITIVE | RAW_COUNT,
+        REGION_NEGATIVE | DEFERRED,
+        REGION_POSITIVE | DEFERRED,
+        REGION_APPLY,
+        REGION_NEGATIVE | DEFERRED | ADD_FLUX,
+        REGION_POSITIVE | DEFERRED | ADD_FLUX,
+        REGION_APPLY | ADD_FLUX,
+    ];
+    for kind in kinds {
+        let make = &mut || -> Result<Box<dyn Backend>, BackendError> {
+            Ok(Box::new(Broken(CpuBackend::new(), Fault::SkewsKind(kind))))
+        };
+        let name = if kind == ORDINARY {
+            "gather-formulas"
+        } else {
+            "gather-kinds"
+        };
+        let failed = check(name)(make, &ConformanceOptions::quick()).unwrap_err();
+        println!("{kind:#x}: {failed}");
+        assert!(
+            failed.contains(&format!("kind {kind:#x} (")),
+            "{kind:#x}: {failed}"
+        );
+    }
 }

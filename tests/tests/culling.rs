@@ -7,13 +7,13 @@
 //! opposite corners of the box it should have: no photon leaves the cube, so a box outside it
 //! is crossed by no path, and a box around it by every path.
 
-use backend_cpu::CpuBackend;
 use glam::Vec3;
 use harness::driver::{MoveReport, Renderer};
 use ppm_core::compile::compile_scene;
+use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{EyePassParams, GpuBounds, HitPoint, PhotonPassParams, photon_flags};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::rng::DIFFERENCE_PASS_BASE;
 use ppm_core::scene::{Material, MaterialKind, Move, Object, Scene};
 
@@ -54,7 +54,7 @@ struct LocalMove {
     after: Vec<HitPoint>,
 }
 
-fn local_move(backend: &mut dyn DynamicBackend, scene: &Scene, cull_uncrossed: bool) -> LocalMove {
+fn local_move(backend: &mut dyn Backend, scene: &Scene, cull_uncrossed: bool) -> LocalMove {
     let mut p = RenderParams::for_scene(scene);
     (p.width, p.height, p.photons_per_pass) = (16, 16, PHOTONS);
     let moves = MoveParams {
@@ -86,14 +86,10 @@ fn bytes(hit_points: &[HitPoint]) -> &[u8] {
     bytemuck::cast_slice(hit_points)
 }
 
-/// The backends the test runs on: the CPU's, and wgpu's when an adapter exists; `batched`
-/// adds a wgpu backend whose passes are split into batches of paths.
-fn backends(test: &str, batched: bool) -> Vec<(String, Box<dyn DynamicBackend>)> {
-    let mut all: Vec<(String, Box<dyn DynamicBackend>)> =
-        vec![("cpu".to_owned(), Box::new(CpuBackend::new()))];
-    if let Some(gpu) = backend_wgpu::backend_or_skip(test) {
-        all.push(("wgpu".to_owned(), Box::new(gpu)));
-    }
+/// The backends the test runs on ([`tests::backends`]); `batched` adds a wgpu backend whose
+/// passes are split into batches of paths.
+fn backends(test: &str, batched: bool) -> Vec<(String, Box<dyn Backend + Send>)> {
+    let mut all = tests::backends(test);
     if batched && let Some(mut gpu) = backend_wgpu::backend_or_skip(test) {
         // 64 KiB holds 2,048 deposits: a pass of the partial box takes several batches.
         gpu.set_photon_buffer_limit(64 * 1024);
@@ -195,7 +191,7 @@ fn both_backends_cull_the_same_paths_and_culling_changes_no_statistic() {
 
 /// Loads the furnace with `movers` as the movers' boxes and traces its hit points: the pass
 /// contract below is tested on the backend directly.
-fn load_furnace(backend: &mut dyn DynamicBackend, movers: &[GpuBounds]) {
+fn load_furnace(backend: &mut dyn Backend, movers: &[GpuBounds]) {
     let scene = scenes::analytic::furnace(Vec3::splat(0.5), 1.0);
     let mut compiled = compile_scene(&scene, 16, 16);
     compiled.movers = movers.to_vec();
@@ -229,19 +225,32 @@ fn a_pass_culls_only_paths_recorded_as_uncrossed() {
             mask_offset,
             ..Default::default()
         };
-        assert_eq!(backend.photon_pass(&cull(0)).unwrap().culled, 0, "{name}");
+        assert_eq!(
+            backend
+                .photon_pass(&cull(0), &PhotonSource::Lights)
+                .unwrap()
+                .culled,
+            0,
+            "{name}"
+        );
         let record = PhotonPassParams {
             flags: photon_flags::CHANGED_ONLY | photon_flags::RECORD_CROSSED,
             ..cull(0)
         };
-        backend.photon_pass(&record).unwrap();
+        backend.photon_pass(&record, &PhotonSource::Lights).unwrap();
         assert_eq!(
-            backend.photon_pass(&cull(0)).unwrap().culled,
+            backend
+                .photon_pass(&cull(0), &PhotonSource::Lights)
+                .unwrap()
+                .culled,
             u64::from(PHOTONS),
             "{name}: the recorded slot culls every path"
         );
         assert_eq!(
-            backend.photon_pass(&cull(PHOTONS)).unwrap().culled,
+            backend
+                .photon_pass(&cull(PHOTONS), &PhotonSource::Lights)
+                .unwrap()
+                .culled,
             0,
             "{name}: past the recorded slot nothing is culled"
         );

@@ -7,6 +7,7 @@
 
 use glam::Vec3;
 use ppm_core::compile::compile_scene;
+use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{EyePassParams, PhotonPassParams, first_hit};
 use ppm_core::passes::{EyePass, PhotonPass, ReadBack, SceneUpload};
 use scenes::analytic::furnace;
@@ -26,15 +27,18 @@ fn deposited_per_photon(albedo: Vec3, mode: u32, photons: u32) -> (Vec3, Vec3) {
         })
         .unwrap();
     let stats = backend
-        .photon_pass(&PhotonPassParams {
-            seed: 11,
-            photon_count: photons,
-            max_depth: 16,
-            first_hit: mode,
-            ray_epsilon: 1e-5,
-            power_scale: 1.0,
-            ..Default::default()
-        })
+        .photon_pass(
+            &PhotonPassParams {
+                seed: 11,
+                photon_count: photons,
+                max_depth: 16,
+                first_hit: mode,
+                ray_epsilon: 1e-5,
+                power_scale: 1.0,
+                ..Default::default()
+            },
+            &PhotonSource::Lights,
+        )
         .unwrap();
     let deposits = backend.read_photons().unwrap();
     assert_eq!(stats.deposited as usize, deposits.len());

@@ -5,7 +5,6 @@
 //! `sppm` on both backends, before and after a local move of the block under the water, and
 //! the reference path tracer must all find 2 in every 8x8 block.
 
-use backend_wgpu::backend_or_skip;
 use glam::Vec3;
 use harness::driver::{Budget, Schedule, run};
 use harness::reference::{ReferenceBudget, render_reference};
@@ -13,7 +12,7 @@ use ppm_core::compile::compile_scene;
 use ppm_core::image::Image;
 use ppm_core::metrics::block_means;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use scenes::analytic::{furnace_radiance, water_furnace};
 use std::ops::ControlFlow;
@@ -63,7 +62,7 @@ fn assert_two_everywhere(name: &str, image: &Image) {
 /// Frame 0 for half the iterations, a local move of the block, then three times as many:
 /// the slots the move reset start again from the initial radius, whose blur takes that
 /// long to fall within the tolerance.
-fn render_with_a_move(backend: &mut dyn DynamicBackend, name: &str) {
+fn render_with_a_move(backend: &mut dyn Backend, name: &str) {
     let scene = scene();
     let p = params(&scene);
     let warmup = p.passes / 2;
@@ -97,26 +96,18 @@ fn render_with_a_move(backend: &mut dyn DynamicBackend, name: &str) {
     assert_two_everywhere(&format!("{name} after a local move"), &outcome.image);
 }
 
-fn render_still(backend: &mut dyn DynamicBackend) -> Image {
+fn render_still(backend: &mut dyn Backend) -> Image {
     tests::render_on(backend, &scene(), 0, &params(&scene())).image
 }
 
 #[test]
-fn the_water_furnace_is_two_through_the_water_on_the_cpu() {
-    let image = render_still(&mut backend_cpu::CpuBackend::new());
-    assert_two_everywhere("cpu", &image);
-    render_with_a_move(&mut backend_cpu::CpuBackend::new(), "cpu");
-}
-
-#[test]
-fn the_water_furnace_is_two_through_the_water_on_wgpu() {
-    let Some(mut backend) = backend_or_skip("the_water_furnace_is_two_through_the_water_on_wgpu")
-    else {
-        return;
-    };
-    let image = render_still(&mut backend);
-    assert_two_everywhere("wgpu", &image);
-    render_with_a_move(&mut backend, "wgpu");
+fn the_water_furnace_is_two_through_the_water_on_every_backend() {
+    let test = "the_water_furnace_is_two_through_the_water_on_every_backend";
+    for (name, mut backend) in tests::backends(test) {
+        let image = render_still(backend.as_mut());
+        assert_two_everywhere(&name, &image);
+        render_with_a_move(backend.as_mut(), &name);
+    }
 }
 
 /// The ground truth agrees: the path tracer, which scales radiance through refraction on its

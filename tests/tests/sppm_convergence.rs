@@ -3,14 +3,13 @@
 //! must, while the thesis's fixed-hit-point `ppm` stays where it is.
 
 use backend_cpu::CpuBackend;
-use backend_wgpu::backend_or_skip;
 use harness::driver::Renderer;
 use harness::reference::{ReferenceBudget, render_reference};
 use ppm_core::compile::compile_scene;
 use ppm_core::image::Image;
 use ppm_core::metrics::{block_relative_rmse, relative_rmse};
 use ppm_core::params::{Estimator, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use std::ops::ControlFlow;
 
@@ -40,7 +39,7 @@ fn truth(scene: &Scene) -> Image {
 
 /// Pixel and 8x8-block relative RMSE after `FEW` and after `MANY` iterations of one render.
 fn errors(
-    backend: &mut dyn DynamicBackend,
+    backend: &mut dyn Backend,
     scene: &Scene,
     estimator: Estimator,
     truth: &Image,
@@ -110,14 +109,12 @@ fn sppm_error_against_the_truth_falls_with_iterations_on_the_cpu() {
 }
 
 #[test]
-fn sppm_error_against_the_truth_falls_with_iterations_on_wgpu() {
-    let Some(mut backend) = backend_or_skip("sppm_error_against_the_truth_falls_on_wgpu") else {
-        return;
-    };
+fn sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends() {
+    let test = "sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends";
     let scene = cornell_frame1();
     let truth = truth(&scene);
-    assert_converges(
-        "wgpu sppm",
-        errors(&mut backend, &scene, Estimator::Sppm, &truth),
-    );
+    for (name, mut backend) in tests::compared_with_cpu(test) {
+        let sppm = errors(backend.as_mut(), &scene, Estimator::Sppm, &truth);
+        assert_converges(&format!("{name} sppm"), sppm);
+    }
 }

@@ -5,25 +5,19 @@ use harness::stress::{run_case, table};
 use scenes::stress::STRESS;
 
 #[test]
-fn every_stress_case_holds_on_the_cpu_backend() {
-    let results: Vec<_> = STRESS
-        .iter()
-        .map(|c| run_case(&mut backend_cpu::CpuBackend::new(), c))
-        .collect();
-    println!("{}", table(&results));
-    assert!(results.iter().all(|r| r.passed), "{}", table(&results));
-}
-
-#[test]
-fn every_stress_case_holds_on_the_wgpu_backend() {
-    let Some(mut gpu) =
-        backend_wgpu::backend_or_skip("every_stress_case_holds_on_the_wgpu_backend")
-    else {
-        return;
-    };
-    let results: Vec<_> = STRESS.iter().map(|c| run_case(&mut gpu, c)).collect();
-    println!("{}", table(&results));
-    assert!(results.iter().all(|r| r.passed), "{}", table(&results));
+fn every_stress_case_holds_on_every_backend() {
+    for (name, mut backend) in tests::backends("every_stress_case_holds_on_every_backend") {
+        let results: Vec<_> = STRESS
+            .iter()
+            .map(|c| run_case(backend.as_mut(), c))
+            .collect();
+        println!("{name}:\n{}", table(&results));
+        assert!(
+            results.iter().all(|r| r.passed),
+            "{name}:\n{}",
+            table(&results)
+        );
+    }
 }
 
 /// Radiance is scale-invariant when the radius scales with the scene, and linear in the
@@ -49,36 +43,36 @@ fn scale_and_power_cases_reproduce_the_unit_furnace() {
     }
 }
 
-/// CPU and wgpu agree on every case by the harness's independent-seed test. The false-alarm
-/// rate 0.01 is split among the cases (Bonferroni), so the whole family keeps it.
+/// Every backend agrees with the CPU on every case by the harness's independent-seed test.
+/// The false-alarm rate 0.01 is split among the cases (Bonferroni), so the whole family keeps
+/// it.
 #[test]
-fn both_backends_agree_on_every_stress_case() {
-    let Some(mut gpu) = backend_wgpu::backend_or_skip("both_backends_agree_on_every_stress_case")
-    else {
-        return;
-    };
+fn every_backend_agrees_with_the_cpu_on_every_stress_case() {
+    let test = "every_backend_agrees_with_the_cpu_on_every_stress_case";
     let alpha = 0.01 / STRESS.len() as f64;
     let mut failures = Vec::new();
-    for case in STRESS {
-        match harness::stress::agreement(&mut backend_cpu::CpuBackend::new(), &mut gpu, case, alpha)
-        {
-            Ok(Some(r)) => {
-                println!(
-                    "{:<24} {} of {} tests rejected, smallest p {:.2e}",
-                    case.name, r.rejected, r.tests, r.min_p
-                );
-                if !r.agree {
-                    failures.push(format!(
-                        "{}: {} rejected, min p {:.2e}",
-                        case.name, r.rejected, r.min_p
-                    ));
+    for (name, mut other) in tests::compared_with_cpu(test) {
+        for case in STRESS {
+            let mut cpu = backend_cpu::CpuBackend::new();
+            match harness::stress::agreement(&mut cpu, other.as_mut(), case, alpha) {
+                Ok(Some(r)) => {
+                    println!(
+                        "{name} {:<24} {} of {} tests rejected, smallest p {:.2e}",
+                        case.name, r.rejected, r.tests, r.min_p
+                    );
+                    if !r.agree {
+                        failures.push(format!(
+                            "{name} {}: {} rejected, min p {:.2e}",
+                            case.name, r.rejected, r.min_p
+                        ));
+                    }
                 }
+                Ok(None) => println!(
+                    "{name} {:<24} refused on the f32 limit: nothing to compare",
+                    case.name
+                ),
+                Err(e) => failures.push(format!("{name} {}: {e}", case.name)),
             }
-            Ok(None) => println!(
-                "{:<24} refused on the f32 limit: nothing to compare",
-                case.name
-            ),
-            Err(e) => failures.push(format!("{}: {e}", case.name)),
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");

@@ -5,7 +5,6 @@
 //! whatever iteration a move lands on, no mode blows a pixel up.
 
 use backend_cpu::CpuBackend;
-use backend_wgpu::backend_or_skip;
 use glam::{Quat, Vec3};
 use harness::driver::{Budget, Renderer, Schedule, run};
 use harness::reference::{ReferenceBudget, render_reference};
@@ -14,7 +13,7 @@ use ppm_core::image::Image;
 use ppm_core::layout::hit_flags;
 use ppm_core::metrics::{block_relative_rmse, relative_rmse};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::DynamicBackend;
+use ppm_core::passes::Backend;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{Move, Scene};
 use std::ops::ControlFlow;
@@ -79,7 +78,7 @@ fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest() {
         })
         .collect();
     assert!(saw.len() > 20 && sees.len() > 20 && apart.len() > 1000);
-    let run = |backend: &mut dyn DynamicBackend| {
+    let run = |backend: &mut dyn Backend| {
         let mut render =
             Renderer::start(backend, scene.clone(), &p, &MoveParams::default()).unwrap();
         for _ in 0..6 {
@@ -111,12 +110,13 @@ fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest() {
         reset
     };
     let cpu = run(&mut CpuBackend::new());
-    if let Some(mut gpu) = backend_or_skip("a_move_nobody_declared_resets_what_sees_it") {
-        let wgpu = run(&mut gpu);
-        let differ = cpu.iter().zip(&wgpu).filter(|(a, b)| a != b).count();
+    let test = "a_move_nobody_declared_resets_what_sees_it";
+    for (name, mut other) in tests::compared_with_cpu(test) {
+        let theirs = run(other.as_mut());
+        let differ = cpu.iter().zip(&theirs).filter(|(a, b)| a != b).count();
         assert!(
             differ * 200 <= cpu.len(),
-            "{differ} slots reset on one backend only"
+            "{name}: {differ} slots reset on one backend only"
         );
     }
 }
@@ -193,15 +193,12 @@ fn a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose() {
 /// rounding (the images agree within 2% relative RMSE, the moves reset the same slots
 /// within 1%).
 #[test]
-fn both_backends_follow_a_path_alike() {
+fn every_backend_follows_a_path_as_the_cpu_does() {
     const SIZE: u32 = 32;
-    let Some(mut gpu) = backend_or_skip("both_backends_follow_a_path_alike") else {
-        return;
-    };
     let (scene, p) = cornell(SIZE, 10_000);
     let path = path(&scene);
     let schedule = Schedule::path(&path, MoveMode::Local, Budget::iterations(4));
-    let follow = |backend: &mut dyn DynamicBackend| {
+    let follow = |backend: &mut dyn Backend| {
         run(
             backend,
             &scene,
@@ -213,16 +210,20 @@ fn both_backends_follow_a_path_alike() {
         .unwrap()
     };
     let cpu = follow(&mut CpuBackend::new());
-    let wgpu = follow(&mut gpu);
-    let differ = relative_rmse(&wgpu.image, &cpu.image);
-    println!("relative RMSE between the backends: {differ:.4}");
-    assert!(differ < 0.02, "{differ}");
-    for (c, w) in cpu.moves.iter().zip(&wgpu.moves) {
-        let (c, w) = (c.updated as f64, w.updated as f64);
-        assert!(
-            (c - w).abs() <= 0.01 * c.max(w) + 2.0,
-            "{c} against {w} reset"
-        );
+    for (name, mut backend) in
+        tests::compared_with_cpu("every_backend_follows_a_path_as_the_cpu_does")
+    {
+        let other = follow(backend.as_mut());
+        let differ = relative_rmse(&other.image, &cpu.image);
+        println!("{name}: relative RMSE against the cpu: {differ:.4}");
+        assert!(differ < 0.02, "{name}: {differ}");
+        for (c, o) in cpu.moves.iter().zip(&other.moves) {
+            let (c, o) = (c.updated as f64, o.updated as f64);
+            assert!(
+                (c - o).abs() <= 0.01 * c.max(o) + 2.0,
+                "{name}: {c} against {o} reset"
+            );
+        }
     }
 }
 
@@ -230,24 +231,23 @@ fn both_backends_follow_a_path_alike() {
 /// moves are samples of the same estimator: no tile's radiance, radius, count or direct light
 /// differs significantly (Welch's t over 6 runs each, Holm-corrected at 1%).
 #[test]
-fn both_backends_agree_on_a_path_with_independent_seeds() {
+fn every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds() {
     use harness::diff::{OTHER_SEED_OFFSET, independent, runs_of_schedule};
     const RUNS: u32 = 6;
-    let Some(mut gpu) = backend_or_skip("both_backends_agree_on_a_path_with_independent_seeds")
-    else {
-        return;
-    };
+    let test = "every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds";
     let (scene, p) = cornell(32, 10_000);
     let schedule = Schedule::path(&path(&scene), MoveMode::Local, Budget::iterations(4));
-    let runs = |backend: &mut dyn DynamicBackend, offset: u32| {
+    let runs = |backend: &mut dyn Backend, offset: u32| {
         let moves = MoveParams::default();
         runs_of_schedule(backend, &scene, &p, &moves, &schedule, RUNS, offset).unwrap()
     };
     let cpu = runs(&mut CpuBackend::new(), 0);
-    let wgpu = runs(&mut gpu, OTHER_SEED_OFFSET);
-    let report = independent::compare(("cpu", &cpu), ("wgpu", &wgpu), &p, 3);
-    println!("{}", independent::format(&report));
-    assert!(report.agree, "{}", independent::format(&report));
+    for (name, mut backend) in tests::compared_with_cpu(test) {
+        let other = runs(backend.as_mut(), OTHER_SEED_OFFSET);
+        let report = independent::compare(("cpu", &cpu), (&name, &other), &p, 3);
+        println!("{}", independent::format(&report));
+        assert!(report.agree, "{}", independent::format(&report));
+    }
 }
 
 /// Largest pixel luminance of an image.
@@ -264,7 +264,7 @@ fn brightest(image: &Image) -> f32 {
 /// leave the image finite and never negative, right after the move and two iterations
 /// later, and right after it (the corrections' own doing, before any new eye sample) no
 /// pixel brighter than twice the brighter of the truth's brightest and the image's before
-/// the move. Both backends (wgpu on fewer cases: lavapipe is slow).
+/// the move. Every backend (those besides the CPU on fewer cases: lavapipe is slow).
 #[test]
 fn no_move_blows_a_pixel_up() {
     const SIZE: u32 = 24;
@@ -274,7 +274,7 @@ fn no_move_blows_a_pixel_up() {
         MoveMode::Area,
         MoveMode::Thesis,
     ];
-    let mut gpu = backend_or_skip("no_move_blows_a_pixel_up");
+    let mut others = tests::compared_with_cpu("no_move_blows_a_pixel_up");
     for name in ["cornell-box", "cornell-bunny", "wedding-band"] {
         let scene = scenes::builtin(name).unwrap().load().unwrap();
         let mut p = RenderParams::for_scene(&scene);
@@ -286,7 +286,7 @@ fn no_move_blows_a_pixel_up() {
             .map(|t| brightest(&truth(t, SIZE, 128)))
             .collect();
         let mut worst = 0.0f32;
-        let mut check = |backend: &mut dyn DynamicBackend, warm: u32, seed: u32| {
+        let mut check = |backend: &mut dyn Backend, warm: u32, seed: u32| {
             let p = RenderParams { seed, ..p.clone() };
             let moves = MoveParams::default();
             for (target, truth) in targets.iter().zip(&truths) {
@@ -322,9 +322,9 @@ fn no_move_blows_a_pixel_up() {
         for (warm, seed) in [(1, 0), (2, 1), (3, 0), (5, 1), (8, 0)] {
             check(&mut CpuBackend::new(), warm, seed);
         }
-        if let Some(gpu) = gpu.as_mut() {
+        for (_, other) in &mut others {
             for warm in [1, 4] {
-                check(gpu, warm, 2);
+                check(other.as_mut(), warm, 2);
             }
         }
         println!("{name}: brightest pixel right after a move at most {worst:.3} times the bound");
@@ -348,8 +348,7 @@ fn every_move_of_a_path_keeps_what_it_did_not_change() {
         MoveMode::Difference,
         MoveMode::Local,
     ];
-    let mut gpu = backend_or_skip("every_move_of_a_path_keeps_what_it_did_not_change");
-    let check = |backend: &mut dyn DynamicBackend| {
+    let check = |backend: &mut dyn Backend| {
         for mode in modes {
             let mut render =
                 Renderer::start(backend, scene.clone(), &p, &MoveParams::default()).unwrap();
@@ -370,8 +369,7 @@ fn every_move_of_a_path_keeps_what_it_did_not_change() {
             assert!(resets.iter().all(|&r| r <= 2 * resets[0]), "{what}");
         }
     };
-    check(&mut CpuBackend::new());
-    if let Some(gpu) = gpu.as_mut() {
-        check(gpu);
+    for (_, mut backend) in tests::backends("every_move_of_a_path_keeps_what_it_did_not_change") {
+        check(backend.as_mut());
     }
 }

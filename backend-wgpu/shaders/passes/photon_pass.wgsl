@@ -13,15 +13,6 @@
 // each path crossed a mover's box (atomicOr/atomicAnd, so each path writes only its own bit
 // whatever the order), and pose B skips the paths that did not, which would store nothing.
 
-struct Emitter {
-    kind: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-    region: EmissionRegion,
-    guide: GuidedEmission,
-}
-
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(2) var<uniform> scene: SceneIndex;

@@ -1,10 +1,6 @@
 // Where photons leave the lights: the twin of ppm_core::emission. Needs the bindings
 // `scene_table`, `scene`, `emitter` and `recorded` in the importing pass.
 
-const EMISSION_ORDINARY: u32 = 0u;
-const EMISSION_REGION: u32 = 1u;
-const EMISSION_GUIDED: u32 = 2u;
-
 struct Emission {
     origin: vec3<f32>,
     direction: vec3<f32>,

@@ -141,7 +141,7 @@ struct PhotonPassParams {
     first_path: u32,
     flags: u32,
     mask_offset: u32,
-    _pad1: u32,
+    gather_kind: u32,
     gather_r2_floor: f32,
 }
 
@@ -197,6 +197,20 @@ struct GuidedEmission {
     beta: f32,
     paths: u32,
     weighted: u32,
+}
+
+// Where a photon pass's photons start (ppm_core::layout::Emitter), by kind.
+const EMISSION_ORDINARY: u32 = 0u;
+const EMISSION_REGION: u32 = 1u;
+const EMISSION_GUIDED: u32 = 2u;
+
+struct Emitter {
+    kind: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    region: EmissionRegion,
+    guide: GuidedEmission,
 }
 
 const GATHER_ORDINARY: u32 = 0u;

@@ -10,9 +10,10 @@
 //! - [`EyePass`]: one eye path per slot to its visible point ([`paths::eye_path`]).
 //! - [`DirectLight`]: emission seen plus light from the lights ([`paths::direct_light`]).
 //! - [`PhotonPass`]: photons from the lights, their deposits in path order
-//!   ([`paths::photon_path`]).
+//!   ([`paths::photon_path`]); a move's other photon sources are refused.
 //! - [`GatherPass`]: each slot's photons within its radius, folded in by
-//!   [`gather_rule`], which decides every gather kind's policy.
+//!   [`gather_rule`], which decides every gather kind's policy, for the kind the photon pass
+//!   named ([`check_gather_kind`]).
 //! - [`Resolve`], [`ReadBack`], [`RandomSource`]: the image, the buffers, the generator.
 //!
 //! [`Backend::dynamic`] stays `None`: a move restarts on this backend, saying why.
@@ -23,7 +24,7 @@ pub mod paths;
 
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
-use ppm_core::emission::ordinary_emission;
+use ppm_core::emission::PhotonSource;
 use ppm_core::geometry::oct_faces;
 use ppm_core::image::Image;
 use ppm_core::layout::{
@@ -32,9 +33,9 @@ use ppm_core::layout::{
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
-    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
+    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload, check_gather_kind,
 };
-use ppm_core::rng::{PassKind, StreamKey, random_bits};
+use ppm_core::rng::{StreamKey, random_bits};
 use ppm_core::update::gather::{Found, SlotState, gather_rule};
 use ppm_core::update::radiance;
 use std::f32::consts::FRAC_1_PI;
@@ -47,6 +48,8 @@ pub struct MinimalBackend {
     /// Each slot's deferred sum; a still frame never defers, so it stays zero.
     pending: Vec<[f32; 4]>,
     photons: Vec<Photon>,
+    /// The gather kind the last photon pass named (none before one).
+    map_kind: Option<u32>,
     /// The last photon pass's `gather_r2_floor`.
     r2_floor: f32,
     /// The initial squared radius of the last fresh eye pass.
@@ -76,6 +79,7 @@ impl SceneUpload for MinimalBackend {
         self.scene = Some(paths::Scene::new(scene));
         self.hit_points.clear();
         self.photons.clear();
+        self.map_kind = None;
         Ok(())
     }
 }
@@ -136,7 +140,12 @@ impl DirectLight for MinimalBackend {
 }
 
 impl PhotonPass for MinimalBackend {
-    fn photon_pass(&mut self, params: &PhotonPassParams) -> Result<PhotonStats, BackendError> {
+    fn photon_pass(
+        &mut self,
+        params: &PhotonPassParams,
+        source: &PhotonSource<'_>,
+    ) -> Result<PhotonStats, BackendError> {
+        source.lights_only("minimal")?;
         let scene = loaded(&self.scene, "photon")?;
         let mut stats = PhotonStats {
             emitted: u64::from(params.photon_count),
@@ -148,11 +157,11 @@ impl PhotonPass for MinimalBackend {
             for local in 0..params.photon_count {
                 let key = StreamKey {
                     seed: params.seed,
-                    kind: PassKind::Photon,
+                    kind: source.pass_kind(),
                     pass_index: params.pass_index,
                     path: params.first_path + local,
                 };
-                let emission = ordinary_emission(&scene.lights, &scene.materials, &key);
+                let emission = source.emit(&scene.lights, &scene.materials, &key);
                 if emission.weight > 0.0 {
                     stats.rays += paths::photon_path(params, scene, &key, &emission, &mut photons);
                 }
@@ -172,6 +181,7 @@ impl PhotonPass for MinimalBackend {
         }
         stats.deposited = photons.len() as u64;
         self.photons = photons;
+        self.map_kind = Some(params.gather_kind);
         self.r2_floor = params.gather_r2_floor;
         Ok(stats)
     }
@@ -180,6 +190,7 @@ impl PhotonPass for MinimalBackend {
 impl GatherPass for MinimalBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let materials = &loaded(&self.scene, "gather")?.materials;
+        check_gather_kind(self.map_kind, params)?;
         let mut stats = GatherStats::default();
         for (hp, pending) in self.hit_points.iter_mut().zip(&mut self.pending) {
             let mut found = Found::default();
@@ -209,15 +220,7 @@ impl GatherPass for MinimalBackend {
                 let albedo = materials[hp.material as usize].albedo;
                 reflectance = [0, 1, 2].map(|c| hp.throughput[c] * albedo[c] * FRAC_1_PI);
             }
-            let before = SlotState {
-                tau: hp.tau,
-                n: hp.n,
-                pending: *pending,
-                r2: hp.r2,
-                emitted: hp.emitted,
-                flags: hp.flags,
-                _pad: 0,
-            };
+            let before = SlotState::of(hp, *pending);
             let after = gather_rule(params, self.r2_initial, reflectance, before, &found);
             (hp.n, hp.r2, hp.tau, hp.emitted) = (after.n, after.r2, after.tau, after.emitted);
             *pending = after.pending;

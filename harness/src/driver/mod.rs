@@ -25,6 +25,7 @@ pub use schedule::{
 
 use crate::report::{RenderReport, left_out};
 use ppm_core::compile::{CompiledScene, compile_scene};
+use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
@@ -180,13 +181,18 @@ impl<'a> Renderer<'a> {
             Some((guide, paths)) if guided_turn => {
                 let (guide, paths) = (*guide, paths.clone());
                 let n = self.params.photons_per_pass;
-                let params = self.photon_params(self.counters.guided_pass, n, 1.0);
+                let kind = gather_kind::GUIDED;
+                let params = self.photon_params(self.counters.guided_pass, n, 1.0, kind);
                 let t = Instant::now();
-                let stats = dynamic(self.backend)?.guided_photon_pass(&params, &guide, &paths)?;
+                let source = PhotonSource::Guided {
+                    guide,
+                    paths: &paths,
+                };
+                let stats = self.backend.photon_pass(&params, &source)?;
                 self.count_photons(&stats, t);
                 self.counters.guided_pass += 1;
                 self.counts.guided.add(&stats);
-                self.gather(gather_kind::GUIDED, n as f32, 0.0)?;
+                self.gather(kind, n as f32, 0.0)?;
             }
             _ => self.ordinary_pass()?,
         }
@@ -197,13 +203,14 @@ impl<'a> Renderer<'a> {
     /// One ordinary photon pass, gathered by every slot.
     fn ordinary_pass(&mut self) -> Result<(), BackendError> {
         let n = self.params.photons_per_pass;
-        let params = self.photon_params(self.counters.photon_pass, n, 1.0);
+        let kind = gather_kind::ORDINARY;
+        let params = self.photon_params(self.counters.photon_pass, n, 1.0, kind);
         let t = Instant::now();
-        let stats = self.backend.photon_pass(&params)?;
+        let stats = self.backend.photon_pass(&params, &PhotonSource::Lights)?;
         self.count_photons(&stats, t);
         self.counters.photon_pass += 1;
         self.counts.ordinary.add(&stats);
-        self.gather(gather_kind::ORDINARY, n as f32, 0.0)
+        self.gather(kind, n as f32, 0.0)
     }
 
     /// The image of the current statistics (black before `sppm`'s first iteration, which has
@@ -332,6 +339,7 @@ impl<'a> Renderer<'a> {
         pass_index: u32,
         photon_count: u32,
         power_scale: f32,
+        gather_kind: u32,
     ) -> PhotonPassParams {
         pass_params::photon_pass(
             &self.params,
@@ -339,6 +347,7 @@ impl<'a> Renderer<'a> {
             pass_index,
             photon_count,
             power_scale,
+            gather_kind,
         )
     }
 

@@ -10,7 +10,7 @@
 
 use super::{Renderer, dynamic};
 use glam::Vec3;
-use ppm_core::emission::ordinary_emission;
+use ppm_core::emission::{PhotonSource, ordinary_emission};
 use ppm_core::layout::{
     EmissionRegion, GuidedEmission, PhotonPassParams, RecordedPath, gather_kind, photon_flags,
     region_mode,
@@ -231,9 +231,9 @@ impl Renderer<'_> {
         // that reached them are rebuilt from their index and guide later passes.
         let n = self.params.photons_per_pass;
         let testing_index = self.counters.photon_pass;
-        let params = self.photon_params(testing_index, n, 1.0);
+        let params = self.photon_params(testing_index, n, 1.0, gather_kind::GUIDED);
         let t = Instant::now();
-        let stats = self.backend.photon_pass(&params)?;
+        let stats = self.backend.photon_pass(&params, &PhotonSource::Lights)?;
         self.count_photons(&stats, t);
         self.counters.photon_pass += 1;
         self.counts.testing.add(&stats);
@@ -315,9 +315,11 @@ impl Renderer<'_> {
                 let nc = self.moves.region_photons;
                 let total = (nc * self.moves.compensation_passes) as f32;
                 for k in 0..self.moves.compensation_passes {
-                    let params = self.photon_params(self.counters.region_pass + k, nc, sign);
+                    let index = self.counters.region_pass + k;
+                    let params = self.photon_params(index, nc, sign, kind | flag);
                     let t = Instant::now();
-                    let stats = dynamic(self.backend)?.region_photon_pass(&params, region)?;
+                    let source = PhotonSource::Region(*region);
+                    let stats = self.backend.photon_pass(&params, &source)?;
                     self.count_photons(&stats, t);
                     total_stats.add(&stats);
                     self.count_compensation(kind, &stats);
@@ -372,10 +374,10 @@ impl Renderer<'_> {
                         flags,
                         mask_offset,
                         gather_r2_floor: *r2_floor,
-                        ..self.photon_params(index, n, sign)
+                        ..self.photon_params(index, n, sign, gathered)
                     };
                     let t = Instant::now();
-                    let stats = self.backend.photon_pass(&params)?;
+                    let stats = self.backend.photon_pass(&params, &PhotonSource::Lights)?;
                     self.count_photons(&stats, t);
                     total_stats.add(&stats);
                     self.count_compensation(kind, &stats);

@@ -3,6 +3,8 @@
 //! conformance suite and tests call the same functions, so a backend is proved with the
 //! parameters it will be driven with, ray offset included.
 
+#[cfg(doc)]
+use ppm_core::layout::gather_kind;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, PhotonPassParams, direct_accumulate, eye_flags, first_hit,
 };
@@ -70,14 +72,16 @@ pub fn direct_light(
 }
 
 /// A photon pass of `photon_count` photons keyed by `pass_index`, their power times
-/// `power_scale` (-1 for compensation photons); the first diffuse hit is skipped when shadow
-/// rays count direct light.
+/// `power_scale` (-1 for compensation photons), for a gather of `gather_kind` (a
+/// [`gather_kind`] with its flags); the first diffuse hit is skipped when shadow rays count
+/// direct light.
 pub fn photon_pass(
     params: &RenderParams,
     extent: f32,
     pass_index: u32,
     photon_count: u32,
     power_scale: f32,
+    gather_kind: u32,
 ) -> PhotonPassParams {
     PhotonPassParams {
         seed: params.seed,
@@ -90,6 +94,7 @@ pub fn photon_pass(
         },
         ray_epsilon: ray_epsilon(params, extent),
         power_scale,
+        gather_kind,
         ..Default::default()
     }
 }

@@ -5,7 +5,7 @@
 //! [`gather_rule`], and writes the result back: the policy is not the backend's to choose.
 
 use super::{Statistics, compensation_update, history_kept, luminance, ppm_update};
-use crate::layout::{GatherParams, gather_kind, hit_flags};
+use crate::layout::{GatherParams, HitPoint, gather_kind, hit_flags};
 use bytemuck::{Pod, Zeroable};
 
 /// The fields of a slot that a gather reads and writes, with its pending sum (the deferred
@@ -29,6 +29,21 @@ pub struct SlotState {
     pub flags: u32,
     /// Padding.
     pub _pad: u32,
+}
+
+impl SlotState {
+    /// The gather rule's view of slot `hp` with its pending sum.
+    pub fn of(hp: &HitPoint, pending: [f32; 4]) -> Self {
+        Self {
+            tau: hp.tau,
+            n: hp.n,
+            pending,
+            r2: hp.r2,
+            emitted: hp.emitted,
+            flags: hp.flags,
+            _pad: 0,
+        }
+    }
 }
 
 /// What a slot found in the current photon map, already scaled to its own disc (the map's

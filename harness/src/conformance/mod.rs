@@ -11,9 +11,9 @@ use crate::driver::{Budget, Schedule, pass_params, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
 use ppm_core::compile::compile_scene;
-use ppm_core::geometry::oct_faces;
+use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{
-    EyePassParams, GatherParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, hit_flags,
+    EyePassParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, gather_kind, hit_flags,
 };
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError};
@@ -21,8 +21,9 @@ use ppm_core::qmc;
 use ppm_core::rng::TEST_VECTORS;
 use ppm_core::scene::Scene;
 use ppm_core::scene::path::{After, MovePath};
-use ppm_core::update::{Statistics, ppm_update};
 use std::fmt;
+
+mod gathers;
 
 /// Makes a fresh backend for each check.
 pub type BackendFactory<'a> = &'a mut dyn FnMut() -> Result<Box<dyn Backend>, BackendError>;
@@ -142,12 +143,13 @@ pub const CHECKS: &[(&str, Tier, Check)] = &[
     ("hit-point-layout", Tier::Static, check_hit_point_layout),
     ("eye-pass", Tier::Static, check_eye_pass),
     ("photon-power", Tier::Static, check_photon_power),
-    ("gather-formulas", Tier::Static, check_gather_formulas),
+    ("gather-formulas", Tier::Static, gathers::check_ordinary),
     ("determinism", Tier::Static, check_determinism),
     ("agreement/same-seed", Tier::Static, check_same_seed),
     ("agreement/independent", Tier::Static, check_independent),
     ("stress-family", Tier::Static, check_still_stress),
     ("dynamic-passes", Tier::Dynamic, check_dynamic_passes),
+    ("gather-kinds", Tier::Dynamic, gathers::check_every_kind),
     ("moves/same-seed", Tier::Dynamic, check_moves_same_seed),
     ("moves/independent", Tier::Dynamic, check_moves_independent),
     ("moves/stress-family", Tier::Dynamic, check_moving_stress),
@@ -331,13 +333,13 @@ fn check_photon_power(make: BackendFactory, o: &ConformanceOptions) -> Result<St
     let p = params_for(&scene, o);
     b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
     let photons = o.photons_per_pass.max(50_000);
-    b.photon_pass(&PhotonPassParams {
+    let params = PhotonPassParams {
         seed: 3,
         max_depth: 24,
         first_hit: first_hit::DEPOSIT,
-        ..pass_params::photon_pass(&p, compiled.extent, 0, photons, 1.0)
-    })
-    .map_err(err)?;
+        ..pass_params::photon_pass(&p, compiled.extent, 0, photons, 1.0, gather_kind::ORDINARY)
+    };
+    b.photon_pass(&params, &PhotonSource::Lights).map_err(err)?;
     let deposits = b.read_photons().map_err(err)?;
     let total: f64 = deposits.iter().map(|d| f64::from(d.power[0])).sum();
     let ratio = total / f64::from(photons) / f64::from(compiled.light_power.x);
@@ -350,79 +352,6 @@ fn check_photon_power(make: BackendFactory, o: &ConformanceOptions) -> Result<St
     }
     Ok(format!(
         "deposited / emitted power = {ratio:.4} (expected 2)"
-    ))
-}
-
-/// The gather applies eqs 1-3 to exactly the photons within each radius, with flux times the
-/// eye path's throughput times the BRDF, and counts the pass in `emitted` of every slot:
-/// recomputed on the host by brute force from the backend's own photons and slots.
-fn check_gather_formulas(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
-    let scene = cornell()?;
-    let p = params_for(&scene, o);
-    let compiled = compile_scene(&scene, p.width.min(32), p.height.min(32));
-    let mut b = make().map_err(err)?;
-    b.load_scene(&compiled).map_err(err)?;
-    b.eye_pass(&eye_params(&p, compiled.extent)).map_err(err)?;
-    b.photon_pass(&PhotonPassParams {
-        seed: 5,
-        ..pass_params::photon_pass(&p, compiled.extent, 0, o.photons_per_pass, 1.0)
-    })
-    .map_err(err)?;
-    let before = b.read_hit_points().map_err(err)?;
-    let photons = b.read_photons().map_err(err)?;
-    let gather = GatherParams {
-        alpha: p.alpha,
-        emitted_increment: o.photons_per_pass as f32,
-        ..Default::default()
-    };
-    b.gather_pass(&gather).map_err(err)?;
-    let after = b.read_hit_points().map_err(err)?;
-    let mut checked = 0;
-    let mut off = 0;
-    for (hp, got) in before.iter().zip(&after) {
-        let x = Vec3::from(hp.position);
-        let n = Vec3::from(hp.normal);
-        let (mut m, mut flux) = (0u32, Vec3::ZERO);
-        for ph in &photons {
-            if (Vec3::from(ph.position) - x).length_squared() < hp.r2 && oct_faces(ph.normal_oct, n)
-            {
-                m += 1;
-                flux += Vec3::from(ph.power);
-            }
-        }
-        let dtau = if hp.is_valid() {
-            let albedo = Vec3::from(compiled.materials[hp.material as usize].albedo);
-            flux * Vec3::from(hp.throughput) * albedo * std::f32::consts::FRAC_1_PI
-        } else {
-            Vec3::ZERO
-        };
-        let s = ppm_update(
-            Statistics {
-                n: hp.n,
-                r2: hp.r2,
-                tau: hp.tau,
-            },
-            m as f32,
-            dtau.into(),
-            p.alpha,
-        );
-        let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-12;
-        let ok = close(s.n, got.n)
-            && close(s.r2, got.r2)
-            && (0..3).all(|c| close(s.tau[c], got.tau[c]))
-            && close(hp.emitted + gather.emitted_increment, got.emitted);
-        checked += 1;
-        off += usize::from(!ok);
-    }
-    // A photon at distance^2 within rounding of r2 may fall on either side.
-    if off * 1000 > checked {
-        return Err(format!(
-            "{off} of {checked} hit points differ from eqs 1-3 applied by brute force"
-        ));
-    }
-    Ok(format!(
-        "{} of {checked} hit points match eqs 1-3 by brute force",
-        checked - off
     ))
 }
 

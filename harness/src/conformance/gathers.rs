@@ -1,0 +1,446 @@
+//! The gather checks: a backend's own photon and gather passes, for each gather kind, against
+//! ppm-core's gather rule applied on the host by brute force to the backend's own photons and
+//! slots (docs/algorithm.md 1.4 and 3, "Who gathers what"). The static tier checks ordinary
+//! photons; the dynamic tier runs every kind a move uses, in the order the driver runs them.
+
+use super::{BackendFactory, ConformanceOptions, cornell, err, eye_params, params_for};
+use crate::driver::pass_params;
+use glam::Vec3;
+use ppm_core::compile::{CompiledScene, compile_scene};
+use ppm_core::emission::{PhotonSource, ordinary_emission};
+use ppm_core::geometry::oct_faces;
+use ppm_core::layout::{
+    EmissionRegion, GatherParams, GuidedEmission, HitPoint, Photon, PhotonPassParams, RecordedPath,
+    gather_kind, hit_flags, region_mode,
+};
+use ppm_core::params::RenderParams;
+use ppm_core::passes::{Backend, BackendError};
+use ppm_core::region::emitting_region;
+use ppm_core::rng::{PassKind, StreamKey};
+use ppm_core::update::gather::{Found, SlotState, gather_rule, gathers};
+use ppm_core::update::luminance;
+use std::f32::consts::FRAC_1_PI;
+
+/// Where a step's photons start.
+#[derive(Clone, Copy)]
+enum Source {
+    Lights,
+    /// Through the emitting region of [`region_mode`] `mode`, with path weights.
+    Region(u32),
+    /// Around a few recorded ordinary emissions, weighted.
+    Guided,
+}
+
+/// One gather, after a photon pass of its own (an apply reads the pending sums instead).
+struct Step {
+    name: &'static str,
+    kind: u32,
+    source: Source,
+    power_scale: f32,
+    /// The photon pass's gather floor, in initial radii (local mode's correction).
+    floor_radii: f32,
+}
+
+const fn step(name: &'static str, kind: u32, source: Source, power_scale: f32) -> Step {
+    Step {
+        name,
+        kind,
+        source,
+        power_scale,
+        floor_radii: 0.0,
+    }
+}
+
+const ORDINARY: Step = step("ordinary", gather_kind::ORDINARY, Source::Lights, 1.0);
+
+/// Every kind a move gathers, as its mode runs them: the thesis's raw region passes, area
+/// mode's deferred ones, difference mode's deferred ordinary photons, local mode's flux-only
+/// correction within a floor disc, and the guided photons.
+const MOVE_STEPS: [Step; 12] = {
+    use gather_kind::*;
+    let (neg, pos) = (REGION_NEGATIVE, REGION_POSITIVE);
+    let point = Source::Region(region_mode::POINT);
+    let area = Source::Region(region_mode::AREA);
+    let correction = DEFERRED | ADD_FLUX;
+    [
+        step("guided", GUIDED, Source::Guided, 1.0),
+        step("thesis compensation", neg | RAW_COUNT, point, -1.0),
+        step("thesis region", pos | RAW_COUNT, point, 1.0),
+        step("area compensation", neg | DEFERRED, area, -1.0),
+        step("area region", pos | DEFERRED, area, 1.0),
+        step("area apply", REGION_APPLY, Source::Lights, 0.0),
+        step("difference, pose A", neg | DEFERRED, Source::Lights, -1.0),
+        step("difference, pose B", pos | DEFERRED, Source::Lights, 1.0),
+        step("difference apply", REGION_APPLY, Source::Lights, 0.0),
+        Step {
+            floor_radii: 3.0,
+            ..step(
+                "local correction, pose A",
+                neg | correction,
+                Source::Lights,
+                -1.0,
+            )
+        },
+        Step {
+            floor_radii: 3.0,
+            ..step(
+                "local correction, pose B",
+                pos | correction,
+                Source::Lights,
+                1.0,
+            )
+        },
+        step("local apply", REGION_APPLY | ADD_FLUX, Source::Lights, 0.0),
+    ]
+};
+
+/// `gather-formulas` (static tier): ordinary photons through the backend's own passes; then a
+/// gather of another kind than the photon pass named must be refused.
+pub(super) fn check_ordinary(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+) -> Result<String, String> {
+    let mut bench = Bench::new(make, o)?;
+    let outcome = bench.run(&ORDINARY)?;
+    outcome.verdict()?;
+    let other = GatherParams {
+        alpha: bench.params.alpha,
+        kind: gather_kind::GUIDED,
+        ..Default::default()
+    };
+    match bench.backend.gather_pass(&other) {
+        Err(BackendError::GatherKind { .. }) => {
+            Ok(format!("{outcome}; a guided gather of its map refused"))
+        }
+        other => Err(format!(
+            "a guided gather of an ordinary pass's map gave {other:?}, not BackendError::GatherKind"
+        )),
+    }
+}
+
+/// `gather-kinds` (dynamic tier): every kind a move gathers, on slots of which every third is
+/// flagged updated, so that each kind's choice of who gathers and who is served shows.
+pub(super) fn check_every_kind(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+) -> Result<String, String> {
+    let mut bench = Bench::new(make, o)?;
+    bench.run(&ORDINARY)?.verdict()?;
+    bench.flag_every_third_updated()?;
+    let mut outcomes = Vec::new();
+    for step in &MOVE_STEPS {
+        outcomes.push(bench.run(step)?);
+    }
+    let failed: Vec<String> = outcomes.iter().filter_map(|o| o.verdict().err()).collect();
+    if !failed.is_empty() {
+        return Err(failed.join("; "));
+    }
+    let worst = outcomes
+        .iter()
+        .min_by_key(|o| o.checked - o.off)
+        .expect("steps ran");
+    Ok(format!(
+        "{} gathers of every kind as the gather rule by brute force; the least close: {worst}",
+        outcomes.len()
+    ))
+}
+
+/// How one gather compared.
+struct Outcome {
+    name: &'static str,
+    kind: u32,
+    checked: usize,
+    off: usize,
+}
+
+impl Outcome {
+    /// A photon at distance^2 within rounding of r2 may fall on either side: one slot in a
+    /// thousand may differ.
+    fn verdict(&self) -> Result<(), String> {
+        match self.off * 1000 > self.checked {
+            true => Err(format!(
+                "kind {:#x} ({}): {} of {} slots differ from the gather rule applied by brute force",
+                self.kind, self.name, self.off, self.checked
+            )),
+            false => Ok(()),
+        }
+    }
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "kind {:#x} ({}), {} of {} slots match",
+            self.kind,
+            self.name,
+            self.checked - self.off,
+            self.checked
+        )
+    }
+}
+
+/// A backend with one eye pass traced, and the host's copy of the pending sums it cannot read
+/// back (compared when an apply folds them in).
+struct Bench {
+    backend: Box<dyn Backend>,
+    compiled: CompiledScene,
+    params: RenderParams,
+    pending: Vec<[f32; 4]>,
+    /// Emitting regions by [`region_mode`], around a box in the middle of the scene.
+    regions: [EmissionRegion; 2],
+    paths: Vec<RecordedPath>,
+    next_pass: u32,
+}
+
+impl Bench {
+    fn new(make: BackendFactory, o: &ConformanceOptions) -> Result<Self, String> {
+        let scene = cornell()?;
+        let mut params = params_for(&scene, o);
+        params.width = params.width.min(32);
+        params.height = params.height.min(32);
+        let compiled = compile_scene(&scene, params.width, params.height);
+        let mut backend = make().map_err(err)?;
+        backend.load_scene(&compiled).map_err(err)?;
+        backend
+            .eye_pass(&eye_params(&params, compiled.extent))
+            .map_err(err)?;
+        let slots = backend.read_hit_points().map_err(err)?.len();
+        let (lo, hi) = compiled
+            .triangles
+            .iter()
+            .flat_map(|t| {
+                let v0 = Vec3::from(t.v0);
+                [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)]
+            })
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        let (centre, half) = ((lo + hi) * 0.5, (hi - lo) * 0.1);
+        let corners: Vec<Vec3> = (0..8)
+            .map(|i| centre + half * Vec3::new(sign(i, 1), sign(i, 2), sign(i, 4)))
+            .collect();
+        let region = |mode| {
+            emitting_region(&compiled.lights, &corners, mode)
+                .map_err(|e| format!("no emitting region around the scene's centre: {e:?}"))
+        };
+        let regions = [region(region_mode::AREA)?, region(region_mode::POINT)?];
+        let paths = (0..16)
+            .map(|path| {
+                let key = StreamKey {
+                    seed: params.seed,
+                    kind: PassKind::Photon,
+                    pass_index: 0,
+                    path,
+                };
+                let e = ordinary_emission(&compiled.lights, &compiled.materials, &key);
+                RecordedPath {
+                    origin: e.origin.into(),
+                    light: e.light,
+                    direction: e.direction.into(),
+                    _pad0: 0,
+                }
+            })
+            .collect();
+        Ok(Self {
+            backend,
+            compiled,
+            params,
+            pending: vec![[0.0; 4]; slots],
+            regions,
+            paths,
+            next_pass: 0,
+        })
+    }
+
+    /// Flags every third slot `UPDATED`, as a hit-point update would after a move.
+    fn flag_every_third_updated(&mut self) -> Result<(), String> {
+        let mut slots = self.backend.read_hit_points().map_err(err)?;
+        for hp in slots.iter_mut().step_by(3) {
+            hp.flags |= hit_flags::UPDATED;
+        }
+        self.backend.write_hit_points(&slots).map_err(err)
+    }
+
+    /// Runs `step` on the backend and on the host, from the slots the backend holds before it.
+    fn run(&mut self, step: &Step) -> Result<Outcome, String> {
+        let before = self.backend.read_hit_points().map_err(err)?;
+        let n = self.params.photons_per_pass;
+        let apply = step.kind & gather_kind::KIND_MASK == gather_kind::REGION_APPLY;
+        let (photons, weights, r2_floor) = match apply {
+            true => (Vec::new(), Vec::new(), 0.0),
+            false => self.photon_pass(step, n)?,
+        };
+        let grows = matches!(
+            step.kind & gather_kind::KIND_MASK,
+            gather_kind::ORDINARY | gather_kind::GUIDED
+        );
+        let gather = GatherParams {
+            alpha: self.params.alpha,
+            emitted_increment: if grows { n as f32 } else { 0.0 },
+            kind: step.kind,
+            region_photons: n as f32,
+        };
+        self.backend.gather_pass(&gather).map_err(err)?;
+        let after = self.backend.read_hit_points().map_err(err)?;
+        let r2_initial = self.params.initial_radius * self.params.initial_radius;
+        let expected: Vec<SlotState> = before
+            .iter()
+            .zip(&self.pending)
+            .map(|(hp, pending)| {
+                let gathering = !apply && gathers(hp.flags, step.kind);
+                let (reflectance, found) = match gathering {
+                    true => (
+                        self.reflectance(hp),
+                        found_by_brute_force(hp, &photons, &weights, r2_floor),
+                    ),
+                    false => (Vec3::ZERO, Found::default()),
+                };
+                let state = SlotState::of(hp, *pending);
+                gather_rule(&gather, r2_initial, reflectance.into(), state, &found)
+            })
+            .collect();
+        self.pending = expected.iter().map(|s| s.pending).collect();
+        Ok(Outcome {
+            name: step.name,
+            kind: step.kind,
+            checked: after.len(),
+            off: differing(&expected, &after),
+        })
+    }
+
+    /// Traces `step`'s photons for its kind; returns the deposits, the path weight of each
+    /// (recomputed from its path's random numbers, as the contract keys them) and the floor.
+    /// Deposits must carry the sign of the power scale: the host's rule, fed the backend's
+    /// own photons, would follow a mis-signed pass.
+    fn photon_pass(&mut self, step: &Step, n: u32) -> Result<(Vec<Photon>, Vec<f32>, f32), String> {
+        let r2_floor = (step.floor_radii * self.params.initial_radius).powi(2);
+        let params = PhotonPassParams {
+            gather_r2_floor: r2_floor,
+            ..pass_params::photon_pass(
+                &self.params,
+                self.compiled.extent,
+                self.next_pass,
+                n,
+                step.power_scale,
+                step.kind,
+            )
+        };
+        self.next_pass += 1;
+        let source = photon_source(&self.regions, &self.paths, step.source);
+        self.backend.photon_pass(&params, &source).map_err(err)?;
+        let photons = self.backend.read_photons().map_err(err)?;
+        if let Some(ph) = photons
+            .iter()
+            .find(|ph| ph.power.iter().any(|&c| c * step.power_scale < 0.0))
+        {
+            return Err(format!(
+                "kind {:#x} ({}): a photon pass of power scale {} deposits power {:?} (path {})",
+                step.kind, step.name, step.power_scale, ph.power, ph.path
+            ));
+        }
+        let weights = photons
+            .iter()
+            .map(|ph| match source.keeps_weights() {
+                true => {
+                    let key = StreamKey {
+                        seed: params.seed,
+                        kind: source.pass_kind(),
+                        pass_index: params.pass_index,
+                        path: ph.path,
+                    };
+                    let c = &self.compiled;
+                    source.emit(&c.lights, &c.materials, &key).weight
+                }
+                false => 1.0,
+            })
+            .collect();
+        Ok((photons, weights, r2_floor))
+    }
+
+    /// The slot's eye-path throughput times its diffuse BRDF.
+    fn reflectance(&self, hp: &HitPoint) -> Vec3 {
+        let albedo = Vec3::from(self.compiled.materials[hp.material as usize].albedo);
+        Vec3::from(hp.throughput) * albedo * FRAC_1_PI
+    }
+}
+
+/// The contract's form of `source`.
+fn photon_source<'a>(
+    regions: &[EmissionRegion; 2],
+    paths: &'a [RecordedPath],
+    source: Source,
+) -> PhotonSource<'a> {
+    match source {
+        Source::Lights => PhotonSource::Lights,
+        Source::Region(mode) => PhotonSource::Region(regions[mode as usize]),
+        Source::Guided => PhotonSource::Guided {
+            guide: GuidedEmission {
+                cos_cone: 10f32.to_radians().cos(),
+                beta: 0.25,
+                paths: paths.len() as u32,
+                weighted: 1,
+            },
+            paths,
+        },
+    }
+}
+
+fn sign(i: u32, bit: u32) -> f32 {
+    if i & bit == 0 { -1.0 } else { 1.0 }
+}
+
+/// What `hp` finds among `photons` within its radius, or the floor's wider disc scaled to its
+/// own ([`Found`]).
+fn found_by_brute_force(
+    hp: &HitPoint,
+    photons: &[Photon],
+    weights: &[f32],
+    r2_floor: f32,
+) -> Found {
+    let r2 = hp.r2.max(r2_floor);
+    let (x, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
+    let (mut count, mut weight, mut flux, mut power_sq) = (0u32, 0.0, Vec3::ZERO, 0.0);
+    for (ph, w) in photons.iter().zip(weights) {
+        if (Vec3::from(ph.position) - x).length_squared() < r2 && oct_faces(ph.normal_oct, normal) {
+            count += 1;
+            weight += w;
+            flux += Vec3::from(ph.power);
+            power_sq += luminance(ph.power).powi(2);
+        }
+    }
+    let shrink = if r2_floor > hp.r2 {
+        hp.r2 / r2_floor
+    } else {
+        1.0
+    };
+    Found {
+        flux: (flux * shrink).into(),
+        count: count as f32,
+        weight: weight * shrink,
+        power_sq: power_sq * shrink * shrink,
+        _pad: [0.0; 2],
+    }
+}
+
+/// Slots whose statistics differ from `expected` beyond f32 summation order: relative 1e-4 of
+/// the slot's value, or a millionth of the largest value of that field over the slots.
+fn differing(expected: &[SlotState], got: &[HitPoint]) -> usize {
+    let fields = |s: &SlotState| [s.n, s.r2, s.tau[0], s.tau[1], s.tau[2], s.emitted];
+    let got_fields = |h: &HitPoint| [h.n, h.r2, h.tau[0], h.tau[1], h.tau[2], h.emitted];
+    let mut scale = [0f32; 6];
+    for s in expected {
+        for (m, v) in scale.iter_mut().zip(fields(s)) {
+            *m = m.max(v.abs());
+        }
+    }
+    expected
+        .iter()
+        .zip(got)
+        .filter(|(e, g)| {
+            let close = |(a, b, m): (f32, f32, f32)| {
+                (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-6 * m
+            };
+            let (e, g) = (fields(e), got_fields(g));
+            !(0..6).map(|i| (e[i], g[i], scale[i])).all(close)
+        })
+        .count()
+}
