@@ -7,7 +7,9 @@
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
 //! last ten) and per move (mean and largest), their ratio, and the slots the moves reset and
 //! corrected on average. Figures only, no threshold: machines are noisy, compare rows of one
-//! run. `PPM_BENCH_BACKENDS` (default `cpu,wgpu`) and `PPM_BENCH_SCENES` choose the rows.
+//! run. `PPM_BENCH_BACKENDS` (default `cpu,wgpu`) and `PPM_BENCH_SCENES` choose the rows;
+//! `PPM_BENCH_CORRECTION_PASSES` caps local mode's correction (0: none, the move's fixed
+//! cost).
 
 mod common;
 
@@ -23,6 +25,11 @@ fn main() {
     let warmup: u32 = setting("PPM_BENCH_WARMUP", 30);
     let moves: u32 = setting("PPM_BENCH_MOVES", 30);
     let size: u32 = setting("PPM_BENCH_SIZE", 256);
+    let defaults = MoveParams::default();
+    let move_params = MoveParams {
+        correction_passes: setting("PPM_BENCH_CORRECTION_PASSES", defaults.correction_passes),
+        ..defaults
+    };
     let backends = backends();
     let scenes = std::env::var("PPM_BENCH_SCENES")
         .unwrap_or_else(|_| "cornell-box,cornell-bunny,wedding-band".into());
@@ -52,8 +59,8 @@ fn main() {
         let mut p = RenderParams::for_scene(&scene);
         (p.width, p.height) = (size, size);
         let row = |backend: &mut dyn Backend| {
-            let mut r = Renderer::start(backend, scene.clone(), &p, &MoveParams::default())
-                .expect("the scene loads");
+            let mut r =
+                Renderer::start(backend, scene.clone(), &p, &move_params).expect("the scene loads");
             let mut iteration_ms = Vec::new();
             for _ in 0..warmup {
                 let t = Instant::now();

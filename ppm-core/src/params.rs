@@ -258,8 +258,8 @@ pub struct MoveParams {
     /// ordinary pass).
     pub difference_passes: u32,
     /// Local mode's correction photons per pose at most, in ordinary passes' worth; a move
-    /// uses fewer after a short history ([`MoveParams::correction_for`]). They are traced as
-    /// one pass per pose, gathered once.
+    /// uses fewer after a short history, down to [`MIN_CORRECTION_SHARE`] of a pass
+    /// ([`MoveParams::correction_for`]). They are traced as one pass per pose, gathered once.
     pub correction_passes: u32,
     /// Local mode gathers a one-pass correction within at least this many initial radii (0:
     /// each slot's own radius), a larger one within less ([`MoveParams::correction_for`]).
@@ -273,28 +273,32 @@ pub struct MoveParams {
 /// ([`MoveParams::correction_for`]).
 pub const ITERATIONS_PER_CORRECTION_PASS: u32 = 64;
 
+/// The smallest local correction, in ordinary passes' worth of photons: a drag step, whose
+/// history is an iteration or two, gets this much ([`MoveParams::correction_for`]).
+pub const MIN_CORRECTION_SHARE: f32 = 0.25;
+
 impl MoveParams {
     /// Local mode's correction for a move that keeps `history` iterations (those since the
-    /// last move or the start): ordinary passes' worth of photons per pose, and the disc, in
-    /// initial radii, they are gathered within at least.
+    /// last move or the start): ordinary passes' worth of photons per pose (0: none), and
+    /// the disc, in initial radii, they are gathered within at least.
     ///
     /// A kept slot weighs its history against the correction's noise
     /// ([`crate::update::history_kept`]), so a long history is worth a large correction and a
     /// short one, as in a drag that moves at every iteration, a small and quick one: one pass
-    /// per [`ITERATIONS_PER_CORRECTION_PASS`] iterations, at least one, at most
-    /// `correction_passes`. The disc narrows as `passes^(-1/6)`, a density estimate's
-    /// bandwidth rule in two dimensions, trading the correction's noise for its blur of the
-    /// change. Measured after 15 s of warm-up (about 500 iterations) on cornell-box, local
-    /// mode reached restart's error 8 s after the move 4.00 s after it with 2 passes within 3
-    /// radii, 1.88 s with 8 within 3, 1.26 s with 8 within 2, and 1.39 s with 16 within 2
-    /// (whose move cost 531 ms).
-    pub fn correction_for(&self, history: u32) -> (u32, f32) {
-        let passes = history
-            .div_ceil(ITERATIONS_PER_CORRECTION_PASS)
-            .clamp(1, self.correction_passes.max(1))
-            .min(self.correction_passes);
-        let radii = self.correction_radii * (passes.max(1) as f32).powf(-1.0 / 6.0);
-        (passes, radii)
+    /// per [`ITERATIONS_PER_CORRECTION_PASS`] iterations, at least [`MIN_CORRECTION_SHARE`]
+    /// of one, at most `correction_passes`. The disc narrows as `passes^(-1/6)`, a density
+    /// estimate's bandwidth rule in two dimensions, trading the correction's noise for its
+    /// blur of the change. Measured after 15 s of warm-up (about 500 iterations) on
+    /// cornell-box, local mode reached restart's error 8 s after the move 4.00 s after it
+    /// with 2 passes within 3 radii, 1.88 s with 8 within 3, 1.26 s with 8 within 2, and
+    /// 1.39 s with 16 within 2 (whose move cost 531 ms).
+    pub fn correction_for(&self, history: u32) -> (f32, f32) {
+        if self.correction_passes == 0 {
+            return (0.0, self.correction_radii);
+        }
+        let share = (history as f32 / ITERATIONS_PER_CORRECTION_PASS as f32)
+            .clamp(MIN_CORRECTION_SHARE, self.correction_passes as f32);
+        (share, self.correction_radii * share.powf(-1.0 / 6.0))
     }
 
     /// Checks every setting; `source` names where they came from in the error.
@@ -354,10 +358,11 @@ mod tests {
     #[test]
     fn a_local_correction_grows_with_the_history_it_keeps_within_its_bounds() {
         let moves = MoveParams::default();
-        let mut last = (0, f32::INFINITY);
-        for history in [0, 1, 64, 65, 200, 500, 10_000] {
+        let mut last = (0.0, f32::INFINITY);
+        let most = moves.correction_passes as f32;
+        for history in [0, 1, 16, 17, 64, 65, 200, 500, 10_000] {
             let (passes, radii) = moves.correction_for(history);
-            assert!((1..=moves.correction_passes).contains(&passes), "{history}");
+            assert!((MIN_CORRECTION_SHARE..=most).contains(&passes), "{history}");
             assert!(
                 passes >= last.0 && radii <= last.1,
                 "{history}: {passes}, {radii}"
@@ -366,17 +371,18 @@ mod tests {
         }
         assert_eq!(
             moves.correction_for(1).0,
-            1,
-            "a drag step corrects with one pass"
+            MIN_CORRECTION_SHARE,
+            "a drag step corrects with the smallest share of a pass"
         );
-        assert_eq!(last.0, moves.correction_passes);
+        assert_eq!(moves.correction_for(64).0, 1.0);
+        assert_eq!(last.0, most);
         let none = MoveParams {
             correction_passes: 0,
             ..MoveParams::default()
         };
         assert_eq!(
             none.correction_for(500).0,
-            0,
+            0.0,
             "no correction asked, none traced"
         );
     }

@@ -11,8 +11,8 @@
 //!   group (pose A); or the pixel lies under pose B's outline ([`covered_pixels`],
 //!   conservative) and pose B comes nearer the eye than the farthest vertex its paths reached;
 //!   or its paths bounced, their box meets a moved object's box in pose B, and one of
-//!   [`PROBE_PATHS`] eye paths traced in pose B through random points of the pixel meets a
-//!   moved object ([`Renderer::probe`]);
+//!   [`PROBE_PATHS`](super::probe::PROBE_PATHS) eye paths traced in pose B through random points of the pixel meets a
+//!   moved object ([`super::probe`], on the host);
 //! - any other slot keeps its visible points, the light it saw directly and its photon
 //!   statistics. Its direct light can change only through shadow or cosine rays from its
 //!   visible points to a light that cross a moved object's box in either pose: where a
@@ -41,12 +41,12 @@
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
 use super::moves::{Compensation, MoveReport};
-use super::{Renderer, dynamic};
+use super::probe::{self, ProbeSettings};
+use super::{Renderer, dynamic, pass_params};
 use glam::Vec3;
 use ppm_core::compile::{CompiledScene, mover_boxes, object_group};
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, HitPoint, SlotBounds, direct_accumulate, eye_flags,
-    gather_kind, hit_flags,
+    DirectLightParams, HitPoint, SlotBounds, direct_accumulate, gather_kind, hit_flags,
 };
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
@@ -63,15 +63,6 @@ pub const CORRECTION_SAMPLES: u32 = 8;
 
 /// Keys the correction's random numbers apart from every iteration's.
 const CORRECTION_SEED: u32 = 0x5eed_c0de;
-
-/// Eye paths per pixel that `Renderer::probe` traces in the new pose, through independent
-/// random points of it: an object that covers an eighth of what a pixel sees through a
-/// mirror is missed with probability (7/8)^32 = 1.4%, a sixteenth with 13%. A pixel kept
-/// that way holds a sliver of stale light, which its later iterations dilute.
-pub const PROBE_PATHS: u32 = 32;
-
-/// Keys the probe's random numbers apart from every iteration's.
-const PROBE_SEED: u32 = 0x9b0b_e5ed;
 
 /// Lights up to which the direct-light test takes each emitting triangle's box; beyond, the
 /// box around all of them.
@@ -128,12 +119,16 @@ impl Renderer<'_> {
     ///
     /// [`MoveParams::correction_for`]: ppm_core::params::MoveParams::correction_for
     fn local_correction(&self) -> (u32, Compensation) {
-        let (passes, radii) = self.moves.correction_for(self.counters.steps_since_move);
+        let (share, radii) = self.moves.correction_for(self.counters.steps_since_move);
+        // At most `correction_passes` passes' worth, which the options hold under 2^32.
+        let photons = (f64::from(share) * f64::from(self.params.photons_per_pass)).round();
+        let photons = photons.min(f64::from(u32::MAX)) as u32;
         let correction = Compensation::Difference {
-            correction_passes: Some(passes),
+            correction_photons: Some(photons),
             r2_floor: (radii * self.params.initial_radius).powi(2),
         };
-        (passes, correction)
+        // Pass indices advance by whole passes, so no two moves share random numbers.
+        (share.ceil() as u32, correction)
     }
 
     /// Moves the `changed` objects to their pose in `next`: the resets, then difference
@@ -289,11 +284,7 @@ impl Renderer<'_> {
             .enumerate()
             .map(|(i, hp)| !decided(i, hp) && chained(i, hp))
             .collect();
-        let met_in_b = if undecided.iter().any(|&u| u) {
-            self.probe(compiled, &slots, &undecided, moved.groups)?
-        } else {
-            Vec::new()
-        };
+        let met_in_b = self.probe(compiled, &slots, &undecided, moved.groups);
         let lights = self.light_boxes();
         let boxes: Vec<Aabb> = moved.before.iter().chain(&moved.after).copied().collect();
         let direct_may_change = |b: &Aabb| {
@@ -349,46 +340,39 @@ impl Renderer<'_> {
         vec![boxes.iter().skip(1).fold(boxes[0], |a, b| a.union(b))]
     }
 
-    /// Per pixel, whether one of [`PROBE_PATHS`] eye paths through random points of it
-    /// meets one of the moved `groups` in the pose `next` holds, for the `probed` slots: the
-    /// test for paths past a mirror or glass bounce, which the screen cannot judge. Every
-    /// other slot rests, so the probe costs in proportion to the slots it decides. Leaves
-    /// scratch in the slots (the caller writes them back) and pose B loaded.
+    /// Per pixel, whether the probe's paths through it meet one of the moved `groups` in
+    /// pose `next`, for the pixels of the `probed` slots ([`super::probe`]); empty when
+    /// none is probed.
     fn probe(
-        &mut self,
+        &self,
         next: &CompiledScene,
         slots: &[HitPoint],
         probed: &[bool],
         groups: u32,
-    ) -> Result<Vec<bool>, BackendError> {
-        // A kept slot continues its own sample sequence from `iterations` and rests from
-        // `rest_at` on: the probed slots start theirs at 0, and each pass's own seed gives
-        // them a fresh point. `eye_met` is kept, so it gathers over the passes.
-        let scratch: Vec<HitPoint> = slots
+    ) -> Vec<bool> {
+        let mut pixels: Vec<u32> = slots
             .iter()
             .zip(probed)
-            .map(|(hp, &p)| HitPoint {
-                iterations: if p { 0 } else { u32::MAX },
-                eye_met: 0,
-                ..*hp
-            })
+            .filter(|(_, p)| **p)
+            .map(|(hp, _)| hp.pixel)
             .collect();
-        self.backend.write_hit_points(&scratch)?;
-        dynamic(self.backend)?.update_scene(next)?;
-        for path in 0..PROBE_PATHS {
-            let params = EyePassParams {
-                seed: self.params.seed ^ PROBE_SEED ^ path,
-                flags: eye_flags::KEEP_STATISTICS | eye_flags::JITTER | eye_flags::FOCUS,
-                rest_at: 1,
-                ..self.eye_params(path, true)
-            };
-            self.backend.eye_pass(&params)?;
+        if pixels.is_empty() {
+            return Vec::new();
         }
+        pixels.dedup();
+        let settings = ProbeSettings {
+            seed: self.params.seed,
+            max_depth: self.params.max_eye_depth,
+            ray_epsilon: pass_params::ray_epsilon(&self.params, self.extent),
+        };
         let mut met = vec![false; (self.params.width * self.params.height) as usize];
-        for hp in self.backend.read_hit_points()? {
-            met[hp.pixel as usize] |= hp.eye_met & groups != 0;
+        for (pixel, hit) in pixels
+            .iter()
+            .zip(probe::paths_meet(next, &pixels, groups, &settings))
+        {
+            met[*pixel as usize] |= hit;
         }
-        Ok(met)
+        met
     }
 }
 

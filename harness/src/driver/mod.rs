@@ -15,6 +15,7 @@ pub mod checkpoint;
 mod local;
 pub mod moves;
 pub mod pass_params;
+mod probe;
 pub mod schedule;
 
 pub use moves::{MoveReport, PhotonCounts};

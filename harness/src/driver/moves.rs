@@ -93,10 +93,10 @@ pub(super) enum Compensation {
         raw: bool,
     },
     Difference {
-        /// Local mode: ordinary passes' worth of photons in its one correction pass per pose,
-        /// which stores only deposits of paths that crossed a mover's box. `None`: difference
-        /// mode's `difference_passes` passes, storing every deposit.
-        correction_passes: Option<u32>,
+        /// Local mode: the photons of its one correction pass per pose, which stores only
+        /// deposits of paths that crossed a mover's box. `None`: difference mode's
+        /// `difference_passes` passes of ordinary photons, storing every deposit.
+        correction_photons: Option<u32>,
         /// Squared radius the passes are gathered within at least (local mode:
         /// [`MoveParams::correction_for`]; 0: each slot's own).
         ///
@@ -270,7 +270,7 @@ impl Renderer<'_> {
             MoveMode::Difference if vertices.is_empty() => return Err("nothing moves".to_owned()),
             MoveMode::Difference => {
                 return Ok(Compensation::Difference {
-                    correction_passes: None,
+                    correction_photons: None,
                     r2_floor: 0.0,
                 });
             }
@@ -327,23 +327,15 @@ impl Renderer<'_> {
                 }
             }
             Compensation::Difference {
-                correction_passes,
+                correction_photons,
                 r2_floor,
             } => {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
                 // Local mode's correction is one pass per pose: a gather per pass over every
                 // kept slot cost more than the photons (MoveParams::correction_passes).
-                let (n, passes) = match *correction_passes {
-                    Some(count) => {
-                        let n = self.params.photons_per_pass.checked_mul(count).ok_or_else(|| {
-                            BackendError::Limit(format!(
-                                "correction_passes: {count} passes of {} photons exceed 2^32 photons",
-                                self.params.photons_per_pass
-                            ))
-                        })?;
-                        (n, 1)
-                    }
+                let (n, passes) = match *correction_photons {
+                    Some(n) => (n, u32::from(n > 0)),
                     None => (self.params.photons_per_pass, self.moves.difference_passes),
                 };
                 let total = (n * passes) as f32;
@@ -352,7 +344,7 @@ impl Renderer<'_> {
                 // those: the others would store nothing.
                 let mut flags = 0;
                 let mut gathered = kind | gather_kind::DEFERRED;
-                if correction_passes.is_some() {
+                if correction_photons.is_some() {
                     gathered |= gather_kind::ADD_FLUX;
                     flags |= photon_flags::CHANGED_ONLY;
                     if self.moves.cull_uncrossed {

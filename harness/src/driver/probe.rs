@@ -1,0 +1,94 @@
+//! Local mode's probe of paths past a mirror or glass (docs/algorithm.md 3c): whether eye
+//! paths through random points of a pixel meet a moved object in the new pose. The screen
+//! cannot judge such a pixel, so its paths are traced, on the host with the CPU backend's
+//! scene, whatever backend renders: a handful of pixels' paths cost far less than as many
+//! full-image eye passes on the backend (each of which visits every slot), and every backend
+//! then resets the same slots.
+
+use backend_cpu::trace::SceneData;
+use glam::Vec3;
+use ppm_core::compile::{CompiledScene, camera_ray};
+use ppm_core::geometry::{Transport, specular_bounce};
+use ppm_core::layout::material_kind;
+use ppm_core::rng::{PassKind, StreamKey};
+use rayon::prelude::*;
+
+/// Eye paths per pixel the probe traces, through independent random points of it: an object
+/// that covers an eighth of what a pixel sees through a mirror is missed with probability
+/// (7/8)^32 = 1.4%, a sixteenth with 13%. A pixel kept that way holds a sliver of stale light,
+/// which its later iterations dilute.
+pub const PROBE_PATHS: u32 = 32;
+
+/// Keys the probe's random numbers apart from every iteration's.
+const PROBE_SEED: u32 = 0x9b0b_e5ed;
+
+/// How the probe's paths are traced: the render's seed, depth and ray offset.
+pub(super) struct ProbeSettings {
+    pub seed: u32,
+    pub max_depth: u32,
+    pub ray_epsilon: f32,
+}
+
+/// Per pixel of `pixels`, whether one of [`PROBE_PATHS`] eye paths through random points of
+/// it, traced in `pose`, meets one of the object `groups` (bits of
+/// [`ppm_core::compile::object_group`]), at any surface up to and including the first
+/// non-specular one.
+pub(super) fn paths_meet(
+    pose: &CompiledScene,
+    pixels: &[u32],
+    groups: u32,
+    settings: &ProbeSettings,
+) -> Vec<bool> {
+    let scene = SceneData::new(pose);
+    pixels
+        .par_iter()
+        .map(|&pixel| {
+            (0..PROBE_PATHS).any(|path| meets(&scene, pose, pixel, path, groups, settings))
+        })
+        .collect()
+}
+
+/// Whether path `path` through pixel `pixel` meets `groups`.
+fn meets(
+    scene: &SceneData,
+    pose: &CompiledScene,
+    pixel: u32,
+    path: u32,
+    groups: u32,
+    settings: &ProbeSettings,
+) -> bool {
+    let key = StreamKey {
+        seed: settings.seed ^ PROBE_SEED,
+        kind: PassKind::Eye,
+        pass_index: path,
+        path: pixel,
+    };
+    let camera = &pose.camera;
+    let px = (pixel % camera.width) as f32 + key.uniform(0);
+    let py = (pixel / camera.width) as f32 + key.uniform(1);
+    let mut dir = camera_ray(camera, px, py);
+    let mut origin = Vec3::from(camera.eye);
+    for depth in 0..=settings.max_depth {
+        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+            return false;
+        };
+        let tri = &scene.triangles[hit.triangle as usize];
+        if tri.group & groups != 0 {
+            return true;
+        }
+        let material = &scene.materials[tri.material as usize];
+        if material.kind == material_kind::DIFFUSE {
+            return false;
+        }
+        let position = origin + dir * hit.t;
+        let normal = Vec3::from(tri.normal);
+        let front = dir.dot(normal) < 0.0;
+        let facing = if front { normal } else { -normal };
+        let u = key.uniform(2 + depth);
+        let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
+        dir = bounce.dir;
+        let side = if bounce.transmitted { -facing } else { facing };
+        origin = position + side * settings.ray_epsilon;
+    }
+    false
+}
