@@ -10,13 +10,14 @@ use glam::Vec3;
 use ppm_core::compile::{CompiledScene, camera_ray};
 use ppm_core::geometry::{Transport, specular_bounce};
 use ppm_core::layout::material_kind;
-use ppm_core::rng::{PassKind, StreamKey};
+use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
 
-/// Eye paths per pixel the probe traces, through independent random points of it: an object
-/// that covers an eighth of what a pixel sees through a mirror is missed with probability
-/// (7/8)^32 = 1.4%, a sixteenth with 13%. A pixel kept that way holds a sliver of stale light,
-/// which its later iterations dilute.
+/// Eye paths per pixel the probe traces, through stratified random points of it (an
+/// Owen-scrambled Sobol sequence per pixel): an object that covers an eighth of what a pixel
+/// sees through a mirror would be missed by independent points with probability
+/// (7/8)^32 = 1.4%, a sixteenth with 13%, and stratified points spread further. A pixel kept
+/// that way holds a sliver of stale light, which its later iterations dilute.
 pub const PROBE_PATHS: u32 = 32;
 
 /// Keys the probe's random numbers apart from every iteration's.
@@ -43,17 +44,21 @@ pub(super) fn paths_meet(
     pixels
         .par_iter()
         .map(|&pixel| {
-            (0..PROBE_PATHS).any(|path| meets(&scene, pose, pixel, path, groups, settings))
+            let points = StratifiedStream::new(settings.seed ^ PROBE_SEED, PassKind::Eye, pixel);
+            (0..PROBE_PATHS).any(|path| {
+                let (jx, jy) = points.pair(0, path);
+                meets(&scene, pose, pixel, (path, jx, jy), groups, settings)
+            })
         })
         .collect()
 }
 
-/// Whether path `path` through pixel `pixel` meets `groups`.
+/// Whether path `path` through point `(jx, jy)` of pixel `pixel` meets `groups`.
 fn meets(
     scene: &SceneData,
     pose: &CompiledScene,
     pixel: u32,
-    path: u32,
+    (path, jx, jy): (u32, f32, f32),
     groups: u32,
     settings: &ProbeSettings,
 ) -> bool {
@@ -64,8 +69,8 @@ fn meets(
         path: pixel,
     };
     let camera = &pose.camera;
-    let px = (pixel % camera.width) as f32 + key.uniform(0);
-    let py = (pixel / camera.width) as f32 + key.uniform(1);
+    let px = (pixel % camera.width) as f32 + jx;
+    let py = (pixel / camera.width) as f32 + jy;
     let mut dir = camera_ray(camera, px, py);
     let mut origin = Vec3::from(camera.eye);
     for depth in 0..=settings.max_depth {
@@ -84,7 +89,7 @@ fn meets(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        let u = key.uniform(2 + depth);
+        let u = key.uniform(depth);
         let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
