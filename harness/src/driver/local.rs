@@ -11,8 +11,9 @@
 //!   group (pose A); or the pixel lies under pose B's outline ([`covered_pixels`],
 //!   conservative) and pose B comes nearer the eye than the farthest vertex its paths reached;
 //!   or its paths bounced, their box meets a moved object's box in pose B, and one of
-//!   [`PROBE_PATHS`](super::probe::PROBE_PATHS) eye paths traced in pose B through random points of the pixel meets a
-//!   moved object ([`super::probe`], on the host);
+//!   [`PROBE_PATHS`](super::probe::PROBE_PATHS) eye paths traced in pose B through
+//!   stratified random points of the pixel meets a moved object ([`super::probe`], traced on
+//!   the host);
 //! - any other slot keeps its visible points, the light it saw directly and its photon
 //!   statistics. Its direct light can change only through shadow or cosine rays from its
 //!   visible points to a light that cross a moved object's box in either pose: where a
