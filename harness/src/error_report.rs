@@ -343,8 +343,8 @@ pub fn csv(runs: &[ModeRun]) -> String {
     s
 }
 
-/// The log-log chart of the runs, with the perfect-compensation curve dashed in grey, as
-/// `stem.png` and `stem.svg`.
+/// The log-log chart of the runs, with the perfect-compensation curve dashed in grey where
+/// it was measured (it needs the restart run), as `stem.png` and `stem.svg`.
 pub fn chart(
     stem: &Path,
     scene: &str,
@@ -371,12 +371,14 @@ pub fn chart(
             dashed: false,
         })
         .collect();
-    series.push(Series {
-        name: "perfect",
-        colour: [0.55; 3],
-        points: perfect.to_vec(),
-        dashed: true,
-    });
+    if !perfect.is_empty() {
+        series.push(Series {
+            name: "perfect",
+            colour: [0.55; 3],
+            points: perfect.to_vec(),
+            dashed: true,
+        });
+    }
     write_loglog_chart(
         stem,
         &format!("{scene}: error after the move"),

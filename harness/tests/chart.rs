@@ -73,3 +73,45 @@ fn chart_is_written_as_png_and_svg_with_every_legend_name() {
         assert!(texts.contains(&tick), "no tick labelled {tick}: {texts:?}");
     }
 }
+
+/// The report's chart names the perfect-compensation bound only where it was measured (it
+/// needs a restart run): a run of local mode alone draws no empty "perfect" entry.
+#[test]
+fn an_unmeasured_perfect_bound_is_left_off_the_report_chart() {
+    use harness::error_report::{Measurement, ModeRun, chart};
+    use ppm_core::params::MoveMode;
+    let dir = std::env::temp_dir().join(format!("ppm-chart-perfect-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let measurements = (1..=8)
+        .map(|i| Measurement {
+            mode: MoveMode::Local,
+            seconds: 0.25 * f64::from(i),
+            rel_rmse: 0.1 / f64::from(i).sqrt(),
+            kept: 0.08 / f64::from(i).sqrt(),
+            reset: 0.06 / f64::from(i).sqrt(),
+            passes: i,
+        })
+        .collect();
+    let local = ModeRun {
+        mode: MoveMode::Local,
+        moves: Vec::new(),
+        counts: Default::default(),
+        r2_initial: 1.0,
+        measurements,
+        kept_slope: None,
+        brightest_after_move: None,
+        brightest_final: None,
+        iteration_ms: None,
+    };
+    let legend = |perfect: &[(f64, f64)]| {
+        let stem = dir.join("chart");
+        chart(&stem, "cornell-box", std::slice::from_ref(&local), perfect).unwrap();
+        std::fs::read_to_string(stem.with_extension("svg")).unwrap()
+    };
+    let without = legend(&[]);
+    let with = legend(&[(0.25, 0.05), (2.0, 0.02)]);
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(without.contains("local"), "the local curve is not named");
+    assert!(!without.contains("perfect"), "an empty bound is named");
+    assert!(with.contains("perfect"), "a measured bound is not named");
+}
