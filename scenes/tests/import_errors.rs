@@ -166,3 +166,46 @@ fn files_cut_short_anywhere_are_errors_not_panics() {
         Err(SceneError::At { .. }) | Err(SceneError::Invalid { .. })
     ));
 }
+
+/// An `Integrator "sppm"` sets what means the same here: the initial radius, photons per
+/// iteration (-1: one per pixel, as pbrt), the iterations. Another integrator's settings
+/// leave ours, and a radius or count that cannot be one is refused naming it.
+#[test]
+fn pbrt_sppm_settings_become_the_render_defaults() {
+    let with = |integrator: &str| {
+        let text = format!("{integrator}\n{PBRT_OK}");
+        pbrt::parse_pbrt(&text, "t.pbrt", Path::new("."), "t").map(|s| s.render)
+    };
+    let sppm = with(
+        r#"Integrator "sppm" "float radius" [ 0.01 ] "integer photonsperiteration" [ 20000 ] "integer iterations" [ 32 ] "integer maxdepth" [ 5 ]"#,
+    )
+    .unwrap();
+    assert_eq!(
+        (sppm.initial_radius, sppm.photons_per_pass, sppm.passes),
+        (0.01, 20_000, 32)
+    );
+    let per_pixel = with(r#"Integrator "sppm" "integer photonsperiteration" [ -1 ]"#).unwrap();
+    assert_eq!(per_pixel.photons_per_pass, 64 * 48);
+    let plain = pbrt::parse_pbrt(PBRT_OK, "t.pbrt", Path::new("."), "t")
+        .unwrap()
+        .render;
+    let path = with(r#"Integrator "volpath" "integer maxdepth" [ 5 ]"#).unwrap();
+    assert_eq!(path, plain, "another integrator's settings are not ours");
+    for (bad, named) in [
+        (r#"Integrator "sppm" "float radius" [ -1 ]"#, "radius"),
+        (
+            r#"Integrator "sppm" "integer photonsperiteration" [ 0 ]"#,
+            "photonsperiteration",
+        ),
+        (
+            r#"Integrator "sppm" "integer iterations" [ 2.5 ]"#,
+            "iterations",
+        ),
+    ] {
+        let e = with(bad).unwrap_err().to_string();
+        assert!(
+            e.starts_with("t.pbrt:1: Integrator") && e.contains(named),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -5,9 +5,9 @@ use crate::file::interop::{SceneBuilder, camera_pose, look_at, mesh_triangles, s
 use crate::file::mesh::{MeshData, read_ply};
 use crate::file::scene_file::SceneSource;
 use glam::{DMat4, DQuat, DVec3, Vec3};
-use ppm_core::scene::Scene;
 use ppm_core::scene::SceneError;
 use ppm_core::scene::{Camera, MaterialKind, Object};
+use ppm_core::scene::{MAX_COORDINATE, RenderDefaults, Scene};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -42,6 +42,7 @@ pub fn parse_pbrt(
         default_material: None,
         camera: None,
         resolution: (1280, 720),
+        sppm: SppmSettings::default(),
     };
     let mut i = 0;
     while i < tokens.len() {
@@ -71,7 +72,48 @@ pub fn parse_pbrt(
         ));
     };
     let (camera, mirrored) = reader.camera_model(camera)?;
-    reader.builder.finish(name, camera, mirrored)
+    let (sppm, resolution) = (reader.sppm, reader.resolution);
+    let mut scene = reader.builder.finish(name, camera, mirrored)?;
+    sppm.apply(&mut scene.render, resolution);
+    Ok(scene)
+}
+
+/// The settings of an `Integrator "sppm"` that mean what ours mean: its initial search
+/// radius, photons per iteration and iterations (pbrt-v4's `SPPMIntegrator`). Its `maxdepth`
+/// counts every bounce of a path, where ours bound eye paths through mirrors and glass and
+/// photon paths apart, and is not taken.
+#[derive(Default)]
+struct SppmSettings {
+    radius: Option<f32>,
+    photons_per_iteration: Option<PhotonsPerIteration>,
+    iterations: Option<u32>,
+}
+
+/// pbrt's `photonsperiteration`: a count, or -1 (its default) for one per pixel.
+#[derive(Clone, Copy)]
+enum PhotonsPerIteration {
+    Count(u32),
+    PerPixel,
+}
+
+impl SppmSettings {
+    /// Makes these the scene's render defaults; `resolution` is the film's, for one photon
+    /// per pixel.
+    fn apply(&self, render: &mut RenderDefaults, resolution: (u32, u32)) {
+        if let Some(r) = self.radius {
+            render.initial_radius = r;
+        }
+        match self.photons_per_iteration {
+            Some(PhotonsPerIteration::Count(n)) => render.photons_per_pass = n,
+            Some(PhotonsPerIteration::PerPixel) => {
+                render.photons_per_pass = resolution.0.saturating_mul(resolution.1).max(1);
+            }
+            None => {}
+        }
+        if let Some(n) = self.iterations {
+            render.passes = n;
+        }
+    }
 }
 
 /// How the current transform was built: pbrt's usual camera set-up (`Scale -1 1 1` and
@@ -119,6 +161,7 @@ struct Reader<'a> {
     default_material: Option<usize>,
     camera: Option<CameraDirective>,
     resolution: (u32, u32),
+    sppm: SppmSettings,
 }
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -255,7 +298,8 @@ impl Reader<'_> {
                     }
                 }
             }
-            "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" | "ColorSpace" | "Option" => {}
+            "Integrator" => self.integrator(&d)?,
+            "Sampler" | "PixelFilter" | "Accelerator" | "ColorSpace" | "Option" => {}
             "WorldBegin" => self.set(DMat4::IDENTITY, Built::Identity),
             "WorldEnd" => {}
             "Material" => {
@@ -309,6 +353,39 @@ impl Reader<'_> {
     fn apply(&mut self, m: DMat4, built: Built) {
         self.state.ctm *= m;
         self.state.built = built;
+    }
+
+    /// Reads an `Integrator "sppm"`'s settings that mean what ours do ([`SppmSettings`]);
+    /// another integrator's settings are another method's, and are ignored.
+    fn integrator(&mut self, d: &Directive) -> Result<()> {
+        if d.string(0)? != "sppm" {
+            return Ok(());
+        }
+        for p in d.params(1)? {
+            match p.name.as_str() {
+                "radius" => {
+                    let r = d.float(&p)?;
+                    if !(r.is_finite() && r > 0.0 && r <= MAX_COORDINATE) {
+                        return Err(d.param_err(
+                            &p,
+                            format!("{r} is not a radius in (0, {MAX_COORDINATE:e}]"),
+                        ));
+                    }
+                    self.sppm.radius = Some(r);
+                }
+                "photonsperiteration" => {
+                    let count = match d.float(&p)? {
+                        -1.0 => PhotonsPerIteration::PerPixel,
+                        _ => PhotonsPerIteration::Count(d.positive(&p)?),
+                    };
+                    self.sppm.photons_per_iteration = Some(count);
+                }
+                "iterations" | "numiterations" => self.sppm.iterations = Some(d.positive(&p)?),
+                // maxdepth (see SppmSettings), seed, imagewritefrequency.
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     fn camera_directive(&mut self, d: &Directive) -> Result<()> {
