@@ -258,8 +258,8 @@ pub struct MoveParams {
     /// ordinary pass).
     pub difference_passes: u32,
     /// Local mode's correction photons per pose at most, in ordinary passes' worth; a move
-    /// uses fewer after a short history, down to [`MIN_CORRECTION_SHARE`] of a pass
-    /// ([`MoveParams::correction_for`]). They are traced as one pass per pose, gathered once.
+    /// uses fewer after a short history, down to one pass ([`MoveParams::correction_for`]).
+    /// They are traced as one pass per pose, gathered once.
     pub correction_passes: u32,
     /// Local mode gathers a one-pass correction within at least this many initial radii (0:
     /// each slot's own radius), a larger one within less ([`MoveParams::correction_for`]).
@@ -273,10 +273,6 @@ pub struct MoveParams {
 /// ([`MoveParams::correction_for`]).
 pub const ITERATIONS_PER_CORRECTION_PASS: u32 = 64;
 
-/// The smallest local correction, in ordinary passes' worth of photons: a drag step, whose
-/// history is an iteration or two, gets this much ([`MoveParams::correction_for`]).
-pub const MIN_CORRECTION_SHARE: f32 = 0.25;
-
 impl MoveParams {
     /// Local mode's correction for a move that keeps `history` iterations (those since the
     /// last move or the start): ordinary passes' worth of photons per pose (0: none), and
@@ -285,8 +281,9 @@ impl MoveParams {
     /// A kept slot weighs its history against the correction's noise
     /// ([`crate::update::history_kept`]), so a long history is worth a large correction and a
     /// short one, as in a drag that moves at every iteration, a small and quick one: one pass
-    /// per [`ITERATIONS_PER_CORRECTION_PASS`] iterations, at least [`MIN_CORRECTION_SHARE`]
-    /// of one, at most `correction_passes`. The disc narrows as `passes^(-1/6)`, a density
+    /// per [`ITERATIONS_PER_CORRECTION_PASS`] iterations, at least one (a drag step with a
+    /// quarter or half of one was measurably worse right after the drag:
+    /// docs/error-vs-time.md), at most `correction_passes`. The disc narrows as `passes^(-1/6)`, a density
     /// estimate's bandwidth rule in two dimensions, trading the correction's noise for its
     /// blur of the change. Measured after 15 s of warm-up (about 500 iterations) on
     /// cornell-box, local mode reached restart's error 8 s after the move 4.00 s after it
@@ -297,7 +294,7 @@ impl MoveParams {
             return (0.0, self.correction_radii);
         }
         let share = (history as f32 / ITERATIONS_PER_CORRECTION_PASS as f32)
-            .clamp(MIN_CORRECTION_SHARE, self.correction_passes as f32);
+            .clamp(1.0, self.correction_passes as f32);
         (share, self.correction_radii * share.powf(-1.0 / 6.0))
     }
 
@@ -362,7 +359,7 @@ mod tests {
         let most = moves.correction_passes as f32;
         for history in [0, 1, 16, 17, 64, 65, 200, 500, 10_000] {
             let (passes, radii) = moves.correction_for(history);
-            assert!((MIN_CORRECTION_SHARE..=most).contains(&passes), "{history}");
+            assert!((1.0..=most).contains(&passes), "{history}");
             assert!(
                 passes >= last.0 && radii <= last.1,
                 "{history}: {passes}, {radii}"
@@ -371,8 +368,8 @@ mod tests {
         }
         assert_eq!(
             moves.correction_for(1).0,
-            MIN_CORRECTION_SHARE,
-            "a drag step corrects with the smallest share of a pass"
+            1.0,
+            "a drag step corrects with one pass"
         );
         assert_eq!(moves.correction_for(64).0, 1.0);
         assert_eq!(last.0, most);

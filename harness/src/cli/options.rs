@@ -148,8 +148,7 @@ pub struct MoveOptions {
     #[arg(long, default_value_t = 8)]
     pub difference_passes: u32,
     /// Local mode's correction photons per pose at most, in ordinary passes' worth (traced
-    /// as one pass): a move uses one pass per 64 iterations since the last move, at least a
-    /// quarter of one.
+    /// as one pass): a move uses one pass per 64 iterations since the last move, at least one.
     #[arg(long, default_value_t = 8)]
     pub correction_passes: u32,
     /// Local mode gathers a one-pass correction within at least this many initial radii (0:
