@@ -54,7 +54,6 @@ pub fn direct_light_main(
     scene: &SceneData,
     hit_points: &mut [HitPoint],
 ) -> DirectStats {
-    let correcting = params.accumulate == direct_accumulate::CORRECT;
     let rays = hit_points
         .par_iter_mut()
         .enumerate()
@@ -63,18 +62,12 @@ pub fn direct_light_main(
             if hp.flags & hit_flags::RESTING != 0 {
                 return 0;
             }
-            if correcting && hp.flags & hit_flags::DIRECT_MAY_CHANGE == 0 {
-                return 0;
-            }
             let (estimate, rays) = if hp.is_valid() {
                 slot_direct(params, scene, hp, slot as u32)
             } else {
                 (Vec3::ZERO, 0)
             };
-            if correcting {
-                let shift = params.sign * hp.iterations as f32 * estimate;
-                hp.direct = (Vec3::from(hp.direct) + shift).into();
-            } else if params.accumulate == direct_accumulate::ADD {
+            if params.accumulate == direct_accumulate::ADD {
                 hp.direct = (Vec3::from(hp.direct) + estimate).into();
                 hp.iterations += 1;
             } else {
@@ -88,8 +81,9 @@ pub fn direct_light_main(
 }
 
 /// One visible point's direct radiance towards the eye, throughput included, and the rays
-/// traced for it.
-fn slot_direct(
+/// traced for it; `slot` keys its random numbers. Local mode's direct-light correction
+/// calls it on the host at visible points of its own.
+pub fn slot_direct(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,

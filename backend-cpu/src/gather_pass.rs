@@ -6,7 +6,7 @@ use crate::photon_search::{Found, PhotonMap, RUN, photons_in_discs};
 use glam::Vec3;
 use ppm_core::layout::{GatherParams, GpuMaterial, HitPoint, gather_kind};
 use ppm_core::passes::GatherStats;
-use ppm_core::update::gather::{self, SlotState, gather_rule, gathers};
+use ppm_core::update::gather::{self, SlotState, disc_shrink, gather_rule, gathers, search_r2};
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 
@@ -53,7 +53,7 @@ pub fn gather_pass_main(
                     r2_initial,
                     reflectance.into(),
                     before,
-                    &scaled(found, map.r2_floor, hp.r2),
+                    &scaled(found, search_r2(hp, map.r2_floor), hp.r2),
                 );
                 (hp.n, hp.r2, hp.tau, hp.emitted) = (after.n, after.r2, after.tau, after.emitted);
                 *pending = after.pending;
@@ -67,11 +67,10 @@ pub fn gather_pass_main(
     }
 }
 
-/// What a slot found, scaled to its own disc: photons found in a floor disc wider than the
-/// slot's stand for their density over the slot's own disc (a slot's own disc, even of
-/// radius 0, scales nothing).
-fn scaled(found: Found, r2_floor: f32, r2: f32) -> gather::Found {
-    let shrink = if r2_floor > r2 { r2 / r2_floor } else { 1.0 };
+/// What a slot found within a disc of squared radius `searched`, scaled to its own disc of
+/// `r2` ([`disc_shrink`]; a slot's own disc, even of radius 0, scales nothing).
+fn scaled(found: Found, searched: f32, r2: f32) -> gather::Found {
+    let shrink = disc_shrink(r2, searched);
     gather::Found {
         flux: (found.flux * shrink).into(),
         count: found.count as f32,

@@ -7,7 +7,7 @@
 
 #![warn(missing_docs)]
 
-mod direct_light;
+pub mod direct_light;
 mod eye_pass;
 mod gather_pass;
 mod hit_point_update;

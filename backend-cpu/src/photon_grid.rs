@@ -7,6 +7,7 @@ use glam::Vec3;
 use ppm_core::geometry::oct_unfold;
 use ppm_core::grid::{RADIUS_BINS, bucket_count, cell_key, cell_of, cell_size, radius_bin};
 use ppm_core::layout::{GridParams, HitPoint, Photon};
+use ppm_core::update::gather::search_r2;
 use rayon::prelude::*;
 
 /// Cells are this many times as wide as [`ppm_core::grid`]'s. A gather looks each cell up once
@@ -53,7 +54,7 @@ pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint], r2_floor: 
         .fold(
             || vec![0u32; RADIUS_BINS as usize],
             |mut h, hp| {
-                h[radius_bin(hp.r2.max(r2_floor)) as usize] += 1;
+                h[radius_bin(search_r2(hp, r2_floor)) as usize] += 1;
                 h
             },
         )

@@ -28,6 +28,7 @@ use crate::photon_grid::{CellPhoton, PhotonGrid};
 use glam::Vec3;
 use ppm_core::grid::{cell_key, cell_range, cells_in, scan_instead};
 use ppm_core::layout::HitPoint;
+use ppm_core::update::gather::search_r2;
 use ppm_core::update::luminance;
 
 /// Slots searched together: consecutive pixels of a row.
@@ -274,14 +275,14 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
     found
 }
 
-/// Centre, normal and squared radius of the disc a slot gathers the map's photons within (its
-/// own radius, or the pass's floor).
+/// Centre, normal and squared radius of the disc a slot gathers the map's photons within
+/// ([`search_r2`]).
 #[inline]
 fn disc(hp: &HitPoint, map: &PhotonMap) -> (Vec3, Vec3, f32) {
     (
         Vec3::from(hp.position),
         Vec3::from(hp.normal),
-        hp.r2.max(map.r2_floor),
+        search_r2(hp, map.r2_floor),
     )
 }
 
@@ -397,12 +398,16 @@ mod tests {
 
     /// The grid finds exactly the photons a scan of all of them finds, at any scale and with a
     /// deposit far from the rest (which must not starve the others' buckets), within each
-    /// slot's radius or a pass's wider floor.
+    /// slot's radius or a pass's wider floor, or a slot's own wider correction disc, which
+    /// only a pass with a floor reads.
     #[test]
     fn the_grid_finds_what_a_brute_force_scan_finds() {
         let cases = [(1.0, 10.0), (1e-4, 1e-3), (1e4, 1e37), (1.0, 1e8)];
         for ((scale, far), floor) in cases.into_iter().flat_map(|c| [(c, 0.0), (c, 0.01)]) {
-            let (photons, hit_points) = case(scale, far);
+            let (photons, mut hit_points) = case(scale, far);
+            for hp in hit_points.iter_mut().step_by(3) {
+                hp.correction_r2 = 0.04 * scale * scale;
+            }
             let r2_floor = floor * scale * scale;
             let grid = build_photon_grid(&photons, &hit_points, r2_floor);
             let map = PhotonMap {
@@ -418,8 +423,11 @@ mod tests {
                 let expected: Vec<usize> = (0..photons.len())
                     .filter(|&i| {
                         let p = &photons[i];
-                        (Vec3::from(p.position) - Vec3::from(hp.position)).length_squared()
-                            < hp.r2.max(r2_floor)
+                        let r2 = match floor > 0.0 {
+                            true => hp.r2.max(r2_floor).max(hp.correction_r2),
+                            false => hp.r2,
+                        };
+                        (Vec3::from(p.position) - Vec3::from(hp.position)).length_squared() < r2
                             && oct_faces(p.normal_oct, n)
                     })
                     .collect();

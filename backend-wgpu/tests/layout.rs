@@ -62,7 +62,7 @@ fn buffer_elements_match_their_wgsl_twins() {
         iterations,
         flags,
         eye_met,
-        _pad1
+        correction_r2
     });
     same_layout!(Photon {
         position,
@@ -165,7 +165,7 @@ fn pass_parameters_match_their_wgsl_twins() {
         iteration,
         ray_epsilon,
         accumulate,
-        sign,
+        _pad0,
         _pad1,
         _pad2
     });
@@ -287,7 +287,6 @@ fn shared_constants_agree() {
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
         ("HIT_UPDATED", hit_flags::UPDATED),
-        ("HIT_DIRECT_MAY_CHANGE", hit_flags::DIRECT_MAY_CHANGE),
         ("HIT_RESTING", hit_flags::RESTING),
         ("HIT_EYE_CHAINED", hit_flags::EYE_CHAINED),
         ("HIT_OBJECT_SHIFT", hit_flags::OBJECT_SHIFT),

@@ -26,9 +26,8 @@ pub mod hit_flags {
     pub const FRONT: u32 = 2;
     /// The slot was reset by the last hit-point update (docs/algorithm.md 2.4).
     pub const UPDATED: u32 = 4;
-    /// Set by a local move on the kept slots whose direct light the move may change: the
-    /// paired correction ([`direct_accumulate::CORRECT`](super::direct_accumulate::CORRECT))
-    /// serves them alone.
+    /// Set by a local move on the kept slots whose direct light the move may change, whose
+    /// direct sums it corrected (docs/algorithm.md 3c); no pass reads it.
     pub const DIRECT_MAY_CHANGE: u32 = 16;
     /// The slot sits out this iteration's eye pass and direct light (an eye pass with
     /// [`eye_flags::FOCUS`](super::eye_flags::FOCUS) found it ahead of the slots a move reset):
@@ -93,8 +92,11 @@ pub struct HitPoint {
     /// eye paths met since its statistics started: a move of one of them changes what the
     /// slot saw (a local move resets it).
     pub eye_met: u32,
-    /// Padding.
-    pub _pad1: u32,
+    /// Squared radius of the disc this slot gathers a local move's correction within, when
+    /// wider than the pass's floor ([`search_r2`](crate::update::gather::search_r2)): the
+    /// driver widens it far from the moved objects, where the change is smooth. Written at a
+    /// move, read by no other gather.
+    pub correction_r2: f32,
 }
 
 impl HitPoint {
@@ -352,9 +354,8 @@ pub struct DirectLightParams {
     pub ray_epsilon: f32,
     /// One of [`direct_accumulate`].
     pub accumulate: u32,
-    /// With [`direct_accumulate::CORRECT`]: -1 in the pose before a move, +1 in the pose
-    /// after it.
-    pub sign: f32,
+    /// Padding.
+    pub _pad0: u32,
     /// Padding.
     pub _pad1: u32,
     /// Padding.
@@ -367,12 +368,6 @@ pub mod direct_accumulate {
     pub const REPLACE: u32 = 0;
     /// Add it to the sum as one more iteration (`sppm`).
     pub const ADD: u32 = 1;
-    /// Local mode's paired correction: only at kept slots flagged `DIRECT_MAY_CHANGE`, add
-    /// `sign * iterations * estimate` to the sum, the iteration count unchanged. Run with
-    /// the same random numbers before (`sign` -1) and after (+1) a move, the two passes
-    /// shift the slot's mean by an unbiased estimate of the change of its direct light; where
-    /// the move changed none of the rays, they cancel exactly.
-    pub const CORRECT: u32 = 2;
 }
 
 /// How the photon pass treats the first surface a photon meets after leaving the light.
@@ -416,8 +411,9 @@ pub struct PhotonPassParams {
     /// backend folds each batch into per-slot sums, searches only for the slots that kind
     /// gathers ([`crate::update::gather::gathers`]).
     pub gather_kind: u32,
-    /// Squared radius within which every slot gathers this pass's photons at least: a slot
-    /// whose `r2` is smaller searches this disc and scales what it finds by `r2 / floor`
+    /// Squared radius within which every slot gathers this pass's photons at least, or its
+    /// `correction_r2` where wider ([`search_r2`](crate::update::gather::search_r2)): a slot
+    /// whose `r2` is smaller searches that disc and scales what it finds by `r2` over it
     /// (local mode's correction, which a small converged disc would gather too noisily).
     /// Zero: each slot gathers within its own radius.
     pub gather_r2_floor: f32,

@@ -72,10 +72,6 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if (hp.flags & HIT_RESTING) != 0u {
         return;
     }
-    let correcting = params.accumulate == DIRECT_CORRECT;
-    if correcting && (hp.flags & HIT_DIRECT_MAY_CHANGE) == 0u {
-        return;
-    }
     var estimate = vec3<f32>(0.0);
     if (hp.flags & HIT_VALID) != 0u {
         let material = scene_material(hp.material);
@@ -88,10 +84,7 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     var direct = estimate;
     var iterations = 1u;
-    if correcting {
-        direct = hp.direct + params.sign * f32(hp.iterations) * estimate;
-        iterations = hp.iterations;
-    } else if params.accumulate == DIRECT_ADD {
+    if params.accumulate == DIRECT_ADD {
         direct = hp.direct + estimate;
         iterations = hp.iterations + 1u;
     }

@@ -73,7 +73,7 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
         return;
     }
     let g = grid;
-    let r2 = max(hp.r2, radii.y);
+    let r2 = search_r2(hp, radii.y);
     let r = sqrt(r2);
     let lo = cell_of(hp.position - vec3<f32>(r), g.cell_size);
     let hi = cell_of(hp.position + vec3<f32>(r), g.cell_size);
@@ -122,10 +122,10 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     if !WEIGHTED {
         weight = f32(found.m);
     }
-    // Photons found in a floor disc wider than the slot's stand for their density over the
-    // slot's own disc (as the CPU, weight and flux scaled, the count kept; a slot's own disc,
-    // even of radius 0, scales nothing).
-    let shrink = select(1.0, hp.r2 / radii.y, radii.y > hp.r2);
+    // Photons found in a disc wider than the slot's stand for their density over the slot's
+    // own disc (as the CPU, weight and flux scaled, the count kept; a slot's own disc, even of
+    // radius 0, scales nothing).
+    let shrink = disc_shrink(hp.r2, r2);
     weight *= shrink;
     accumulated[2u * slot] += vec4<f32>(found.flux * shrink, f32(found.m));
     accumulated[2u * slot + 1u] += vec4<f32>(weight, found.power_sq * shrink * shrink, 0.0, 0.0);

@@ -1,4 +1,4 @@
-// #import layout rng qmc grid
+// #import layout rng qmc sampling update grid
 // The per-pass photon map: the twin of backend-cpu's photon_grid.rs. Same cells (sized from a
 // histogram of the visible points' squared radii), same buckets, and the photons copied into
 // bucket order with ascending rank (the CPU's path order) within each bucket, so gathers sum
@@ -39,7 +39,7 @@ fn grid_histogram_main(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(wo
     workgroupBarrier();
     for (var i = wid.x * 64u + lid.x; i < params.hit_point_count; i += HISTOGRAM_GROUPS * 64u) {
         if (hit_points[i].flags & HIT_VALID) != 0u {
-            atomicAdd(&local_histogram[radius_bin(max(hit_points[i].r2, params.r2_floor))], 1u);
+            atomicAdd(&local_histogram[radius_bin(search_r2(hit_points[i], params.r2_floor))], 1u);
         }
     }
     workgroupBarrier();

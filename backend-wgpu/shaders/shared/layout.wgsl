@@ -8,7 +8,6 @@ const MATERIAL_GLASS: u32 = 2u;
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
 const HIT_UPDATED: u32 = 4u;
-const HIT_DIRECT_MAY_CHANGE: u32 = 16u;
 const HIT_RESTING: u32 = 32u;
 const HIT_EYE_CHAINED: u32 = 128u;
 const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_CHAINED;
@@ -40,7 +39,7 @@ struct HitPoint {
     iterations: u32,
     flags: u32,
     eye_met: u32,
-    _pad1: u32,
+    correction_r2: f32,
 }
 
 struct Photon {
@@ -120,7 +119,7 @@ struct DirectLightParams {
     iteration: u32,
     ray_epsilon: f32,
     accumulate: u32,
-    sign: f32,
+    _pad0: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -128,7 +127,6 @@ struct DirectLightParams {
 // DirectLightParams::accumulate (ppm_core::layout::direct_accumulate).
 const DIRECT_REPLACE: u32 = 0u;
 const DIRECT_ADD: u32 = 1u;
-const DIRECT_CORRECT: u32 = 2u;
 
 struct PhotonPassParams {
     seed: u32,

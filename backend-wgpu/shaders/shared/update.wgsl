@@ -98,6 +98,20 @@ fn gathers(flags: u32, kind: u32) -> bool {
     return (flags & HIT_VALID) != 0u && serves(flags, kind);
 }
 
+// The squared radius of the disc a slot searches a map within: ppm_core's search_r2.
+fn search_r2(hp: HitPoint, r2_floor: f32) -> f32 {
+    if r2_floor > 0.0 {
+        return max(max(hp.r2, r2_floor), hp.correction_r2);
+    }
+    return hp.r2;
+}
+
+// What photons found within a disc of squared radius `searched` stand for in the slot's own
+// disc of `r2`: ppm_core's disc_shrink.
+fn disc_shrink(r2: f32, searched: f32) -> f32 {
+    return select(1.0, r2 / searched, searched > r2);
+}
+
 fn uses_pending(kind: u32) -> bool {
     return (kind & GATHER_DEFERRED) != 0u || (kind & GATHER_KIND_MASK) == GATHER_REGION_APPLY;
 }

@@ -36,7 +36,7 @@ use ppm_core::passes::{
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload, check_gather_kind,
 };
 use ppm_core::rng::{StreamKey, random_bits};
-use ppm_core::update::gather::{Found, SlotState, gather_rule};
+use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, search_r2};
 use ppm_core::update::radiance;
 use std::f32::consts::FRAC_1_PI;
 
@@ -114,11 +114,6 @@ impl EyePass for MinimalBackend {
 impl DirectLight for MinimalBackend {
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
         let scene = loaded(&self.scene, "direct light")?;
-        if params.accumulate == direct_accumulate::CORRECT {
-            return Err(BackendError::Unsupported(
-                "direct-light corrections belong to local moves (the dynamic tier)".into(),
-            ));
-        }
         let mut stats = DirectStats::default();
         for (slot, hp) in self.hit_points.iter_mut().enumerate() {
             let (estimate, rays) = match hp.is_valid() {
@@ -196,9 +191,9 @@ impl GatherPass for MinimalBackend {
             let mut found = Found::default();
             let mut reflectance = [0.0; 3];
             if ppm_core::update::gather::gathers(hp.flags, params.kind) {
-                // Every photon, one by one, within the slot's disc (or the map's wider floor
-                // disc, whose photons then stand for their density over the slot's own).
-                let r2 = hp.r2.max(self.r2_floor);
+                // Every photon, one by one, within the slot's disc (or a wider disc under the
+                // map's floor, whose photons then stand for their density over the slot's own).
+                let r2 = search_r2(hp, self.r2_floor);
                 for p in &self.photons {
                     let d = [0, 1, 2].map(|c| p.position[c] - hp.position[c]);
                     let inside = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r2;
@@ -208,11 +203,7 @@ impl GatherPass for MinimalBackend {
                         found.flux = [0, 1, 2].map(|c| found.flux[c] + p.power[c]);
                     }
                 }
-                let shrink = if self.r2_floor > hp.r2 {
-                    hp.r2 / self.r2_floor
-                } else {
-                    1.0
-                };
+                let shrink = disc_shrink(hp.r2, r2);
                 found.flux = found.flux.map(|f| f * shrink);
                 found.weight *= shrink;
                 stats.hit_points_reached += u64::from(found.count > 0.0);

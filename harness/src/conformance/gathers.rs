@@ -17,7 +17,7 @@ use ppm_core::params::RenderParams;
 use ppm_core::passes::{Backend, BackendError};
 use ppm_core::region::emitting_region;
 use ppm_core::rng::{PassKind, StreamKey};
-use ppm_core::update::gather::{Found, SlotState, gather_rule, gathers};
+use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, gathers, search_r2};
 use ppm_core::update::luminance;
 use std::f32::consts::FRAC_1_PI;
 
@@ -119,14 +119,15 @@ pub(super) fn check_ordinary(
 }
 
 /// `gather-kinds` (dynamic tier): every kind a move gathers, on slots of which every third is
-/// flagged updated, so that each kind's choice of who gathers and who is served shows.
+/// flagged updated, so that each kind's choice of who gathers and who is served shows, and
+/// every second has a wide correction disc, which only local mode's correction reads.
 pub(super) fn check_every_kind(
     make: BackendFactory,
     o: &ConformanceOptions,
 ) -> Result<String, String> {
     let mut bench = Bench::new(make, o)?;
     bench.run(&ORDINARY)?.verdict()?;
-    bench.flag_every_third_updated()?;
+    bench.prepare_move()?;
     let mut outcomes = Vec::new();
     for step in &MOVE_STEPS {
         outcomes.push(bench.run(step)?);
@@ -251,11 +252,17 @@ impl Bench {
         })
     }
 
-    /// Flags every third slot `UPDATED`, as a hit-point update would after a move.
-    fn flag_every_third_updated(&mut self) -> Result<(), String> {
+    /// Flags every third slot `UPDATED`, as a hit-point update would after a move, and
+    /// widens every second slot's correction disc to 4 initial radii, as a local move does
+    /// far from the objects it moved (only gathers under a floor may read it).
+    fn prepare_move(&mut self) -> Result<(), String> {
         let mut slots = self.backend.read_hit_points().map_err(err)?;
         for hp in slots.iter_mut().step_by(3) {
             hp.flags |= hit_flags::UPDATED;
+        }
+        let wide = (4.0 * self.params.initial_radius).powi(2);
+        for hp in slots.iter_mut().step_by(2) {
+            hp.correction_r2 = wide;
         }
         self.backend.write_hit_points(&slots).map_err(err)
     }
@@ -388,15 +395,15 @@ fn sign(i: u32, bit: u32) -> f32 {
     if i & bit == 0 { -1.0 } else { 1.0 }
 }
 
-/// What `hp` finds among `photons` within its radius, or the floor's wider disc scaled to its
-/// own ([`Found`]).
+/// What `hp` finds among `photons` within its radius, or the wider disc a floor gives it
+/// ([`search_r2`]) scaled to its own ([`Found`]).
 fn found_by_brute_force(
     hp: &HitPoint,
     photons: &[Photon],
     weights: &[f32],
     r2_floor: f32,
 ) -> Found {
-    let r2 = hp.r2.max(r2_floor);
+    let r2 = search_r2(hp, r2_floor);
     let (x, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
     let (mut count, mut weight, mut flux, mut power_sq) = (0u32, 0.0, Vec3::ZERO, 0.0);
     for (ph, w) in photons.iter().zip(weights) {
@@ -407,11 +414,7 @@ fn found_by_brute_force(
             power_sq += luminance(ph.power).powi(2);
         }
     }
-    let shrink = if r2_floor > hp.r2 {
-        hp.r2 / r2_floor
-    } else {
-        1.0
-    };
+    let shrink = disc_shrink(hp.r2, r2);
     Found {
         flux: (flux * shrink).into(),
         count: count as f32,

@@ -18,9 +18,9 @@
 //!   statistics. Its direct light can change only through shadow or cosine rays from its
 //!   visible points to a light that cross a moved object's box in either pose: where a
 //!   segment from its box to a light's box may cross one ([`segments_may_meet`]), its direct
-//!   sum is corrected by [`CORRECTION_SAMPLES`] shadow-ray samples traced at its visible point
-//!   in both poses with the same random numbers (an unbiased estimate of the change, exactly
-//!   zero where the move blocks or frees none of them);
+//!   sum is corrected by the change over its pixel that paired eye paths and light samples
+//!   estimate in both poses ([`super::direct_change`], traced on the host: an unbiased
+//!   estimate, exactly zero where the move blocks or frees none of the rays);
 //! - the kept slots' indirect light is corrected by a difference pass per pose: ordinary
 //!   photons traced in both poses with the same random numbers, whose deferred net sum is the change
 //!   of every photon path the move changed. A path is the same in both poses until it
@@ -28,8 +28,9 @@
 //!   are stored (in both poses): the gathers cost in proportion to the light the objects
 //!   touch. Pose A records, one bit per path, whether the path crossed a box at all; pose B
 //!   traces only those that did (`culled_share` in the report). The correction is gathered
-//!   within a disc wider than a converged slot's ([`MoveParams::correction_radii`]), and
-//!   added to the flux alone: it brings no new photons to shrink the radius with.
+//!   within a disc wider than a converged slot's ([`MoveParams::correction_radii`]), wider
+//!   still far from the moved objects ([`CORRECTION_SPREAD`]), and added to the flux alone:
+//!   it brings no new photons to shrink the radius with.
 //!
 //! The records hold since a slot's statistics started, so a slot whose paths first meet an
 //! object late in its life is still reset by the next move of it. A moved light restarts.
@@ -41,41 +42,60 @@
 //!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
+use super::direct_change::{MOST_SAMPLES, Samples, direct_changes, direct_samples_for};
 use super::moves::{Compensation, MoveReport};
 use super::probe::{self, ProbeSettings};
 use super::{Renderer, dynamic, pass_params};
 use glam::Vec3;
 use ppm_core::compile::{CompiledScene, mover_boxes, object_group};
-use ppm_core::layout::{
-    DirectLightParams, HitPoint, SlotBounds, direct_accumulate, gather_kind, hit_flags,
-};
+use ppm_core::layout::{HitPoint, SlotBounds, gather_kind, hit_flags};
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
 use ppm_core::reach::{Aabb, segments_may_meet};
 use ppm_core::refit::recompile_moved;
 use ppm_core::scene::{MaterialKind, Scene};
 use ppm_core::screen_cover::covered_pixels;
-use ppm_core::update::{history_kept, luminance};
+use ppm_core::update::history_kept;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Direct-light samples per slot of the paired correction, in each pose.
-pub const CORRECTION_SAMPLES: u32 = 8;
+/// How a kept slot's correction disc widens with the distance `d` from its visible point to
+/// the nearest moved box: to `CORRECTION_SPREAD * d`. The change a move makes to the indirect
+/// light varies over about that distance, so such a disc blurs little of it and gathers more
+/// of the correction's photons, whose noise the slot would otherwise keep (docs/algorithm.md
+/// 3b).
+const CORRECTION_SPREAD: f32 = 0.3;
 
-/// Keys the correction's random numbers apart from every iteration's.
-const CORRECTION_SEED: u32 = 0x5eed_c0de;
+/// The widest correction disc, in radii of the pass's floor, for a correction of two passes'
+/// worth or more; one of `P < 2` passes' worth widens to `P` floors at most. A disc's cost
+/// grows with its area, and a drag step's one-pass correction does not widen: on the drag
+/// bench widening cost a cornell-box step 23 ms, two thirds of an iteration.
+const CORRECTION_WIDEST: f32 = 2.0;
 
 /// Lights up to which the direct-light test takes each emitting triangle's box; beyond, the
 /// box around all of them.
 const LIGHT_BOXES: usize = 16;
 
-/// Slots a move reset, kept, and kept with their direct sum corrected, and every slot's
-/// direct sum before the correction.
+/// What local mode's correction of a move is made of ([`Renderer::local_correction`]).
+struct CorrectionSize {
+    /// Whole passes' worth of photons: the pass counter advances by as many.
+    passes: u32,
+    /// The difference passes that correct the indirect light.
+    photons: Compensation,
+    /// Their squared floor radius.
+    r2_floor: f32,
+    /// The widest a kept slot's disc grows far from the move, in floor radii
+    /// ([`correction_r2`]).
+    widest: f32,
+    /// Paired direct-light samples per corrected slot ([`direct_changes`]).
+    direct_samples: u32,
+}
+
+/// Slots a move reset, kept, and kept with their direct sum corrected.
 struct Resets {
     reset: u64,
     kept: u64,
     direct_corrected: u64,
-    direct_before: Vec<[f32; 3]>,
 }
 
 /// The moved objects' boxes in both poses and their group bits.
@@ -108,28 +128,33 @@ impl Renderer<'_> {
                 self.scene.objects[light].name
             ));
         }
-        Ok(self.local_correction().1)
+        Ok(self.local_correction().photons)
     }
 
-    /// Local mode's indirect correction: difference passes that store only the deposits of
-    /// paths that crossed a moved object's box (the others cancel between the poses),
-    /// gathered within a disc wider than a converged slot's. Its size follows the history
-    /// the move keeps ([`MoveParams::correction_for`]): a slot keeps the share of its history
-    /// worth keeping against the correction's noise, so a long history is worth more
-    /// photons, and more photons a narrower disc (less blur of the change).
+    /// Local mode's correction of a move. Its size follows the history the move keeps
+    /// ([`MoveParams::correction_for`]): a slot keeps the share of its history worth keeping
+    /// against the correction's noise, so a long history is worth more photons and direct
+    /// samples, more photons a narrower floor disc (less blur of the change), and a wider
+    /// one far from the move.
     ///
     /// [`MoveParams::correction_for`]: ppm_core::params::MoveParams::correction_for
-    fn local_correction(&self) -> (u32, Compensation) {
+    fn local_correction(&self) -> CorrectionSize {
         let (share, radii) = self.moves.correction_for(self.counters.steps_since_move);
         // At most `correction_passes` passes' worth, which the options hold under 2^32.
         let photons = (f64::from(share) * f64::from(self.params.photons_per_pass)).round();
         let photons = photons.min(f64::from(u32::MAX)) as u32;
-        let correction = Compensation::Difference {
-            correction_photons: Some(photons),
-            r2_floor: (radii * self.params.initial_radius).powi(2),
-        };
-        // Pass indices advance by whole passes, so no two moves share random numbers.
-        (share.ceil() as u32, correction)
+        let r2_floor = (radii * self.params.initial_radius).powi(2);
+        CorrectionSize {
+            // Pass indices advance by whole passes, so no two moves share random numbers.
+            passes: share.ceil() as u32,
+            photons: Compensation::Difference {
+                correction_photons: Some(photons),
+                r2_floor,
+            },
+            r2_floor,
+            widest: CORRECTION_WIDEST.min(share),
+            direct_samples: direct_samples_for(share),
+        }
     }
 
     /// Moves the `changed` objects to their pose in `next`: the resets, then difference
@@ -156,7 +181,13 @@ impl Renderer<'_> {
         };
         // The resets depend only on the records and on pose B, so they come first: the
         // passes below then skip the reset slots in both poses alike.
-        let resets = self.reset_near(&next, &compiled, changed, &moved)?;
+        let size = self.local_correction();
+        let mut slots = self.backend.read_hit_points()?;
+        let resets = self.reset_near(&mut slots, &next, &compiled, changed, &moved, &size)?;
+        if resets.direct_corrected > 0 {
+            self.correct_direct(&mut slots, &compiled, size.direct_samples);
+        }
+        self.backend.write_hit_points(&slots)?;
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
@@ -165,26 +196,18 @@ impl Renderer<'_> {
             self.report.photons_deposited as f64 / self.report.photons_emitted.max(1) as f64;
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
-        let (passes, correction) = self.local_correction();
         dynamic(self.backend)?.update_scene(&self.compiled)?;
-        self.compensate(&correction, gather_kind::REGION_NEGATIVE)?;
-        if resets.direct_corrected > 0 {
-            self.correct_direct(-1.0)?;
-        }
+        self.compensate(&size.photons, gather_kind::REGION_NEGATIVE)?;
         dynamic(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
         self.counters.frame += 1;
-        if resets.direct_corrected > 0 {
-            self.correct_direct(1.0)?;
-            self.weigh_direct_corrections(&resets.direct_before)?;
-        }
-        let positive = self.compensate(&correction, gather_kind::REGION_POSITIVE)?;
+        let positive = self.compensate(&size.photons, gather_kind::REGION_POSITIVE)?;
         if positive.emitted > 0 {
             report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
         }
-        self.counters.difference_pass += passes;
-        if passes > 0 {
+        self.counters.difference_pass += size.passes;
+        if size.passes > 0 {
             self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;
         }
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;
@@ -201,57 +224,60 @@ impl Renderer<'_> {
         Ok(report)
     }
 
-    /// Half of the paired direct-light correction, in the current pose (`sign` -1 before the
-    /// move, +1 after it; the same random numbers both times).
-    fn correct_direct(&mut self, sign: f32) -> Result<(), BackendError> {
-        let params = DirectLightParams {
-            seed: self.params.seed ^ CORRECTION_SEED,
-            samples: CORRECTION_SAMPLES,
-            iteration: self.counters.difference_pass,
-            accumulate: direct_accumulate::CORRECT,
-            sign,
-            ..self.direct_params(0, true)
+    /// Corrects the direct sums of the kept `slots` flagged `DIRECT_MAY_CHANGE` by their
+    /// change from the current pose to `next` ([`direct_changes`]), each weighed against its
+    /// history (docs/algorithm.md 3c): against the slot's corrected mean `D` over `N`
+    /// iterations (relative noise about `1 / N`), a change known to a variance `V` leaves
+    /// the history worth `N' = N / (1 + N V / lum(D)^2)` iterations ([`history_kept`]), and
+    /// the sum keeps its mean at that count. An unchanged slot keeps all of it. Channels the
+    /// change drives below zero are clamped there. `samples` pairs per slot.
+    fn correct_direct(&self, slots: &mut [HitPoint], next: &CompiledScene, samples: u32) {
+        let corrected: Vec<bool> = slots
+            .iter()
+            .map(|hp| hp.flags & hit_flags::DIRECT_MAY_CHANGE != 0 && hp.iterations > 0)
+            .collect();
+        // Each move draws samples of its own.
+        let samples = Samples {
+            first: self.counters.difference_pass.wrapping_mul(MOST_SAMPLES),
+            count: samples,
         };
-        self.run_direct_light(&params)
-    }
-
-    /// Weighs each corrected direct sum against its correction (docs/algorithm.md 3c): the
-    /// paired samples estimate the change at one visible point of the pixel, so a change of
-    /// size `d` is known only to about `d`; against the slot's mean `D` over `N` iterations
-    /// (relative noise about `1 / N`) its history is then worth
-    /// `N' = N / (1 + N d^2 / D^2)` iterations ([`history_kept`]), and the sum keeps its mean
-    /// at that count. An unchanged slot (`d = 0`) keeps all of it; a large change leaves the
-    /// samples that follow to decide, at the rate of a consistent estimator. Channels the
-    /// correction drove below zero are clamped there.
-    fn weigh_direct_corrections(&mut self, before: &[[f32; 3]]) -> Result<(), BackendError> {
-        let mut slots = self.backend.read_hit_points()?;
-        slots.par_iter_mut().zip(before).for_each(|(hp, old)| {
-            if hp.flags & hit_flags::DIRECT_MAY_CHANGE == 0 || hp.iterations == 0 {
+        let changes = direct_changes(
+            &self.compiled,
+            next,
+            slots,
+            &corrected,
+            &samples,
+            &self.probe_settings(),
+        );
+        slots.par_iter_mut().zip(changes).for_each(|(hp, change)| {
+            // No pair changed: the sum stays as it is, bit for bit.
+            let Some(change) = change.filter(|c| c.mean != [0.0; 3]) else {
                 return;
-            }
+            };
             let n = hp.iterations as f32;
-            let corrected = hp.direct.map(|d| d.max(0.0));
-            let change = std::array::from_fn(|c| (hp.direct[c] - old[c]) / n);
-            let mean = corrected.map(|d| d / n);
-            let kept = history_kept(n, mean, luminance(change).powi(2));
+            let mean: [f32; 3] =
+                std::array::from_fn(|c| (hp.direct[c] / n + change.mean[c]).max(0.0));
+            let kept = history_kept(n, mean, change.variance);
             let count = ((n * kept).round() as u32).clamp(1, hp.iterations);
-            hp.direct = corrected.map(|d| d * count as f32 / n);
+            hp.direct = mean.map(|d| d * count as f32);
             hp.iterations = count;
         });
-        self.backend.write_hit_points(&slots)
     }
 
-    /// Starts over the slots whose view the move of `changed` objects to `next` (`compiled`)
-    /// may change (see the module doc) and marks them `UPDATED`, so the compensation skips
-    /// them; marks `DIRECT_MAY_CHANGE` the kept slots whose direct light it may change.
+    /// Starts over the `slots` whose view the move of `changed` objects to `next`
+    /// (`compiled`) may change (see the module doc) and marks them `UPDATED`, so the
+    /// compensation skips them; marks `DIRECT_MAY_CHANGE` the kept slots whose direct light it
+    /// may change, and sizes each kept slot's correction disc ([`correction_r2`]) as `size`
+    /// says.
     fn reset_near(
         &mut self,
+        slots: &mut [HitPoint],
         next: &Scene,
         compiled: &CompiledScene,
         changed: &[usize],
         moved: &Moved,
+        size: &CorrectionSize,
     ) -> Result<Resets, BackendError> {
-        let mut slots = self.backend.read_hit_points()?;
         let bounds = dynamic(self.backend)?.read_slot_bounds()?;
         let posed: Vec<[Vec3; 3]> = changed
             .iter()
@@ -285,7 +311,7 @@ impl Renderer<'_> {
             .enumerate()
             .map(|(i, hp)| !decided(i, hp) && chained(i, hp))
             .collect();
-        let met_in_b = self.probe(compiled, &slots, &undecided, moved.groups);
+        let met_in_b = self.probe(compiled, slots, &undecided, moved.groups);
         let lights = self.light_boxes();
         let boxes: Vec<Aabb> = moved.before.iter().chain(&moved.after).copied().collect();
         let direct_may_change = |b: &Aabb| {
@@ -309,6 +335,7 @@ impl Renderer<'_> {
                 }
                 hp.flags &=
                     !(hit_flags::UPDATED | hit_flags::RESTING | hit_flags::DIRECT_MAY_CHANGE);
+                hp.correction_r2 = correction_r2(hp.position.into(), &boxes, size);
                 if direct_may_change(&reached(i)) {
                     hp.flags |= hit_flags::DIRECT_MAY_CHANGE;
                     return (0, 1);
@@ -316,13 +343,20 @@ impl Renderer<'_> {
                 (0, 0)
             })
             .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        self.backend.write_hit_points(&slots)?;
         Ok(Resets {
             reset,
             kept: slots.len() as u64 - reset,
             direct_corrected: corrected,
-            direct_before: slots.iter().map(|hp| hp.direct).collect(),
         })
+    }
+
+    /// How the host traces the probes' eye paths: the render's seed, depth and ray offset.
+    fn probe_settings(&self) -> ProbeSettings {
+        ProbeSettings {
+            seed: self.params.seed,
+            max_depth: self.params.max_eye_depth,
+            ray_epsilon: pass_params::ray_epsilon(&self.params, self.extent),
+        }
     }
 
     /// The boxes the direct-light test reaches for: each light's, or one around all of them.
@@ -361,11 +395,7 @@ impl Renderer<'_> {
             return Vec::new();
         }
         pixels.dedup();
-        let settings = ProbeSettings {
-            seed: self.params.seed,
-            max_depth: self.params.max_eye_depth,
-            ray_epsilon: pass_params::ray_epsilon(&self.params, self.extent),
-        };
+        let settings = self.probe_settings();
         let mut met = vec![false; (self.params.width * self.params.height) as usize];
         for (pixel, hit) in pixels
             .iter()
@@ -381,6 +411,19 @@ impl Renderer<'_> {
 fn aabb(scene: &Scene, o: usize) -> Aabb {
     let (lo, hi) = scene.objects[o].bounds();
     Aabb::new(lo, hi)
+}
+
+/// The squared radius of a kept slot's correction disc (`HitPoint::correction_r2`) whose
+/// visible point is at `position`: the floor's, widened to [`CORRECTION_SPREAD`] times the
+/// distance to the nearest of the moved `boxes`, at most `size.widest` floors.
+fn correction_r2(position: Vec3, boxes: &[Aabb], size: &CorrectionSize) -> f32 {
+    let floor = size.r2_floor.sqrt();
+    let nearest = boxes
+        .iter()
+        .map(|b| b.distance_from(position))
+        .fold(f32::INFINITY, f32::min);
+    let r = (CORRECTION_SPREAD * nearest).clamp(floor, size.widest * floor);
+    r * r
 }
 
 /// A slot's recorded box.

@@ -12,6 +12,7 @@
 //! and direct light once per pose, and an iteration is a photon pass and its gather.
 
 pub mod checkpoint;
+mod direct_change;
 mod local;
 pub mod moves;
 pub mod pass_params;

@@ -9,7 +9,7 @@ use backend_cpu::trace::SceneData;
 use glam::Vec3;
 use ppm_core::compile::{CompiledScene, camera_ray};
 use ppm_core::geometry::{Transport, specular_bounce};
-use ppm_core::layout::material_kind;
+use ppm_core::layout::{HitPoint, hit_flags, material_kind};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
 
@@ -68,32 +68,76 @@ fn meets(
         pass_index: path,
         path: pixel,
     };
+    eye_path(scene, pose, pixel, (jx, jy), &key, groups, settings).met
+}
+
+/// One eye path traced on the host, as the eye pass traces it.
+pub(super) struct EyePath {
+    /// Whether it met one of the groups asked about, up to and including its visible point.
+    pub met: bool,
+    /// Its visible point (position, facing normal, material, throughput and `VALID` and
+    /// `FRONT` flags, as the eye pass writes them), if it reached one before meeting a group.
+    pub visible: Option<HitPoint>,
+}
+
+/// Traces the eye path through point `(jx, jy)` of `pixel` in `pose` (`scene`) to its first
+/// non-specular surface, glass choices drawn from `key`; it stops at the first surface of
+/// one of `groups`.
+pub(super) fn eye_path(
+    scene: &SceneData,
+    pose: &CompiledScene,
+    pixel: u32,
+    (jx, jy): (f32, f32),
+    key: &StreamKey,
+    groups: u32,
+    settings: &ProbeSettings,
+) -> EyePath {
     let camera = &pose.camera;
     let px = (pixel % camera.width) as f32 + jx;
     let py = (pixel / camera.width) as f32 + jy;
     let mut dir = camera_ray(camera, px, py);
     let mut origin = Vec3::from(camera.eye);
+    let mut throughput = Vec3::ONE;
+    let nothing = EyePath {
+        met: false,
+        visible: None,
+    };
     for depth in 0..=settings.max_depth {
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
-            return false;
+            return nothing;
         };
         let tri = &scene.triangles[hit.triangle as usize];
         if tri.group & groups != 0 {
-            return true;
+            return EyePath {
+                met: true,
+                visible: None,
+            };
         }
         let material = &scene.materials[tri.material as usize];
-        if material.kind == material_kind::DIFFUSE {
-            return false;
-        }
         let position = origin + dir * hit.t;
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
+        if material.kind == material_kind::DIFFUSE {
+            let front = if front { hit_flags::FRONT } else { 0 };
+            return EyePath {
+                met: false,
+                visible: Some(HitPoint {
+                    position: position.into(),
+                    normal: facing.into(),
+                    material: tri.material,
+                    throughput: throughput.into(),
+                    flags: hit_flags::VALID | front,
+                    ..HitPoint::empty(pixel)
+                }),
+            };
+        }
         let u = key.uniform(depth);
         let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
+        throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
         origin = position + side * settings.ray_epsilon;
     }
-    false
+    nothing
 }

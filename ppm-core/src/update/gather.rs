@@ -46,9 +46,28 @@ impl SlotState {
     }
 }
 
-/// What a slot found in the current photon map, already scaled to its own disc (the map's
-/// floor disc may be wider: flux and weight times `r2 / r2_floor`, `power_sq` times its
-/// square; the count is not scaled). 32 bytes, the layout of `Found` in update.wgsl.
+/// The squared radius of the disc slot `hp` searches a map within: its own, or in a pass
+/// with a floor (`gather_r2_floor`, local mode's correction) the widest of its own, the
+/// floor and its `correction_r2`. The WGSL twin is `search_r2` in update.wgsl.
+#[inline]
+pub fn search_r2(hp: &HitPoint, r2_floor: f32) -> f32 {
+    if r2_floor > 0.0 {
+        hp.r2.max(r2_floor).max(hp.correction_r2)
+    } else {
+        hp.r2
+    }
+}
+
+/// What photons found within a disc of squared radius `searched` stand for in the slot's own
+/// disc of `r2`: their density times its area, `r2 / searched` where the search was wider.
+#[inline]
+pub fn disc_shrink(r2: f32, searched: f32) -> f32 {
+    if searched > r2 { r2 / searched } else { 1.0 }
+}
+
+/// What a slot found in the current photon map, already scaled to its own disc (the search
+/// disc may be wider, [`search_r2`]: flux and weight times [`disc_shrink`], `power_sq` times
+/// its square; the count is not scaled). 32 bytes, the layout of `Found` in update.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Found {
