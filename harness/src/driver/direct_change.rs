@@ -125,3 +125,33 @@ fn change_of(diffs: &[Vec3]) -> DirectChange {
         variance: sample_variance.max(lum(mean).powi(2) / k),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// No change is exactly none; pairs that agree are still as uncertain as an
+    /// all-or-nothing change seen by as many samples; pairs that disagree give their sample
+    /// variance of the mean.
+    #[test]
+    fn the_change_and_how_well_it_is_known() {
+        let none = change_of(&[Vec3::ZERO; 4]);
+        assert_eq!((none.mean, none.variance), ([0.0; 3], 0.0));
+        let agree = change_of(&[Vec3::splat(-2.0); 4]);
+        assert_eq!(agree.mean, [-2.0; 3]);
+        assert!((agree.variance - 1.0).abs() < 1e-5, "{agree:?}");
+        // Luminances 0 and -4 in turn: mean -2, squared deviations 16 in all over 4 pairs,
+        // so the mean's variance is 16 / (4 x 3).
+        let split = change_of(&[Vec3::ZERO, Vec3::splat(-4.0), Vec3::ZERO, Vec3::splat(-4.0)]);
+        assert_eq!(split.mean, [-2.0; 3]);
+        assert!((split.variance - 16.0 / 12.0).abs() < 1e-4, "{split:?}");
+    }
+
+    /// Four pairs a pass, from 4 to the most.
+    #[test]
+    fn a_longer_history_draws_more_pairs() {
+        assert_eq!(direct_samples_for(1.0), 4);
+        assert_eq!(direct_samples_for(2.0), 8);
+        assert_eq!(direct_samples_for(8.0), MOST_SAMPLES);
+    }
+}

@@ -430,3 +430,38 @@ fn correction_r2(position: Vec3, boxes: &[Aabb], size: &CorrectionSize) -> f32 {
 fn slot_box(b: &SlotBounds) -> Aabb {
     Aabb::new(b.min.into(), b.max.into())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn size(share: f32) -> CorrectionSize {
+        CorrectionSize {
+            passes: share.ceil() as u32,
+            photons: Compensation::Difference {
+                correction_photons: None,
+                r2_floor: 4.0,
+            },
+            r2_floor: 4.0,
+            widest: CORRECTION_WIDEST.min(share),
+            direct_samples: direct_samples_for(share),
+        }
+    }
+
+    /// Near the move a slot keeps the floor disc; it widens with the distance at
+    /// `CORRECTION_SPREAD`, to twice the floor after a long history and not at all for a
+    /// drag step's one pass.
+    #[test]
+    fn the_correction_disc_widens_with_the_distance_from_the_move() {
+        let boxes = [Aabb::new(Vec3::ZERO, Vec3::ONE)];
+        let at = |x: f32, share: f32| correction_r2(Vec3::new(x, 0.5, 0.5), &boxes, &size(share));
+        // Inside the box and near it: the floor (radius 2).
+        assert_eq!(at(0.5, 8.0), 4.0);
+        assert_eq!(at(1.0 + 2.0 / CORRECTION_SPREAD, 8.0), 4.0);
+        // Halfway to the widest: radius 3 at a distance of 10.
+        assert!((at(11.0, 8.0) - 9.0).abs() < 1e-4, "{}", at(11.0, 8.0));
+        // Far away: twice the floor, or the floor alone for a one-pass correction.
+        assert_eq!(at(1e6, 8.0), 16.0);
+        assert_eq!(at(1e6, 1.0), 4.0);
+    }
+}
