@@ -8,11 +8,9 @@
 //! sample; the pairs' spread says how well the mean is known. Traced on the host with the CPU backend's
 //! scene, whatever backend renders (as [`super::probe`]): a few thousand slots' paths.
 
-use super::probe::{ProbeSettings, eye_path};
+use super::probe::{HostPose, ProbeSettings, eye_path};
 use backend_cpu::direct_light::slot_direct;
-use backend_cpu::trace::SceneData;
 use glam::Vec3;
-use ppm_core::compile::CompiledScene;
 use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use ppm_core::update::luminance;
@@ -57,14 +55,14 @@ pub struct DirectChange {
 /// The change from pose `before` to pose `after` of the direct light of each slot of `slots`
 /// that `corrected` flags (`None` for the others), slot `i` keyed by its index.
 pub(super) fn direct_changes(
-    before: &CompiledScene,
-    after: &CompiledScene,
+    before: &HostPose,
+    after: &HostPose,
     slots: &[HitPoint],
     corrected: &[bool],
     samples: &Samples,
     settings: &ProbeSettings,
 ) -> Vec<Option<DirectChange>> {
-    let scenes = [SceneData::new(before), SceneData::new(after)];
+    let poses = [before, after].map(|p| (p.compiled, p.scene()));
     let light = DirectLightParams {
         seed: settings.seed ^ CHANGE_SEED,
         samples: 1,
@@ -95,12 +93,11 @@ pub(super) fn direct_changes(
                             iteration: k,
                             ..light
                         };
-                        let [a, b] =
-                            [(before, &scenes[0]), (after, &scenes[1])].map(|(pose, scene)| {
-                                eye_path(scene, pose, hp.pixel, jitter, &key, 0, settings)
-                                    .visible
-                                    .map_or(Vec3::ZERO, |v| slot_direct(&params, scene, &v, slot).0)
-                            });
+                        let [a, b] = poses.map(|(pose, scene)| {
+                            eye_path(scene, pose, hp.pixel, jitter, &key, 0, settings)
+                                .visible
+                                .map_or(Vec3::ZERO, |v| slot_direct(&params, scene, &v, slot).0)
+                        });
                         b - a
                     })
                     .collect();

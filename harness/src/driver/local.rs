@@ -44,10 +44,10 @@
 
 use super::direct_change::{MOST_SAMPLES, Samples, direct_changes, direct_samples_for};
 use super::moves::{Compensation, MoveReport};
-use super::probe::{self, ProbeSettings};
+use super::probe::{self, HostPose, ProbeSettings};
 use super::{Renderer, dynamic, pass_params};
 use glam::Vec3;
-use ppm_core::compile::{CompiledScene, mover_boxes, object_group};
+use ppm_core::compile::{mover_boxes, object_group};
 use ppm_core::layout::{HitPoint, SlotBounds, gather_kind, hit_flags};
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
@@ -183,9 +183,11 @@ impl Renderer<'_> {
         // passes below then skip the reset slots in both poses alike.
         let size = self.local_correction();
         let mut slots = self.backend.read_hit_points()?;
-        let resets = self.reset_near(&mut slots, &next, &compiled, changed, &moved, &size)?;
+        // Pose B as the host's probes trace it, copied once if one of them needs it.
+        let after = HostPose::new(&compiled);
+        let resets = self.reset_near(&mut slots, &next, &after, changed, &moved, &size)?;
         if resets.direct_corrected > 0 {
-            self.correct_direct(&mut slots, &compiled, size.direct_samples);
+            self.correct_direct(&mut slots, &after, size.direct_samples);
         }
         self.backend.write_hit_points(&slots)?;
         report.updated = resets.reset;
@@ -231,7 +233,7 @@ impl Renderer<'_> {
     /// the history worth `N' = N / (1 + N V / lum(D)^2)` iterations ([`history_kept`]), and
     /// the sum keeps its mean at that count. An unchanged slot keeps all of it. Channels the
     /// change drives below zero are clamped there. `samples` pairs per slot.
-    fn correct_direct(&self, slots: &mut [HitPoint], next: &CompiledScene, samples: u32) {
+    fn correct_direct(&self, slots: &mut [HitPoint], next: &HostPose, samples: u32) {
         let corrected: Vec<bool> = slots
             .iter()
             .map(|hp| hp.flags & hit_flags::DIRECT_MAY_CHANGE != 0 && hp.iterations > 0)
@@ -242,7 +244,7 @@ impl Renderer<'_> {
             count: samples,
         };
         let changes = direct_changes(
-            &self.compiled,
+            &HostPose::new(&self.compiled),
             next,
             slots,
             &corrected,
@@ -265,7 +267,7 @@ impl Renderer<'_> {
     }
 
     /// Starts over the `slots` whose view the move of `changed` objects to `next`
-    /// (`compiled`) may change (see the module doc) and marks them `UPDATED`, so the
+    /// (`after`) may change (see the module doc) and marks them `UPDATED`, so the
     /// compensation skips them; marks `DIRECT_MAY_CHANGE` the kept slots whose direct light it
     /// may change, and sizes each kept slot's correction disc ([`correction_r2`]) as `size`
     /// says.
@@ -273,7 +275,7 @@ impl Renderer<'_> {
         &mut self,
         slots: &mut [HitPoint],
         next: &Scene,
-        compiled: &CompiledScene,
+        after: &HostPose,
         changed: &[usize],
         moved: &Moved,
         size: &CorrectionSize,
@@ -283,8 +285,9 @@ impl Renderer<'_> {
             .iter()
             .flat_map(|&o| next.objects[o].triangles.iter().copied())
             .collect();
-        let covered = covered_pixels(&compiled.camera, &posed);
-        let eye = Vec3::from(compiled.camera.eye);
+        let camera = &after.compiled.camera;
+        let covered = covered_pixels(camera, &posed);
+        let eye = Vec3::from(camera.eye);
         let nearest = moved
             .after
             .iter()
@@ -311,7 +314,7 @@ impl Renderer<'_> {
             .enumerate()
             .map(|(i, hp)| !decided(i, hp) && chained(i, hp))
             .collect();
-        let met_in_b = self.probe(compiled, slots, &undecided, moved.groups);
+        let met_in_b = self.probe(after, slots, &undecided, moved.groups);
         let lights = self.light_boxes();
         let boxes: Vec<Aabb> = moved.before.iter().chain(&moved.after).copied().collect();
         let direct_may_change = |b: &Aabb| {
@@ -380,7 +383,7 @@ impl Renderer<'_> {
     /// none is probed.
     fn probe(
         &self,
-        next: &CompiledScene,
+        next: &HostPose,
         slots: &[HitPoint],
         probed: &[bool],
         groups: u32,

@@ -12,6 +12,7 @@ use ppm_core::geometry::{Transport, specular_bounce};
 use ppm_core::layout::{HitPoint, hit_flags, material_kind};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
+use std::cell::OnceCell;
 
 /// Eye paths per pixel the probe traces, through stratified random points of it (an
 /// Owen-scrambled Sobol sequence per pixel): an object that covers an eighth of what a pixel
@@ -22,6 +23,29 @@ pub const PROBE_PATHS: u32 = 32;
 
 /// Keys the probe's random numbers apart from every iteration's.
 const PROBE_SEED: u32 = 0x9b0b_e5ed;
+
+/// A pose as the host traces it: the compiled scene, and its copy for the CPU backend's ray
+/// queries made on first use, so that a move's probes share one copy of each pose.
+pub(super) struct HostPose<'a> {
+    /// The pose.
+    pub compiled: &'a CompiledScene,
+    scene: OnceCell<SceneData>,
+}
+
+impl<'a> HostPose<'a> {
+    /// The pose `compiled`, not yet copied.
+    pub fn new(compiled: &'a CompiledScene) -> Self {
+        Self {
+            compiled,
+            scene: OnceCell::new(),
+        }
+    }
+
+    /// Its scene for ray queries, copied on the first call.
+    pub fn scene(&self) -> &SceneData {
+        self.scene.get_or_init(|| SceneData::new(self.compiled))
+    }
+}
 
 /// How the probe's paths are traced: the render's seed, depth and ray offset.
 pub(super) struct ProbeSettings {
@@ -35,19 +59,19 @@ pub(super) struct ProbeSettings {
 /// [`ppm_core::compile::object_group`]), at any surface up to and including the first
 /// non-specular one.
 pub(super) fn paths_meet(
-    pose: &CompiledScene,
+    pose: &HostPose,
     pixels: &[u32],
     groups: u32,
     settings: &ProbeSettings,
 ) -> Vec<bool> {
-    let scene = SceneData::new(pose);
+    let (scene, pose) = (pose.scene(), pose.compiled);
     pixels
         .par_iter()
         .map(|&pixel| {
             let points = StratifiedStream::new(settings.seed ^ PROBE_SEED, PassKind::Eye, pixel);
             (0..PROBE_PATHS).any(|path| {
                 let (jx, jy) = points.pair(0, path);
-                meets(&scene, pose, pixel, (path, jx, jy), groups, settings)
+                meets(scene, pose, pixel, (path, jx, jy), groups, settings)
             })
         })
         .collect()
