@@ -1,21 +1,19 @@
 //! Direct light (docs/algorithm.md 1.2): emission seen at each hit point plus light reflected from
-//! the area lights. Each sample is a shadow ray to a point on a light and a cosine-sampled ray
-//! that may meet a light, weighted by the power heuristic: light sampling alone has unbounded
-//! variance next to an emitter (a corner of the furnace's glowing walls), where the cosine
-//! ray takes over.
+//! the area lights. Each sample is a shadow ray to a point on a light and a ray drawn from the
+//! BSDF ([`ppm_core::bsdf`]) that may meet a light, weighted by the power heuristic: light
+//! sampling alone has unbounded variance next to an emitter (a corner of the furnace's
+//! glowing walls), where the BSDF's ray takes over.
 
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::geometry::to_world;
-use ppm_core::layout::NO_MATERIAL;
-use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate, hit_flags};
+use ppm_core::bsdf;
+use ppm_core::layout::{
+    DirectLightParams, GpuMaterial, HitPoint, NO_MATERIAL, direct_accumulate, hit_flags,
+};
 use ppm_core::passes::DirectStats;
 use ppm_core::rng::{PassKind, StratifiedStream};
-use ppm_core::sampling::{
-    cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle,
-};
+use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
 use rayon::prelude::*;
-use std::f32::consts::{FRAC_1_PI, PI};
 
 /// Stratified pairs of each sample: the point on the light, the cosine direction, and the
 /// light's choice (first number). Sample `s` of the slot's iteration `k` is point
@@ -95,27 +93,31 @@ pub fn slot_direct(
     } else {
         Vec3::ZERO
     };
-    let albedo = Vec3::from(material.albedo);
     let mut rays = 0;
-    if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
-        direct += estimate_irradiance(params, scene, hp, slot) * albedo * FRAC_1_PI;
+    if params.samples > 0
+        && bsdf::visible_point_f(material).max_element() > 0.0
+        && !scene.lights.is_empty()
+    {
+        direct += estimate_reflected(params, scene, material, hp, slot);
         rays = u64::from(params.samples * RAYS_PER_SAMPLE);
     }
     (Vec3::from(hp.throughput) * direct, rays)
 }
 
-/// Irradiance from the lights, `E = integral of Le cos_x`: per sample, light sampling
-/// (`Le cos_x / p_light`, `p_light` the solid-angle density of a point chosen by power then by
-/// area) and cosine sampling (`Le pi` where the ray meets a light's front), each weighted by
-/// the power heuristic against the other.
-fn estimate_irradiance(
+/// Light from the lights reflected towards the eye, `integral of f Le cos_x`: per sample,
+/// light sampling (`f Le cos_x / p_light`, `p_light` the solid-angle density of a point
+/// chosen by power then by area) and BSDF sampling (`weight Le` where the ray meets a light's
+/// front), each weighted by the power heuristic against the other.
+fn estimate_reflected(
     params: &DirectLightParams,
     scene: &SceneData,
+    material: &GpuMaterial,
     hp: &HitPoint,
     slot: u32,
 ) -> Vec3 {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
+    let f = bsdf::visible_point_f(material);
     let origin = x + n * params.ray_epsilon;
     let mut sum = Vec3::ZERO;
     let start = sequence_start(params, hp) * params.samples;
@@ -142,12 +144,12 @@ fn estimate_irradiance(
             {
                 let le = Vec3::from(scene.materials[light.material as usize].emission);
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-                sum += le * (cos_x / pl * power_heuristic(pl, cos_x * FRAC_1_PI));
+                let pb = bsdf::pdf(material, n, w);
+                sum += f * le * (cos_x / pl * power_heuristic(pl, pb));
             }
         }
-        let (v1, v2) = pair(PAIR_DIRECTION);
-        let local = cosine_hemisphere(v1, v2);
-        let w = to_world(local, n);
+        let scattered = bsdf::sample_visible(material, n, pair(PAIR_DIRECTION));
+        let w = scattered.dir;
         // Only an emitter met first adds light.
         let hit = if scene.emitters.len() <= FEW_EMITTERS {
             scene.closest_hit_if_emitter(origin, w)
@@ -161,7 +163,7 @@ fn estimate_irradiance(
                 let light = &scene.lights[tri.light as usize];
                 let le = Vec3::from(scene.materials[light.material as usize].emission);
                 let pl = light_pdf(light.pdf, light.area, hit.t * hit.t, cos_l);
-                sum += le * (PI * power_heuristic(local.z * FRAC_1_PI, pl));
+                sum += scattered.weight * le * power_heuristic(scattered.pdf, pl);
             }
         }
     }

@@ -3,11 +3,10 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
+use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::camera_ray;
-use ppm_core::geometry::{Transport, specular_bounce};
 use ppm_core::layout::{
     EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, SlotBounds, eye_flags, hit_flags,
-    material_kind,
 };
 use ppm_core::passes::EyeStats;
 use ppm_core::rng::{PassKind, StreamKey, stratified_pair};
@@ -152,27 +151,23 @@ fn trace_eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        match material.kind {
-            material_kind::DIFFUSE => {
-                out.position = position.into();
-                out.normal = facing.into();
-                out.material = tri.material;
-                out.throughput = throughput.into();
-                out.flags |= hit_flags::VALID
-                    | if front { hit_flags::FRONT } else { 0 }
-                    | (tri.object << hit_flags::OBJECT_SHIFT);
-                return u64::from(depth) + 1;
-            }
-            _ => {
-                out.flags |= hit_flags::EYE_CHAINED;
-                let u = key.uniform(DIM_GLASS + depth);
-                let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
-                throughput *= bounce.weight;
-                dir = bounce.dir;
-                let side = if bounce.transmitted { -facing } else { facing };
-                origin = position + side * params.ray_epsilon;
-            }
+        if !bsdf::is_delta(material) {
+            out.position = position.into();
+            out.normal = facing.into();
+            out.material = tri.material;
+            out.throughput = throughput.into();
+            out.flags |= hit_flags::VALID
+                | if front { hit_flags::FRONT } else { 0 }
+                | (tri.object << hit_flags::OBJECT_SHIFT);
+            return u64::from(depth) + 1;
         }
+        out.flags |= hit_flags::EYE_CHAINED;
+        let u = key.uniform(DIM_GLASS + depth);
+        let bounce = bsdf::sample_delta(material, dir, facing, front, u, Transport::Radiance);
+        throughput *= bounce.weight;
+        dir = bounce.dir;
+        let side = if bounce.transmitted { -facing } else { facing };
+        origin = position + side * params.ray_epsilon;
     }
     u64::from(params.max_depth) + 1
 }

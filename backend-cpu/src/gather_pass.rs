@@ -4,11 +4,11 @@
 
 use crate::photon_search::{Found, PhotonMap, RUN, photons_in_discs};
 use glam::Vec3;
+use ppm_core::bsdf;
 use ppm_core::layout::{GatherParams, GpuMaterial, HitPoint, gather_kind};
 use ppm_core::passes::GatherStats;
 use ppm_core::update::gather::{self, SlotState, disc_shrink, gather_rule, gathers, search_r2};
 use rayon::prelude::*;
-use std::f32::consts::FRAC_1_PI;
 
 /// Region photons gathered but not yet applied, per slot: flux (times BRDF and scale) and
 /// signed count, or a correction's variance ([`SlotState::pending`]).
@@ -42,8 +42,7 @@ pub fn gather_pass_main(
                         stats.0 += u64::from(found.count > 0);
                         stats.1 += u64::from(found.count);
                         Vec3::from(hp.throughput)
-                            * Vec3::from(materials[hp.material as usize].albedo)
-                            * FRAC_1_PI
+                            * bsdf::visible_point_f(&materials[hp.material as usize])
                     }
                     false => Vec3::ZERO,
                 };

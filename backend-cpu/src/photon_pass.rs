@@ -3,12 +3,12 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
+use ppm_core::bsdf::{self, Transport};
 use ppm_core::emission::{EMISSION_DIMS, Emission, PhotonSource};
-use ppm_core::geometry::{Transport, oct_encode, specular_bounce, to_world};
-use ppm_core::layout::{Photon, PhotonPassParams, first_hit, material_kind, photon_flags};
+use ppm_core::geometry::oct_encode;
+use ppm_core::layout::{Photon, PhotonPassParams, first_hit, photon_flags};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::StreamKey;
-use ppm_core::sampling::cosine_hemisphere;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -162,40 +162,47 @@ fn trace_photon(
             -normal
         };
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
-        match material.kind {
-            material_kind::DIFFUSE => {
-                if (stores_all || crossed) && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
-                {
-                    out.push(Photon {
-                        position: position.into(),
-                        path,
-                        power: power.into(),
-                        normal_oct: oct_encode(facing),
-                    });
-                }
-                let albedo = Vec3::from(material.albedo);
-                let survive = albedo.max_element();
-                if key.uniform(d) >= survive {
-                    break;
-                }
-                power *= albedo / survive;
-                dir = to_world(
-                    cosine_hemisphere(key.uniform(d + 1), key.uniform(d + 2)),
-                    facing,
-                );
-                origin = position + facing * params.ray_epsilon;
-            }
-            _ => {
-                let front = facing == normal;
-                let u = key.uniform(d);
-                let bounce =
-                    specular_bounce(material, dir, facing, front, u, Transport::Importance);
-                power *= bounce.weight;
-                dir = bounce.dir;
-                let side = if bounce.transmitted { -facing } else { facing };
-                origin = position + side * params.ray_epsilon;
-            }
+        let front = facing == normal;
+        let delta = bsdf::is_delta(material);
+        if !delta
+            && (stores_all || crossed)
+            && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
+        {
+            out.push(Photon {
+                position: position.into(),
+                path,
+                power: power.into(),
+                normal_oct: oct_encode(facing),
+            });
         }
+        // Dimension d picks the lobe at a delta surface and plays Russian roulette elsewhere
+        // (survival: the largest channel of the sampled weight); d + 1 and d + 2 draw the
+        // direction.
+        let u = key.uniform(d);
+        let scattered = bsdf::sample(
+            material,
+            dir,
+            facing,
+            front,
+            (u, (key.uniform(d + 1), key.uniform(d + 2))),
+            Transport::Importance,
+        );
+        if delta {
+            power *= scattered.weight;
+        } else {
+            let survive = scattered.weight.max_element();
+            if u >= survive {
+                break;
+            }
+            power *= scattered.weight / survive;
+        }
+        dir = scattered.dir;
+        let side = if scattered.transmitted {
+            -facing
+        } else {
+            facing
+        };
+        origin = position + side * params.ray_epsilon;
     }
     (rays, crossed)
 }

@@ -2,11 +2,11 @@
 //!
 //! Each pass is one WGSL file in `shaders/passes/`, assembled at build time with the shared
 //! modules it imports (`shaders/shared/`, twins of ppm-core's `rng`, `sampling`, `geometry`,
-//! `update` and `grid`), so a same-seed run traces the CPU backend's paths up to rounding. Only
-//! baseline WebGPU features are used: no f64, no float atomics; integer atomics count and
-//! scatter, and every order that feeds a float sum is made deterministic. Small per-pass
-//! counters are read back after each pass (rays, deposits, the first non-finite slot); bulk
-//! buffers only when the harness asks ([`ReadBack`], [`Resolve`]).
+//! `bsdf`, `update` and `grid`), so a same-seed run traces the CPU backend's paths up to
+//! rounding. Only baseline WebGPU features are used: no f64, no float atomics; integer atomics
+//! count and scatter, and every order that feeds a float sum is made deterministic. Small
+//! per-pass counters are read back after each pass (rays, deposits, the first non-finite
+//! slot); bulk buffers only when the harness asks ([`ReadBack`], [`Resolve`]).
 
 #![warn(missing_docs)]
 
@@ -34,6 +34,7 @@ use passes::{
     RngVectorsKernel, Slots,
 };
 use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
+use ppm_core::bsdf::{BsdfCase, BsdfOutcome};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::{CompiledScene, SceneFeatures};
 use ppm_core::emission::PhotonSource;
@@ -945,11 +946,33 @@ impl WgpuBackend {
         &self,
         cases: &[GatherCase],
     ) -> Result<Vec<SlotState>, BackendError> {
-        let kernel = passes::GatherVectorsKernel::new(&self.ctx);
-        let input = buffers::storage_init(&self.ctx, "gather cases", cases);
-        let size = (cases.len() * std::mem::size_of::<SlotState>()) as u64;
-        let results = storage_zeroed(&self.ctx, "gather results", size)?;
-        self.run("gather vectors", |encoder| {
+        let shader = (
+            "gather_vectors",
+            shaders::GATHER_VECTORS,
+            "gather_vectors_main",
+        );
+        self.run_vectors(shader, cases)
+    }
+
+    /// Runs bsdf.wgsl on `cases`: a test compares the outcomes with
+    /// [`ppm_core::bsdf::BsdfCase::expected`] on [`ppm_core::bsdf::test_cases`]. Compiles its
+    /// kernel on every call.
+    pub fn bsdf_vectors(&self, cases: &[BsdfCase]) -> Result<Vec<BsdfOutcome>, BackendError> {
+        let shader = ("bsdf_vectors", shaders::BSDF_VECTORS, "bsdf_vectors_main");
+        self.run_vectors(shader, cases)
+    }
+
+    /// Runs a test-vector shader, (name, source, entry point), on `cases`, one output each.
+    fn run_vectors<I: bytemuck::Pod, O: bytemuck::Pod>(
+        &self,
+        (name, source, entry): (&'static str, &str, &'static str),
+        cases: &[I],
+    ) -> Result<Vec<O>, BackendError> {
+        let kernel = passes::VectorsKernel::new(&self.ctx, name, source, entry);
+        let input = buffers::storage_init(&self.ctx, name, cases);
+        let size = (cases.len() * std::mem::size_of::<O>()) as u64;
+        let results = storage_zeroed(&self.ctx, name, size)?;
+        self.run(name, |encoder| {
             kernel.record(&self.ctx, encoder, (&input, &results), cases.len() as u32);
             Ok(())
         })?;

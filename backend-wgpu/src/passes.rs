@@ -391,24 +391,25 @@ impl CheckKernel {
     }
 }
 
-/// gather_vectors.wgsl: update.wgsl's gather rule on given cases. Compiled only when a test
-/// asks for it.
-pub struct GatherVectorsKernel(Kernel);
+/// A test-vector shader (gather_vectors.wgsl, bsdf_vectors.wgsl): one output per input case,
+/// from an entry point over a read-only case array and a result array. Compiled only when a
+/// test asks for it.
+pub struct VectorsKernel(Kernel);
 
-impl GatherVectorsKernel {
-    /// Compiles the shader.
-    pub fn new(ctx: &GpuContext) -> Self {
-        let module = shader_module(&ctx.device, "gather_vectors", shaders::GATHER_VECTORS);
+impl VectorsKernel {
+    /// Compiles entry point `entry` of the shader `name`, assembled as `source`.
+    pub fn new(ctx: &GpuContext, name: &str, source: &str, entry: &'static str) -> Self {
+        let module = shader_module(&ctx.device, name, source);
         Self(Kernel::new(
             &ctx.device,
             &module,
-            "gather_vectors_main",
+            entry,
             &[Read, ReadWrite],
             WORKGROUP,
         ))
     }
 
-    /// Records the rule on `count` cases into `results`.
+    /// Records the shader on `count` cases into `results`.
     pub fn record(
         &self,
         ctx: &GpuContext,

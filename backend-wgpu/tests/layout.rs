@@ -2,11 +2,13 @@
 //! WGSL declaration, as naga lays the WGSL out. Needs no GPU.
 
 use naga::proc::Layouter;
+use ppm_core::bsdf::{BsdfCase, BsdfOutcome, Transport};
 use ppm_core::layout::*;
 use ppm_core::update::gather::{Found, GatherCase, SlotState};
 use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
+const BSDF_WGSL: &str = include_str!("../shaders/shared/bsdf.wgsl");
 
 /// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
 /// layout.wgsl or in the assembled pass shaders.
@@ -148,6 +150,28 @@ fn the_gather_rule_s_structs_match_their_wgsl_twins() {
 }
 
 #[test]
+fn the_bsdf_s_test_structs_match_their_wgsl_twins() {
+    same_layout!(BsdfCase {
+        material,
+        incoming,
+        front,
+        facing,
+        u_lobe,
+        u_dir,
+        transport,
+        _pad
+    });
+    same_layout!(BsdfOutcome {
+        dir,
+        pdf,
+        weight,
+        transmitted,
+        f,
+        pdf_of_dir
+    });
+}
+
+#[test]
 fn pass_parameters_match_their_wgsl_twins() {
     same_layout!(EyePassParams {
         seed,
@@ -284,6 +308,8 @@ fn shared_constants_agree() {
         ("MATERIAL_DIFFUSE", material_kind::DIFFUSE),
         ("MATERIAL_MIRROR", material_kind::MIRROR),
         ("MATERIAL_GLASS", material_kind::GLASS),
+        ("TRANSPORT_RADIANCE", Transport::Radiance as u32),
+        ("TRANSPORT_IMPORTANCE", Transport::Importance as u32),
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
         ("HIT_UPDATED", hit_flags::UPDATED),
@@ -318,8 +344,9 @@ fn shared_constants_agree() {
     ] {
         let line = LAYOUT_WGSL
             .lines()
+            .chain(BSDF_WGSL.lines())
             .find(|l| l.starts_with(&format!("const {name}: u32 = ")))
-            .unwrap_or_else(|| panic!("layout.wgsl lacks {name}"));
+            .unwrap_or_else(|| panic!("layout.wgsl and bsdf.wgsl lack {name}"));
         let literal = line
             .rsplit("= ")
             .next()

@@ -1,7 +1,7 @@
-//! Ray geometry shared by every pass: triangle intersection, local frames, specular directions
-//! and the packed normal of a photon record.
+//! Ray geometry shared by every pass: triangle intersection, local frames, mirror and
+//! refraction directions, and the packed normal of a photon record.
 
-use crate::layout::{GpuMaterial, GpuTriangle, material_kind};
+use crate::layout::GpuTriangle;
 use glam::Vec3;
 
 /// Distance along `dir` to the triangle, or `f32::INFINITY` on a miss (Moller-Trumbore).
@@ -79,72 +79,6 @@ pub fn fresnel_refract(d: Vec3, n: Vec3, eta: f32) -> (f32, Option<Vec3>) {
     let f = 0.5 * (r_s * r_s + r_p * r_p);
     let t = d * eta + n * (eta * cos_i - cos_t);
     (f.clamp(0.0, 1.0), Some(t.normalize()))
-}
-
-/// What a path carries, which decides how refraction scales it (Veach 1997, 5.2).
-///
-/// Radiance is not invariant across a refractive boundary, `L / eta^2` is: a camera in air
-/// looking into water of index 1.8 sees the radiance leaving a surface under water divided by
-/// `1.8^2`. Flux is invariant: a photon keeps its power when it refracts. So an eye path's
-/// throughput takes `(eta_i / eta_t)^2` at each refraction and a photon's power takes nothing;
-/// the two factors of a path that enters and leaves a body cancel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Transport {
-    /// An eye path: its throughput weights radiance found at its end.
-    Radiance,
-    /// A photon path: its power is flux.
-    Importance,
-}
-
-/// How a path continues from a mirror or glass surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpecularBounce {
-    /// New unit direction.
-    pub dir: Vec3,
-    /// The path passed through the surface (refraction): the next origin goes to the far side.
-    pub transmitted: bool,
-    /// Factor on the path's throughput or power.
-    pub weight: Vec3,
-}
-
-/// Continues a path at a specular surface: mirrors reflect with their reflectance; glass
-/// reflects with probability equal to the Fresnel term, else refracts, the weight then
-/// `(eta_i / eta_t)^2` for radiance and unchanged for flux ([`Transport`]). `facing` is the
-/// normal on the incident side, `front` whether that is the triangle's own normal (the path
-/// is entering), `u` the uniform number that picks for glass.
-#[inline]
-pub fn specular_bounce(
-    material: &GpuMaterial,
-    dir: Vec3,
-    facing: Vec3,
-    front: bool,
-    u: f32,
-    transport: Transport,
-) -> SpecularBounce {
-    let reflected = |weight| SpecularBounce {
-        dir: reflect(dir, facing),
-        transmitted: false,
-        weight,
-    };
-    if material.kind == material_kind::MIRROR {
-        return reflected(Vec3::from(material.albedo));
-    }
-    let eta = if front {
-        1.0 / material.ior
-    } else {
-        material.ior
-    };
-    match fresnel_refract(dir, facing, eta) {
-        (fresnel, Some(t)) if u >= fresnel => SpecularBounce {
-            dir: t,
-            transmitted: true,
-            weight: Vec3::splat(match transport {
-                Transport::Radiance => eta * eta,
-                Transport::Importance => 1.0,
-            }),
-        },
-        _ => reflected(Vec3::ONE),
-    }
 }
 
 /// Packs a unit vector into 16+16 bits by the octahedral map (Cigolle et al. 2014).
@@ -278,36 +212,6 @@ mod tests {
         let (f, t) = fresnel_refract(-Vec3::Y, n, 1.0 / 1.5);
         assert_relative_eq!(f, 0.04, epsilon = 1e-4);
         assert_relative_eq!(t.unwrap().y, -1.0, epsilon = 1e-6);
-    }
-
-    /// Into water of index 1.8 and out again: radiance divides by 1.8^2 going in and
-    /// multiplies by it coming out (the product is one), flux keeps its power both ways, and
-    /// reflection changes neither.
-    #[test]
-    fn refraction_scales_radiance_by_eta_squared_and_keeps_flux() {
-        let water = GpuMaterial {
-            kind: material_kind::GLASS,
-            ior: 1.8,
-            ..bytemuck::Zeroable::zeroed()
-        };
-        let up = Vec3::Y;
-        let down = Vec3::new(0.3, -1.0, 0.0).normalize();
-        let bounce = |dir: Vec3, front, u, transport| {
-            let facing = if front { up } else { -up };
-            specular_bounce(&water, dir, facing, front, u, transport)
-        };
-        let enter = bounce(down, true, 0.99, Transport::Radiance);
-        assert!(enter.transmitted);
-        assert_relative_eq!(enter.weight.x, 1.0 / (1.8 * 1.8), epsilon = 1e-6);
-        let leave = bounce(-enter.dir, false, 0.99, Transport::Radiance);
-        assert!(leave.transmitted);
-        assert_relative_eq!(enter.weight.x * leave.weight.x, 1.0, epsilon = 1e-5);
-        assert_relative_eq!(leave.dir.dot(-down), 1.0, epsilon = 1e-5);
-        let photon = bounce(down, true, 0.99, Transport::Importance);
-        assert_eq!((photon.dir, photon.weight), (enter.dir, Vec3::ONE));
-        let mirrored = bounce(down, true, 0.0, Transport::Radiance);
-        assert!(!mirrored.transmitted);
-        assert_eq!(mirrored.weight, Vec3::ONE);
     }
 
     #[test]

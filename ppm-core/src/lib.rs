@@ -4,7 +4,8 @@
 //! - [`passes`]: one trait per pass, implemented by each backend.
 //! - [`layout`]: the `#[repr(C)]` buffer elements, byte-for-byte what the GPU binds.
 //! - [`update`]: the progressive update formulas in their stable forms.
-//! - [`rng`], [`sampling`], [`geometry`]: math that exists once here and once in WGSL.
+//! - [`rng`], [`sampling`], [`geometry`], [`bsdf`]: math that exists once here and once in
+//!   WGSL; [`bsdf`] is what every material does with light.
 //! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
 //!   ([`scene::path`]), and the flattening into buffers. Files are the `scenes` crate's.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping; [`screen_cover`]: the pixels a
@@ -15,6 +16,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bsdf;
 pub mod check;
 pub mod compile;
 pub mod emission;

@@ -1,6 +1,7 @@
-// #import layout rng qmc sampling geometry bvh lights tables scene materials
+// #import layout rng qmc sampling geometry bsdf bvh lights tables scene materials
 // Direct light (docs/algorithm.md 1.2): the twin of backend-cpu's direct_light.rs. Each sample is a
-// shadow ray to a light and a cosine ray that may meet one, weighted by the power heuristic.
+// shadow ray to a light and a ray drawn from the BSDF that may meet one, weighted by the power
+// heuristic.
 
 @group(0) @binding(0) var<uniform> params: DirectLightParams;
 @group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
@@ -19,7 +20,9 @@ fn sequence_start(hp: HitPoint) -> u32 {
     return select(params.iteration, hp.iterations, params.accumulate == DIRECT_ADD);
 }
 
-fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
+// Light from the lights reflected towards the eye (backend-cpu's estimate_reflected).
+fn estimate_reflected(material: GpuMaterial, hp: HitPoint, slot: u32) -> vec3<f32> {
+    let f = visible_point_f(material);
     let origin = hp.position + hp.normal * params.ray_epsilon;
     var sum = vec3<f32>(0.0);
     let start = sequence_start(hp) * params.samples;
@@ -40,12 +43,13 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
             if cos_x > 0.0 && cos_l > 0.0 && !occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
                 let le = scene_material(light.material).emission;
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-                sum += le * (cos_x / pl * power_heuristic(pl, cos_x * (1.0 / PI)));
+                let pb = bsdf_pdf(material, hp.normal, w);
+                sum += f * le * (cos_x / pl * power_heuristic(pl, pb));
             }
         }
         let v = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_DIRECTION, index);
-        let local = cosine_hemisphere(v.x, v.y);
-        let w = to_world(local, hp.normal);
+        let scattered = bsdf_sample_visible(material, hp.normal, v);
+        let w = scattered.dir;
         let hit = closest_hit(origin, w, T_MISS);
         if hit.triangle != 0xffffffffu {
             let tri = scene_triangle(hit.triangle);
@@ -55,7 +59,7 @@ fn estimate_irradiance(hp: HitPoint, slot: u32) -> vec3<f32> {
                 let hit_light = scene_light(tri.light);
                 let le = scene_material(hit_light.material).emission;
                 let pl = light_pdf(hit_light.pdf, hit_light.area, hit.t * hit.t, cos_l);
-                sum += le * (PI * power_heuristic(local.z * (1.0 / PI), pl));
+                sum += scattered.weight * le * power_heuristic(scattered.pdf, pl);
             }
         }
     }
@@ -76,8 +80,9 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if (hp.flags & HIT_VALID) != 0u {
         let material = scene_material(hp.material);
         var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
-        if params.samples > 0u && max(material.albedo.x, max(material.albedo.y, material.albedo.z)) > 0.0 && scene.light_count > 0u {
-            direct += estimate_irradiance(hp, slot) * material.albedo * (1.0 / PI);
+        let f = visible_point_f(material);
+        if params.samples > 0u && max(f.x, max(f.y, f.z)) > 0.0 && scene.light_count > 0u {
+            direct += estimate_reflected(material, hp, slot);
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }
         estimate = hp.throughput * direct;

@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bvh tables scene materials
+// #import layout rng qmc sampling geometry bsdf bvh tables scene materials
 // Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -87,7 +87,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         hi = max(hi, position);
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
-        if material.kind == MATERIAL_DIFFUSE || !SPECULAR {
+        if !SPECULAR || !bsdf_is_delta(material) {
             out.position = position;
             out.normal = facing;
             out.material = tri.material;
@@ -98,7 +98,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         out.flags |= HIT_EYE_CHAINED;
         let u = stream_uniform(key, DIM_GLASS + depth);
-        let bounce = specular_bounce(material, dir, facing, front, u, TRANSPORT_RADIANCE);
+        let bounce = bsdf_sample_delta(material, dir, facing, front, u, TRANSPORT_RADIANCE);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = select(facing, -facing, bounce.transmitted);

@@ -1,4 +1,4 @@
-// #import layout rng qmc geometry sampling update grid tables scene materials
+// #import layout rng qmc geometry sampling bsdf update grid tables scene materials
 // Gather pass (docs/algorithm.md 1.4, and 3 "Who gathers what"): the twin of backend-cpu's
 // gather_pass.rs, in two steps so that a photon pass split into batches still makes one
 // update. `gather_accumulate_main` (per batch, inside the photon pass) adds the photons within
@@ -161,7 +161,7 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     var reflectance = vec3<f32>(0.0);
     if gathering {
-        reflectance = hp.throughput * scene_material(hp.material).albedo * (1.0 / PI);
+        reflectance = hp.throughput * visible_point_f(scene_material(hp.material));
     }
     // The pending sums may be a placeholder until a pass defers: read and written only by
     // the kinds that use them.

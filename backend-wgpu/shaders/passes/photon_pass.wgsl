@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bvh lights emission movers tables scene materials
+// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials
 // Photon pass (docs/algorithm.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -28,7 +28,7 @@
 // carry no region or guided code.
 override EMISSION: u32 = 0u;
 
-// False for a scene without mirrors or glass: the specular bounce is compiled out.
+// False for a scene without mirrors or glass: the delta lobes are compiled out.
 override SPECULAR: bool = true;
 
 // False for passes that never test the movers' boxes (all but local mode's correction): the
@@ -127,31 +127,36 @@ fn trace_photon(path: u32) -> Traced {
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
-        if material.kind == MATERIAL_DIFFUSE || !SPECULAR {
-            if (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
-                let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
-                if slot < arrayLength(&photons) {
-                    photons[slot] = Photon(position, path, power, oct_encode(facing));
-                    ranks[slot] = rank_base + bounce;
-                    if EMISSION == EMISSION_REGION {
-                        weights[slot] = emission.weight;
-                    }
+        let delta = SPECULAR && bsdf_is_delta(material);
+        if !delta && (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
+            let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
+            if slot < arrayLength(&photons) {
+                photons[slot] = Photon(position, path, power, oct_encode(facing));
+                ranks[slot] = rank_base + bounce;
+                if EMISSION == EMISSION_REGION {
+                    weights[slot] = emission.weight;
                 }
             }
-            let survive = max(material.albedo.x, max(material.albedo.y, material.albedo.z));
-            if stream_uniform(key, d) >= survive {
+        }
+        // Dimension d picks the lobe at a delta surface and plays Russian roulette elsewhere
+        // (backend-cpu's photon_pass.rs).
+        let u = stream_uniform(key, d);
+        var scattered: BsdfSample;
+        if delta {
+            scattered = bsdf_sample_delta(material, dir, facing, front, u, TRANSPORT_IMPORTANCE);
+            power *= scattered.weight;
+        } else {
+            let u_dir = vec2<f32>(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u));
+            scattered = bsdf_sample_visible(material, facing, u_dir);
+            let survive = max(scattered.weight.x, max(scattered.weight.y, scattered.weight.z));
+            if u >= survive {
                 break;
             }
-            power *= material.albedo / survive;
-            dir = to_world(cosine_hemisphere(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u)), facing);
-            origin = position + facing * params.ray_epsilon;
-        } else {
-            let sb = specular_bounce(material, dir, facing, front, stream_uniform(key, d), TRANSPORT_IMPORTANCE);
-            power *= sb.weight;
-            dir = sb.dir;
-            let side = select(facing, -facing, sb.transmitted);
-            origin = position + side * params.ray_epsilon;
+            power *= scattered.weight / survive;
         }
+        dir = scattered.dir;
+        let side = select(facing, -facing, scattered.transmitted);
+        origin = position + side * params.ray_epsilon;
     }
     return Traced(rays, crossed_box);
 }

@@ -68,36 +68,6 @@ fn fresnel_refract(d: vec3<f32>, n: vec3<f32>, eta: f32) -> Fresnel {
     return Fresnel(clamp(f, 0.0, 1.0), true, normalize(t));
 }
 
-// What a path carries: the twin of ppm_core::geometry::Transport. An eye path's throughput
-// weights radiance, which refraction scales by (eta_i / eta_t)^2; a photon's power is flux,
-// which it keeps.
-const TRANSPORT_RADIANCE: u32 = 0u;
-const TRANSPORT_IMPORTANCE: u32 = 1u;
-
-struct SpecularBounce {
-    dir: vec3<f32>,
-    transmitted: bool,
-    weight: vec3<f32>,
-}
-
-// False for a scene without glass: the refraction half of the specular bounce is compiled
-// out (backend_wgpu::Specialisation); a pipeline that does not set it keeps it.
-override GLASS: bool = true;
-
-fn specular_bounce(material: GpuMaterial, dir: vec3<f32>, facing: vec3<f32>, front: bool, u: f32, transport: u32) -> SpecularBounce {
-    let reflected = reflect(dir, facing);
-    if material.kind == MATERIAL_MIRROR || !GLASS {
-        return SpecularBounce(reflected, false, material.albedo);
-    }
-    let eta = select(material.ior, 1.0 / material.ior, front);
-    let fresnel = fresnel_refract(dir, facing, eta);
-    if fresnel.refracts && u >= fresnel.reflectance {
-        let scale = select(1.0, eta * eta, transport == TRANSPORT_RADIANCE);
-        return SpecularBounce(fresnel.refracted, true, vec3<f32>(scale));
-    }
-    return SpecularBounce(reflected, false, vec3<f32>(1.0));
-}
-
 fn sign_nonzero(v: f32) -> f32 {
     return select(-1.0, 1.0, v >= 0.0);
 }

@@ -22,6 +22,8 @@
 
 pub mod paths;
 
+use glam::Vec3;
+use ppm_core::bsdf;
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
@@ -38,7 +40,6 @@ use ppm_core::passes::{
 use ppm_core::rng::{StreamKey, random_bits};
 use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, search_r2};
 use ppm_core::update::radiance;
-use std::f32::consts::FRAC_1_PI;
 
 /// The backend's state: the scene, one hit point per slot, and the current photon map.
 #[derive(Default)]
@@ -208,8 +209,8 @@ impl GatherPass for MinimalBackend {
                 found.weight *= shrink;
                 stats.hit_points_reached += u64::from(found.count > 0.0);
                 stats.photons_gathered += found.count as u64;
-                let albedo = materials[hp.material as usize].albedo;
-                reflectance = [0, 1, 2].map(|c| hp.throughput[c] * albedo[c] * FRAC_1_PI);
+                let f = bsdf::visible_point_f(&materials[hp.material as usize]);
+                reflectance = (Vec3::from(hp.throughput) * f).into();
             }
             let before = SlotState::of(hp, *pending);
             let after = gather_rule(params, self.r2_initial, reflectance, before, &found);

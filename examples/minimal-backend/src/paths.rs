@@ -5,19 +5,16 @@
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
+use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::{CompiledScene, camera_ray};
 use ppm_core::emission::{EMISSION_DIMS, Emission};
-use ppm_core::geometry::{Transport, intersect_triangle, oct_encode, specular_bounce, to_world};
+use ppm_core::geometry::{intersect_triangle, oct_encode};
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, HitPoint,
     NO_MATERIAL, Photon, PhotonPassParams, direct_accumulate, eye_flags, first_hit, hit_flags,
-    material_kind,
 };
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey, stratified_pair};
-use ppm_core::sampling::{
-    cosine_hemisphere, light_pdf, power_heuristic, sample_cdf, uniform_triangle,
-};
-use std::f32::consts::{FRAC_1_PI, PI};
+use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
 
 /// An eye path's dimension `DIM_GLASS + depth` picks reflection or refraction at glass.
 const DIM_GLASS: u32 = 2;
@@ -128,7 +125,7 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if material.kind == material_kind::DIFFUSE {
+        if !bsdf::is_delta(material) {
             hp.position = position.into();
             hp.normal = facing.into();
             hp.material = tri.material;
@@ -141,7 +138,7 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         // Mirror or glass: follow the bounce.
         hp.flags |= hit_flags::EYE_CHAINED;
         let u = key.uniform(DIM_GLASS + depth);
-        let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
+        let bounce = bsdf::sample_delta(material, dir, facing, front, u, Transport::Radiance);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
@@ -151,8 +148,8 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
 }
 
 /// A visible point's direct radiance towards the eye, throughput included (docs/algorithm.md
-/// 1.2): the emission it shows, plus per sample a shadow ray to a point on a light and a
-/// cosine-sampled ray that may meet one, weighted by the power heuristic. Returns it and the
+/// 1.2): the emission it shows, plus per sample a shadow ray to a point on a light and a ray
+/// drawn from the BSDF that may meet one, weighted by the power heuristic. Returns it and the
 /// rays traced.
 pub fn direct_light(
     params: &DirectLightParams,
@@ -165,21 +162,30 @@ pub fn direct_light(
         true => Vec3::from(material.emission),
         false => Vec3::ZERO,
     };
-    let albedo = Vec3::from(material.albedo);
     let mut rays = 0;
-    if params.samples > 0 && albedo.max_element() > 0.0 && !scene.lights.is_empty() {
-        radiance += irradiance(params, scene, hp, slot) * albedo * FRAC_1_PI;
+    if params.samples > 0
+        && bsdf::visible_point_f(material).max_element() > 0.0
+        && !scene.lights.is_empty()
+    {
+        radiance += reflected(params, scene, material, hp, slot);
         rays = u64::from(params.samples) * 2;
     }
     ((Vec3::from(hp.throughput) * radiance).into(), rays)
 }
 
-/// Irradiance from the lights at a visible point, `params.samples` samples of both
+/// Light from the lights reflected at a visible point, `params.samples` samples of both
 /// strategies. A slot that adds to its sum continues its own sequence from its iteration
 /// count, so its samples over all iterations are stratified together.
-fn irradiance(params: &DirectLightParams, scene: &Scene, hp: &HitPoint, slot: u32) -> Vec3 {
+fn reflected(
+    params: &DirectLightParams,
+    scene: &Scene,
+    material: &GpuMaterial,
+    hp: &HitPoint,
+    slot: u32,
+) -> Vec3 {
     let x = Vec3::from(hp.position);
     let n = Vec3::from(hp.normal);
+    let f = bsdf::visible_point_f(material);
     let origin = x + n * params.ray_epsilon;
     let first = match params.accumulate == direct_accumulate::ADD {
         true => hp.iterations,
@@ -207,21 +213,22 @@ fn irradiance(params: &DirectLightParams, scene: &Scene, hp: &HitPoint, slot: u3
                 && !occluded(scene, origin, w, dist - 2.0 * params.ray_epsilon)
             {
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-                sum += emission(light.material)
-                    * (cos_x / pl * power_heuristic(pl, cos_x * FRAC_1_PI));
+                let pb = bsdf::pdf(material, n, w);
+                sum += f * emission(light.material) * (cos_x / pl * power_heuristic(pl, pb));
             }
         }
-        // Cosine sampling: light only where the ray meets an emitter's front first.
-        let (v1, v2) = stream.pair(PAIR_DIRECTION, index);
-        let local = cosine_hemisphere(v1, v2);
-        let w = to_world(local, n);
+        // BSDF sampling: light only where the ray meets an emitter's front first.
+        let scattered = bsdf::sample_visible(material, n, stream.pair(PAIR_DIRECTION, index));
+        let w = scattered.dir;
         if let Some((t, index)) = closest_hit(scene, origin, w, f32::INFINITY) {
             let tri = &scene.triangles[index as usize];
             let cos_l = -Vec3::from(tri.normal).dot(w);
             if tri.light != NO_MATERIAL && cos_l > 0.0 {
                 let light = &scene.lights[tri.light as usize];
                 let pl = light_pdf(light.pdf, light.area, t * t, cos_l);
-                sum += emission(light.material) * (PI * power_heuristic(local.z * FRAC_1_PI, pl));
+                sum += scattered.weight
+                    * emission(light.material)
+                    * power_heuristic(scattered.pdf, pl);
             }
         }
     }
@@ -257,23 +264,8 @@ pub fn photon_path(
             -normal
         };
         let d = EMISSION_DIMS + bounce * DIMS_PER_BOUNCE;
-        if material.kind != material_kind::DIFFUSE {
-            let front = facing == normal;
-            let b = specular_bounce(
-                material,
-                dir,
-                facing,
-                front,
-                key.uniform(d),
-                Transport::Importance,
-            );
-            power *= b.weight;
-            dir = b.dir;
-            let side = if b.transmitted { -facing } else { facing };
-            origin = position + side * params.ray_epsilon;
-            continue;
-        }
-        if bounce > 0 || params.first_hit == first_hit::DEPOSIT {
+        let delta = bsdf::is_delta(material);
+        if !delta && (bounce > 0 || params.first_hit == first_hit::DEPOSIT) {
             out.push(Photon {
                 position: position.into(),
                 path: key.path,
@@ -281,17 +273,28 @@ pub fn photon_path(
                 normal_oct: oct_encode(facing),
             });
         }
-        let albedo = Vec3::from(material.albedo);
-        let survive = albedo.max_element();
-        if key.uniform(d) >= survive {
-            break;
-        }
-        power *= albedo / survive;
-        dir = to_world(
-            cosine_hemisphere(key.uniform(d + 1), key.uniform(d + 2)),
+        // Dimension d picks at glass and plays roulette at a diffuse surface.
+        let u = key.uniform(d);
+        let b = bsdf::sample(
+            material,
+            dir,
             facing,
+            facing == normal,
+            (u, (key.uniform(d + 1), key.uniform(d + 2))),
+            Transport::Importance,
         );
-        origin = position + facing * params.ray_epsilon;
+        if !delta {
+            let survive = b.weight.max_element();
+            if u >= survive {
+                break;
+            }
+            power *= b.weight / survive;
+        } else {
+            power *= b.weight;
+        }
+        dir = b.dir;
+        let side = if b.transmitted { -facing } else { facing };
+        origin = position + side * params.ray_epsilon;
     }
     rays
 }

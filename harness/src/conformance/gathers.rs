@@ -6,6 +6,7 @@
 use super::{BackendFactory, ConformanceOptions, cornell, err, eye_params, params_for};
 use crate::driver::pass_params;
 use glam::Vec3;
+use ppm_core::bsdf;
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::emission::{PhotonSource, ordinary_emission};
 use ppm_core::geometry::oct_faces;
@@ -19,7 +20,6 @@ use ppm_core::region::emitting_region;
 use ppm_core::rng::{PassKind, StreamKey};
 use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, gathers, search_r2};
 use ppm_core::update::luminance;
-use std::f32::consts::FRAC_1_PI;
 
 /// Where a step's photons start.
 #[derive(Clone, Copy)]
@@ -363,10 +363,10 @@ impl Bench {
         Ok((photons, weights, r2_floor))
     }
 
-    /// The slot's eye-path throughput times its diffuse BRDF.
+    /// The slot's eye-path throughput times its BSDF.
     fn reflectance(&self, hp: &HitPoint) -> Vec3 {
-        let albedo = Vec3::from(self.compiled.materials[hp.material as usize].albedo);
-        Vec3::from(hp.throughput) * albedo * FRAC_1_PI
+        let material = &self.compiled.materials[hp.material as usize];
+        Vec3::from(hp.throughput) * bsdf::visible_point_f(material)
     }
 }
 

@@ -7,9 +7,9 @@
 
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
+use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::{CompiledScene, camera_ray};
-use ppm_core::geometry::{Transport, specular_bounce};
-use ppm_core::layout::{HitPoint, hit_flags, material_kind};
+use ppm_core::layout::{HitPoint, hit_flags};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
 use std::cell::OnceCell;
@@ -142,7 +142,7 @@ pub(super) fn eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if material.kind == material_kind::DIFFUSE {
+        if !bsdf::is_delta(material) {
             let front = if front { hit_flags::FRONT } else { 0 };
             return EyePath {
                 met: false,
@@ -157,7 +157,7 @@ pub(super) fn eye_path(
             };
         }
         let u = key.uniform(depth);
-        let bounce = specular_bounce(material, dir, facing, front, u, Transport::Radiance);
+        let bounce = bsdf::sample_delta(material, dir, facing, front, u, Transport::Radiance);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };

@@ -1,22 +1,23 @@
 //! An unbiased path tracer: the ground truth the photon mapper is measured against.
 //!
-//! It shares only the compiled scene and its ray queries with the photon passes; the light
-//! transport is written here on its own (light sampling, multiple importance sampling, the
-//! dielectric, Russian roulette), so a mistake in the passes' transport does not repeat here.
-//! Per sample: a point uniform in the pixel's area (a box filter), then at every diffuse
-//! surface next-event estimation towards a point on the area lights and a cosine-sampled
-//! bounce, the two weighted by the power heuristic; mirrors reflect, glass reflects with the
-//! Fresnel probability and otherwise refracts with radiance scaled by `(eta_i / eta_t)^2`;
-//! emission reached directly or after a specular bounce counts whole.
+//! It shares with the photon passes the compiled scene, its ray queries and the materials
+//! ([`ppm_core::bsdf`]: what a surface does with light is written once, and checked by
+//! white-furnace tests and against other renderers rather than against a second copy); the
+//! light transport is written here on its own (light sampling, multiple importance sampling,
+//! Russian roulette), so a mistake in the passes' transport does not repeat here.
+//! Per sample: a point uniform in the pixel's area (a box filter), then at every non-delta
+//! surface next-event estimation towards a point on the area lights and a bounce drawn from
+//! the BSDF, the two weighted by the power heuristic; at mirrors and glass the BSDF's delta
+//! lobes continue the path (radiance scaled by `(eta_i / eta_t)^2` through a refraction);
+//! emission reached directly or after a delta bounce counts whole.
 
 use super::sampler::Sampler;
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
+use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::camera_ray;
-use ppm_core::geometry::{reflect, to_world};
-use ppm_core::layout::{GpuCamera, GpuLight, NO_MATERIAL, material_kind};
-use ppm_core::sampling::{cosine_hemisphere, sample_cdf, uniform_triangle};
-use std::f32::consts::FRAC_1_PI;
+use ppm_core::layout::{GpuCamera, GpuLight, GpuMaterial, NO_MATERIAL};
+use ppm_core::sampling::{sample_cdf, uniform_triangle};
 
 /// Bounces after which a path stops. Russian roulette ends paths long before in any scene
 /// that absorbs: even the albedo-0.99 furnace loses only `0.99^1024 = 3e-5` of its light here.
@@ -100,47 +101,32 @@ impl PathTracer<'_> {
                 radiance += throughput * emission * weight;
             }
             let u = Bounce::new(sampler, bounce);
-            let albedo = Vec3::from(material.albedo);
-            match material.kind {
-                material_kind::DIFFUSE => {
-                    if albedo.max_element() <= 0.0 {
-                        break;
-                    }
-                    let x = position + facing * self.ray_epsilon;
-                    radiance += throughput * albedo * FRAC_1_PI * self.light_sample(x, facing, &u);
-                    let local = cosine_hemisphere(u.direction.0, u.direction.1);
-                    bsdf_pdf = Some(local.z * FRAC_1_PI);
-                    dir = to_world(local, facing);
-                    origin = x;
-                    throughput *= albedo;
+            let delta = bsdf::is_delta(material);
+            if !delta {
+                let f = bsdf::visible_point_f(material);
+                if f.max_element() <= 0.0 {
+                    break;
                 }
-                material_kind::MIRROR => {
-                    dir = reflect(dir, facing);
-                    origin = position + facing * self.ray_epsilon;
-                    throughput *= albedo;
-                    bsdf_pdf = None;
-                }
-                _ => {
-                    let eta = if front {
-                        1.0 / material.ior
-                    } else {
-                        material.ior
-                    };
-                    let (fresnel, refracted) = dielectric(dir, facing, eta);
-                    match refracted {
-                        Some(t) if u.direction.0 >= fresnel => {
-                            dir = t;
-                            origin = position - facing * self.ray_epsilon;
-                            throughput *= eta * eta;
-                        }
-                        _ => {
-                            dir = reflect(dir, facing);
-                            origin = position + facing * self.ray_epsilon;
-                        }
-                    }
-                    bsdf_pdf = None;
-                }
+                let x = position + facing * self.ray_epsilon;
+                radiance += throughput * f * self.light_sample(x, material, facing, &u);
             }
+            let scattered = bsdf::sample(
+                material,
+                dir,
+                facing,
+                front,
+                (u.direction.0, u.direction),
+                Transport::Radiance,
+            );
+            let side = if scattered.transmitted {
+                -facing
+            } else {
+                facing
+            };
+            origin = position + side * self.ray_epsilon;
+            dir = scattered.dir;
+            throughput *= scattered.weight;
+            bsdf_pdf = (!delta).then_some(scattered.pdf);
             if bounce >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(0.95);
                 if u.roulette >= survive {
@@ -153,8 +139,9 @@ impl PathTracer<'_> {
     }
 
     /// Irradiance-like estimate `Le cos_x cos_l / (d^2 p_area)` from one point on the lights,
-    /// weighted against the cosine bounce by the power heuristic.
-    fn light_sample(&self, x: Vec3, n: Vec3, u: &Bounce) -> Vec3 {
+    /// weighted against the BSDF's bounce by the power heuristic (the caller multiplies by
+    /// `f`, the same for every direction at a visible point).
+    fn light_sample(&self, x: Vec3, material: &GpuMaterial, n: Vec3, u: &Bounce) -> Vec3 {
         let lights = &self.scene.lights;
         if lights.is_empty() {
             return Vec3::ZERO;
@@ -178,7 +165,7 @@ impl PathTracer<'_> {
         }
         let pl = self.light_pdf(light, dist, cos_l);
         let le = Vec3::from(self.scene.materials[light.material as usize].emission);
-        le * (cos_x / pl) * power_heuristic(pl, cos_x * FRAC_1_PI)
+        le * (cos_x / pl) * power_heuristic(pl, bsdf::pdf(material, n, w))
     }
 
     /// Solid-angle density with which light sampling picks a point of `light` seen at
@@ -194,38 +181,10 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-/// Fresnel reflectance of a smooth dielectric for unpolarised light and the refracted
-/// direction (`None` under total internal reflection). `n` faces the incident side and `eta`
-/// is the incident index over the transmitted one.
-fn dielectric(dir: Vec3, n: Vec3, eta: f32) -> (f32, Option<Vec3>) {
-    let cos_i = (-dir.dot(n)).clamp(0.0, 1.0);
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    if sin2_t >= 1.0 {
-        return (1.0, None);
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let fresnel = 0.5 * (parallel * parallel + perpendicular * perpendicular);
-    let refracted = (dir * eta + n * (eta * cos_i - cos_t)).normalize();
-    (fresnel, Some(refracted))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
-
-    /// At normal incidence from air into glass of index 1.5 the reflectance is
-    /// `((1.5 - 1) / (1.5 + 1))^2 = 0.04`; past the critical angle inside, reflection is total.
-    #[test]
-    fn dielectric_matches_the_normal_incidence_reflectance_and_reflects_totally_inside() {
-        let (f, t) = dielectric(-Vec3::Y, Vec3::Y, 1.0 / 1.5);
-        assert_relative_eq!(f, 0.04, epsilon = 1e-6);
-        assert_relative_eq!(t.unwrap().y, -1.0, epsilon = 1e-6);
-        let grazing = Vec3::new(0.9, -0.3, 0.0).normalize();
-        assert_eq!(dielectric(grazing, Vec3::Y, 1.5), (1.0, None));
-    }
 
     #[test]
     fn power_heuristic_weights_sum_to_one() {

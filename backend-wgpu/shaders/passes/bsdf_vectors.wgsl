@@ -1,0 +1,38 @@
+// #import layout sampling geometry bsdf
+// Runs bsdf.wgsl on given cases, so a test pins it to ppm_core::bsdf::test_cases.
+
+// One input: ppm_core::bsdf::BsdfCase.
+struct BsdfCase {
+    material: GpuMaterial,
+    incoming: vec3<f32>,
+    front: u32,
+    facing: vec3<f32>,
+    u_lobe: f32,
+    u_dir: vec2<f32>,
+    transport: u32,
+    _pad: u32,
+}
+
+// One output: ppm_core::bsdf::BsdfOutcome.
+struct BsdfOutcome {
+    dir: vec3<f32>,
+    pdf: f32,
+    weight: vec3<f32>,
+    transmitted: u32,
+    f: vec3<f32>,
+    pdf_of_dir: f32,
+}
+
+@group(0) @binding(0) var<storage, read> cases: array<BsdfCase>;
+@group(0) @binding(1) var<storage, read_write> results: array<BsdfOutcome>;
+
+@compute @workgroup_size(64)
+fn bsdf_vectors_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = item_index(gid, groups);
+    if i >= arrayLength(&results) {
+        return;
+    }
+    let c = cases[i];
+    let s = bsdf_sample(c.material, c.incoming, c.facing, c.front != 0u, c.u_lobe, c.u_dir, c.transport);
+    results[i] = BsdfOutcome(s.dir, s.pdf, s.weight, select(0u, 1u, s.transmitted), visible_point_f(c.material), bsdf_pdf(c.material, c.facing, s.dir));
+}

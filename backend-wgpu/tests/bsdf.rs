@@ -1,0 +1,47 @@
+//! bsdf.wgsl reproduces ppm_core::bsdf on every test case: the same lobe, and directions,
+//! weights, densities and values within float rounding (WGSL's sine and cosine are not
+//! correctly rounded, so directions get an absolute allowance).
+
+use ppm_core::bsdf::{BsdfOutcome, test_cases};
+
+/// Allowed difference of a direction's components and of relative weights and densities.
+const TOLERANCE: f32 = 2e-5;
+
+fn close(a: f32, b: f32) -> bool {
+    (a - b).abs() <= TOLERANCE * a.abs().max(b.abs()).max(1.0)
+}
+
+fn fields(o: &BsdfOutcome) -> [f32; 11] {
+    [
+        o.dir[0],
+        o.dir[1],
+        o.dir[2],
+        o.pdf,
+        o.weight[0],
+        o.weight[1],
+        o.weight[2],
+        o.f[0],
+        o.f[1],
+        o.f[2],
+        o.pdf_of_dir,
+    ]
+}
+
+#[test]
+fn the_wgsl_bsdf_reproduces_the_core_s_on_every_case() {
+    let Some(gpu) =
+        backend_wgpu::backend_or_skip("the_wgsl_bsdf_reproduces_the_core_s_on_every_case")
+    else {
+        return;
+    };
+    let cases = test_cases();
+    let got = gpu.bsdf_vectors(&cases).unwrap();
+    assert_eq!(got.len(), cases.len());
+    for (case, wgsl) in cases.iter().zip(&got) {
+        let core = case.expected();
+        assert_eq!(wgsl.transmitted, core.transmitted, "{case:?}");
+        for (w, c) in fields(wgsl).into_iter().zip(fields(&core)) {
+            assert!(close(w, c), "WGSL {wgsl:?}, core {core:?}, case {case:?}");
+        }
+    }
+}
