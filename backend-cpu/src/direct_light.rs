@@ -144,7 +144,7 @@ fn estimate_reflected(
             {
                 let le = Vec3::from(scene.materials[light.material as usize].emission);
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-                let pb = bsdf::pdf(material, n, w);
+                let pb = bsdf::visible_point_pdf(n, w);
                 sum += f * le * (cos_x / pl * power_heuristic(pl, pb));
             }
         }

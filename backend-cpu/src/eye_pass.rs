@@ -12,10 +12,6 @@ use ppm_core::passes::EyeStats;
 use ppm_core::rng::{PassKind, StreamKey, stratified_pair};
 use rayon::prelude::*;
 
-/// Random dimension `DIM_GLASS + depth` picks glass reflection or refraction; the point in
-/// the pixel is stratified over the pixel's samples (slots times iterations).
-const DIM_GLASS: u32 = 2;
-
 /// Writes the visible point of every slot of `hit_points` (`width * height * spp` slots,
 /// slot = pixel * spp + sample), starting the slots fresh or keeping their statistics as
 /// `params.flags` says; with [`eye_flags::RECORD_BOUNDS`], extends each slot's `bounds`.
@@ -151,7 +147,7 @@ fn trace_eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if !bsdf::is_delta(material) {
+        if bsdf::holds_visible_points(material) {
             out.position = position.into();
             out.normal = facing.into();
             out.material = tri.material;
@@ -162,8 +158,12 @@ fn trace_eye_path(
             return u64::from(depth) + 1;
         }
         out.flags |= hit_flags::EYE_CHAINED;
-        let u = key.uniform(DIM_GLASS + depth);
-        let bounce = bsdf::sample_delta(material, dir, facing, front, u, Transport::Radiance);
+        let u = key.eye_bounce(depth);
+        let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
+        if bounce.weight == Vec3::ZERO {
+            // A glossy direction below the surface: the path ends without a visible point.
+            return u64::from(depth) + 1;
+        }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };

@@ -163,8 +163,8 @@ fn trace_photon(
         };
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         let front = facing == normal;
-        let delta = bsdf::is_delta(material);
-        if !delta
+        let stores = bsdf::holds_visible_points(material);
+        if stores
             && (stores_all || crossed)
             && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
         {
@@ -175,9 +175,9 @@ fn trace_photon(
                 normal_oct: oct_encode(facing),
             });
         }
-        // Dimension d picks the lobe at a delta surface and plays Russian roulette elsewhere
-        // (survival: the largest channel of the sampled weight); d + 1 and d + 2 draw the
-        // direction.
+        // Dimension d picks the lobe at a delta surface and plays Russian roulette where
+        // photons are stored (survival: the largest channel of the sampled weight); d + 1 and
+        // d + 2 draw a diffuse or glossy direction.
         let u = key.uniform(d);
         let scattered = bsdf::sample(
             material,
@@ -187,14 +187,17 @@ fn trace_photon(
             (u, (key.uniform(d + 1), key.uniform(d + 2))),
             Transport::Importance,
         );
-        if delta {
-            power *= scattered.weight;
-        } else {
+        if stores {
             let survive = scattered.weight.max_element();
             if u >= survive {
                 break;
             }
             power *= scattered.weight / survive;
+        } else if scattered.weight == Vec3::ZERO {
+            // A glossy direction below the surface.
+            break;
+        } else {
+            power *= scattered.weight;
         }
         dir = scattered.dir;
         let side = if scattered.transmitted {

@@ -101,7 +101,7 @@ pub fn read_back<T: Pod>(
 pub struct SceneBuffers {
     /// Camera uniform.
     pub camera: wgpu::Buffer,
-    /// Every scene record in one table (scene.wgsl): materials (two texels each), triangles
+    /// Every scene record in one table (scene.wgsl): materials (four texels each), triangles
     /// in BVH leaf order (four), flattened BVH nodes (two), emitting triangles (four) and the
     /// boxes of moving objects (two; none when nothing moves).
     pub table: Table,

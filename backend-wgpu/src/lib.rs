@@ -1009,7 +1009,7 @@ impl Backend for WgpuBackend {
                     format!("{pass} pass: refraction code not compiled (the scene has no glass)")
                 }
                 false => {
-                    format!("{pass} pass: mirror and glass code not compiled (the scene has none)")
+                    format!("{pass} pass: mirror, glass and conductor code not compiled (the scene has none)")
                 }
             });
         }

@@ -1,6 +1,6 @@
 //! Which code a scene needs (docs/algorithm.md 6): the eye and photon pipelines are
-//! specialised with override constants, so that a scene without mirrors or glass runs no
-//! specular code, one without glass no refraction, and ordinary photon passes carry no
+//! specialised with override constants, so that a scene without mirrors, glass or conductors
+//! runs no code that continues paths through them, one without glass no refraction, and ordinary photon passes carry no
 //! mover-box tests. Each variant is compiled the first time a pass needs it.
 
 use ppm_core::compile::SceneFeatures;
@@ -11,10 +11,10 @@ pub const VARIANTS: usize = 8;
 /// The override constants a pass pipeline is built with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Specialisation {
-    /// The specular bounce, Fresnel and refraction (`SPECULAR` in eye_pass.wgsl and
+    /// The bounces through mirrors, glass and conductors (`SPECULAR` in eye_pass.wgsl and
     /// photon_pass.wgsl).
     pub specular: bool,
-    /// The refraction half of the specular bounce (`GLASS` in geometry.wgsl); only with
+    /// The refraction half of the delta lobes (`GLASS` in bsdf.wgsl); only with
     /// `specular`.
     pub glass: bool,
     /// The photon pass's mover-box tests (`MOVERS`), which only local mode's correction

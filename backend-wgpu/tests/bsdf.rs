@@ -2,13 +2,23 @@
 //! weights, densities and values within float rounding (WGSL's sine and cosine are not
 //! correctly rounded, so directions get an absolute allowance).
 
-use ppm_core::bsdf::{BsdfOutcome, test_cases};
+use ppm_core::bsdf::{BsdfCase, BsdfOutcome, test_cases};
+use ppm_core::layout::material_kind;
 
 /// Allowed difference of a direction's components and of relative weights and densities.
 const TOLERANCE: f32 = 2e-5;
 
-fn close(a: f32, b: f32) -> bool {
-    (a - b).abs() <= TOLERANCE * a.abs().max(b.abs()).max(1.0)
+/// The allowance for a case: a rough conductor's density and value are steep in the half
+/// vector, by about `1 / alpha`, so a last-place difference in a direction grows by as much.
+fn tolerance(case: &BsdfCase) -> f32 {
+    match case.material.kind == material_kind::CONDUCTOR && case.material.alpha > 0.0 {
+        true => TOLERANCE / case.material.alpha,
+        false => TOLERANCE,
+    }
+}
+
+fn close(a: f32, b: f32, tolerance: f32) -> bool {
+    (a - b).abs() <= tolerance * a.abs().max(b.abs()).max(1.0)
 }
 
 fn fields(o: &BsdfOutcome) -> [f32; 11] {
@@ -20,9 +30,9 @@ fn fields(o: &BsdfOutcome) -> [f32; 11] {
         o.weight[0],
         o.weight[1],
         o.weight[2],
-        o.f[0],
-        o.f[1],
-        o.f[2],
+        o.f_cos[0],
+        o.f_cos[1],
+        o.f_cos[2],
         o.pdf_of_dir,
     ]
 }
@@ -41,7 +51,10 @@ fn the_wgsl_bsdf_reproduces_the_core_s_on_every_case() {
         let core = case.expected();
         assert_eq!(wgsl.transmitted, core.transmitted, "{case:?}");
         for (w, c) in fields(wgsl).into_iter().zip(fields(&core)) {
-            assert!(close(w, c), "WGSL {wgsl:?}, core {core:?}, case {case:?}");
+            assert!(
+                close(w, c, tolerance(case)),
+                "WGSL {wgsl:?}, core {core:?}, case {case:?}"
+            );
         }
     }
 }

@@ -92,7 +92,11 @@ fn buffer_elements_match_their_wgsl_twins() {
         albedo,
         kind,
         emission,
-        ior
+        ior,
+        eta,
+        alpha,
+        k,
+        _pad
     });
     same_layout!(GpuBounds {
         min,
@@ -166,7 +170,7 @@ fn the_bsdf_s_test_structs_match_their_wgsl_twins() {
         pdf,
         weight,
         transmitted,
-        f,
+        f_cos,
         pdf_of_dir
     });
 }
@@ -308,6 +312,7 @@ fn shared_constants_agree() {
         ("MATERIAL_DIFFUSE", material_kind::DIFFUSE),
         ("MATERIAL_MIRROR", material_kind::MIRROR),
         ("MATERIAL_GLASS", material_kind::GLASS),
+        ("MATERIAL_CONDUCTOR", material_kind::CONDUCTOR),
         ("TRANSPORT_RADIANCE", Transport::Radiance as u32),
         ("TRANSPORT_IMPORTANCE", Transport::Importance as u32),
         ("HIT_VALID", hit_flags::VALID),

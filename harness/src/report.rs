@@ -136,7 +136,10 @@ pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -
         out.push("Fresnel sampling and refraction: no glass".to_owned());
     }
     if !features.specular() {
-        out.push("specular eye chains and caustic photon paths: no mirror or glass".to_owned());
+        out.push(
+            "specular eye chains and caustic photon paths: no mirror, glass or conductor"
+                .to_owned(),
+        );
     }
     match params.direct {
         DirectMode::Explicit => {

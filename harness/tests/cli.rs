@@ -656,7 +656,10 @@ fn animate_follows_a_path_file() {
             !left_out.contains("a single frame is rendered"),
             "{left_out}"
         );
-        assert!(left_out.contains("no mirror or glass"), "{left_out}");
+        assert!(
+            left_out.contains("no mirror, glass or conductor"),
+            "{left_out}"
+        );
     }
     assert!(!frames.join("frame-003.exr").exists());
     std::fs::remove_dir_all(&dir).ok();

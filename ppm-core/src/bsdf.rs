@@ -2,23 +2,32 @@
 //! passes, the reference path tracer and local mode's probes all ask here, and backend-wgpu's
 //! `bsdf.wgsl` is the twin, pinned to this module by [`test_cases`] (docs/algorithm.md 1, "Materials").
 //!
-//! Materials fall in two families. **Delta** materials (mirror, glass) scatter into one or two
-//! directions: paths continue through them, and no density exists to evaluate or to weight
-//! against light sampling. **Diffuse** materials scatter over the hemisphere with
-//! `f = albedo / pi`: an eye path stops at the first one (its visible point), a photon is
-//! stored there. Because `f` is the same for every pair of directions on such a surface,
-//! slots and photons store no direction; a glossy material adds them.
+//! Materials fall in three families. **Delta** materials (mirror, glass, a smooth conductor)
+//! scatter into one or two directions: paths continue through them, and no density exists
+//! to evaluate or to weight against light sampling. **Diffuse** materials scatter over the
+//! hemisphere with `f = albedo / pi`: an eye path stops at the first one (its visible point),
+//! a photon is stored there. Because `f` is the same for every pair of directions on such a
+//! surface, slots and photons store no direction. **Glossy** materials (a rough conductor:
+//! GGX microfacets, Walter et al. 2007, sampled by their visible normals, Heitz 2018) have a
+//! density but a lobe too narrow for a photon disc: eye and photon paths continue through
+//! them by sampling it, as through a delta surface, and the reference path tracer also
+//! samples the lights there (docs/algorithm.md 1, "Materials", says why).
 //!
 //! Directions follow the passes: `incoming` is the unit direction a path travels (towards
 //! the surface), `facing` the unit normal on its side, and every sampled direction leaves
 //! the surface.
 
-use crate::geometry::{fresnel_refract, reflect, to_world};
+use crate::geometry::{fresnel_refract, orthonormal_basis, reflect, to_world};
 use crate::layout::{GpuMaterial, material_kind};
 use crate::sampling::cosine_hemisphere;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use std::f32::consts::FRAC_1_PI;
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// GGX roughness below which a conductor is smooth: a narrower lobe renders as a delta one,
+/// and its density (up to `1 / (pi alpha^2)`) would only add rounding (pbrt-v4's
+/// `EffectivelySmooth` uses the same bound).
+pub const SMOOTH_ALPHA: f32 = 1e-3;
 
 /// What a path carries, which decides how refraction scales it (Veach 1997, 5.2).
 ///
@@ -51,11 +60,22 @@ pub struct BsdfSample {
     pub transmitted: bool,
 }
 
-/// Whether the material scatters into single directions (mirror, glass): paths continue
-/// through it, and it holds no visible points and no photons.
+/// Whether the material scatters into single directions (mirror, glass, a smooth conductor):
+/// no density exists to weight against light sampling.
 #[inline]
 pub fn is_delta(material: &GpuMaterial) -> bool {
-    matches!(material.kind, material_kind::MIRROR | material_kind::GLASS)
+    match material.kind {
+        material_kind::MIRROR | material_kind::GLASS => true,
+        material_kind::CONDUCTOR => material.alpha < SMOOTH_ALPHA,
+        _ => false,
+    }
+}
+
+/// Whether eye paths stop on the material (its visible points) and photons are stored there:
+/// the diffuse materials. Paths continue through every other one by [`sample`].
+#[inline]
+pub fn holds_visible_points(material: &GpuMaterial) -> bool {
+    material.kind == material_kind::DIFFUSE
 }
 
 /// The BSDF `f` at a visible point (or a photon's surface), for any pair of directions on the
@@ -65,14 +85,170 @@ pub fn visible_point_f(material: &GpuMaterial) -> Vec3 {
     Vec3::from(material.albedo) * FRAC_1_PI
 }
 
-/// Solid-angle density with which [`sample`] draws `wi` at a non-delta surface with facing
-/// normal `facing` (the cosine lobe); zero below the surface and for delta materials.
+/// Solid-angle density with which [`sample_visible`] draws `wi` at a visible point with
+/// facing normal `facing` (the cosine lobe); zero below the surface.
 #[inline]
-pub fn pdf(material: &GpuMaterial, facing: Vec3, wi: Vec3) -> f32 {
-    if is_delta(material) {
+pub fn visible_point_pdf(facing: Vec3, wi: Vec3) -> f32 {
+    facing.dot(wi).max(0.0) * FRAC_1_PI
+}
+
+/// The BSDF times the cosine at `wi`, `f(wo, wi) cos_i`, of a non-delta surface: `wo` towards
+/// where the path came from and `wi` towards where light comes from, both unit and on the
+/// side of `facing` (zero otherwise); zero for delta materials. With the cosine, since `f`
+/// alone of a rough lobe exceeds f32 between two grazing directions where the product does
+/// not.
+pub fn eval_cos(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+    if cos_o <= 0.0 || cos_i <= 0.0 || is_delta(material) {
+        return Vec3::ZERO;
+    }
+    if material.kind != material_kind::CONDUCTOR {
+        return visible_point_f(material) * cos_i;
+    }
+    let h = half_vector(wo, wi);
+    let alpha = material.alpha;
+    let d = ggx_d(alpha, local_half(facing, wo, wi));
+    // G2 / (4 cos_o cos_i) times cos_i, with cos_i cancelled.
+    let (root_o, root_i) = (smith_root(alpha, cos_o), smith_root(alpha, cos_i));
+    let visibility_cos = 0.5 * cos_i / (cos_i * root_o + cos_o * root_i);
+    Vec3::from(material.albedo) * conductor_fresnel(material, wo.dot(h)) * (d * visibility_cos)
+}
+
+/// Solid-angle density with which [`sample`] draws `wi` given `wo` at a non-delta surface
+/// ([`eval_cos`]'s conventions); zero for delta materials.
+pub fn pdf(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+    if cos_o <= 0.0 || cos_i <= 0.0 || is_delta(material) {
         return 0.0;
     }
-    facing.dot(wi).max(0.0) * FRAC_1_PI
+    if material.kind != material_kind::CONDUCTOR {
+        return visible_point_pdf(facing, wi);
+    }
+    let alpha = material.alpha;
+    ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, local_half(facing, wo, wi)))
+}
+
+/// The GGX distribution of normals `D(m)` of the microfacet normal `m` in the surface's local
+/// frame, `1 / (pi a^2 ((x^2 + y^2) / a^2 + z^2)^2)`: from the tangential components rather
+/// than `1 - cos^2`, which loses a narrow lobe's width to rounding in f32.
+#[inline]
+fn ggx_d(alpha: f32, m: Vec3) -> f32 {
+    let a2 = alpha * alpha;
+    let d = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
+    1.0 / (PI * a2 * d * d)
+}
+
+/// The unit half vector of `wo` and `wi`, both above the surface: their sum scaled to its
+/// largest component before normalising, since at grazing angles its squared length
+/// underflows in f32.
+#[inline]
+fn half_vector(wo: Vec3, wi: Vec3) -> Vec3 {
+    let sum = wo + wi;
+    (sum / sum.abs().max_element()).normalize()
+}
+
+/// The half vector of `wo` and `wi` in the local frame of `facing`.
+#[inline]
+fn local_half(facing: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+    let h = half_vector(wo, wi);
+    let (t, b) = orthonormal_basis(facing);
+    Vec3::new(t.dot(h), b.dot(h), facing.dot(h))
+}
+
+/// `cos sqrt(1 + alpha^2 tan^2)`, the root of Smith's masking for GGX, written without
+/// dividing by `cos`: finite at grazing angles, where `tan` overflows. Smith's
+/// height-correlated masking and shadowing is `G2 = 2 cos_o cos_i / (cos_i root_o + cos_o
+/// root_i)`, its one-direction masking `G1 = 2 cos / (cos + root)`.
+#[inline]
+fn smith_root(alpha: f32, cos: f32) -> f32 {
+    let a2 = alpha * alpha;
+    (a2 + (1.0 - a2) * cos * cos).sqrt()
+}
+
+/// The density of a reflection drawn from the visible normals: `D_wo(m) = G1(wo) (wo.m) D(m)
+/// / cos_o` times the reflection's Jacobian `1 / (4 wo.m)`; with Smith's masking
+/// `G1 = 2 cos_o / (cos_o + root_o)` that is `D / (2 (cos_o + root_o))`.
+#[inline]
+fn ggx_reflection_pdf(alpha: f32, cos_o: f32, d: f32) -> f32 {
+    d / (2.0 * (cos_o + smith_root(alpha, cos_o)))
+}
+
+/// Fresnel reflectance of a conductor of complex index `eta + i k` (per channel) for
+/// unpolarised light from outside at `cos_i` to the (micro)normal.
+pub fn conductor_fresnel(material: &GpuMaterial, cos_i: f32) -> Vec3 {
+    let (eta, k) = (Vec3::from(material.eta), Vec3::from(material.k));
+    Vec3::new(
+        complex_fresnel(cos_i, eta.x, k.x),
+        complex_fresnel(cos_i, eta.y, k.y),
+        complex_fresnel(cos_i, eta.z, k.z),
+    )
+}
+
+/// One channel of [`conductor_fresnel`], with the index as `n = eta + i k`:
+/// `r_s = (cos_i - n cos_t) / (cos_i + n cos_t)`, `r_p = (n cos_i - cos_t) / (n cos_i + cos_t)`,
+/// `n cos_t = sqrt(n^2 - sin_i^2)`.
+fn complex_fresnel(cos_i: f32, eta: f32, k: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin2 = 1.0 - cos_i * cos_i;
+    // n^2 - sin^2 and its principal square root `(a, b)`.
+    let (re, im) = (eta * eta - k * k - sin2, 2.0 * eta * k);
+    let modulus = (re * re + im * im).sqrt();
+    let a = (0.5 * (modulus + re)).max(0.0).sqrt();
+    let b = (0.5 * (modulus - re)).max(0.0).sqrt().copysign(im);
+    // |r_s|^2 with n cos_t = a + i b.
+    let rs = ((cos_i - a).powi(2) + b * b) / ((cos_i + a).powi(2) + b * b).max(f32::MIN_POSITIVE);
+    // |r_p|^2 = |n^2 cos_i - n cos_t|^2 / |n^2 cos_i + n cos_t|^2 with n^2 = (eta^2 - k^2) + i 2 eta k.
+    let (n2_re, n2_im) = ((eta * eta - k * k) * cos_i, 2.0 * eta * k * cos_i);
+    let num = (n2_re - a).powi(2) + (n2_im - b).powi(2);
+    let den = (n2_re + a).powi(2) + (n2_im + b).powi(2);
+    let rp = num / den.max(f32::MIN_POSITIVE);
+    (0.5 * (rs + rp)).clamp(0.0, 1.0)
+}
+
+/// Draws a direction from a rough conductor's visible normals (Heitz 2018) for `wo` towards
+/// where the path came from; the weight is `albedo F G2 / G1(wo)`. A direction below the
+/// surface ends the path: the sample has weight zero.
+fn sample_conductor(material: &GpuMaterial, facing: Vec3, wo: Vec3, u: (f32, f32)) -> BsdfSample {
+    let alpha = material.alpha;
+    let (t, b) = orthonormal_basis(facing);
+    let local_o = Vec3::new(t.dot(wo), b.dot(wo), facing.dot(wo));
+    // The hemisphere of the stretched view direction, its projected disc warped to the
+    // visible part, then unstretched.
+    let v = Vec3::new(alpha * local_o.x, alpha * local_o.y, local_o.z).normalize();
+    let len2 = v.x * v.x + v.y * v.y;
+    let t1 = if len2 > 0.0 {
+        Vec3::new(-v.y, v.x, 0.0) / len2.sqrt()
+    } else {
+        Vec3::X
+    };
+    let t2 = v.cross(t1);
+    let r = u.0.sqrt();
+    let phi = 2.0 * PI * u.1;
+    let p1 = r * phi.cos();
+    let s = 0.5 * (1.0 + v.z);
+    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+    let nh = t1 * p1 + t2 * p2 + v * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+    let m = Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize();
+    let h = to_world(m, facing);
+    let dir = reflect(-wo, h);
+    let (cos_o, cos_i) = (local_o.z, facing.dot(dir));
+    if cos_o <= 0.0 || cos_i <= 0.0 {
+        return BsdfSample {
+            dir,
+            weight: Vec3::ZERO,
+            pdf: 0.0,
+            transmitted: false,
+        };
+    }
+    // f cos_i / pdf = F G2 / G1(wo) = F cos_i (cos_o + root_o) / (cos_i root_o + cos_o root_i).
+    let (root_o, root_i) = (smith_root(alpha, cos_o), smith_root(alpha, cos_i));
+    let g2_over_g1 = cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i);
+    BsdfSample {
+        dir,
+        weight: Vec3::from(material.albedo) * conductor_fresnel(material, wo.dot(h)) * g2_over_g1,
+        pdf: ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)),
+        transmitted: false,
+    }
 }
 
 /// Draws a direction at a non-delta surface: the cosine lobe about `facing`, from the pair
@@ -88,7 +264,8 @@ pub fn sample_visible(material: &GpuMaterial, facing: Vec3, u: (f32, f32)) -> Bs
     }
 }
 
-/// Continues a path at a delta surface: mirrors reflect with their reflectance; glass
+/// Continues a path at a delta surface: mirrors reflect with their reflectance, smooth
+/// conductors with it times their Fresnel term; glass
 /// reflects with probability equal to the Fresnel term, else refracts, the weight then
 /// `(eta_i / eta_t)^2` for radiance and one for flux ([`Transport`]). `front` says whether
 /// `facing` is the triangle's own normal (the path is entering); `u_lobe` picks at glass.
@@ -107,8 +284,13 @@ pub fn sample_delta(
         pdf: 0.0,
         transmitted: false,
     };
-    if material.kind == material_kind::MIRROR {
-        return reflected(Vec3::from(material.albedo));
+    match material.kind {
+        material_kind::MIRROR => return reflected(Vec3::from(material.albedo)),
+        material_kind::CONDUCTOR => {
+            let fresnel = conductor_fresnel(material, -incoming.dot(facing));
+            return reflected(Vec3::from(material.albedo) * fresnel);
+        }
+        _ => {}
     }
     let eta = if front {
         1.0 / material.ior
@@ -129,8 +311,9 @@ pub fn sample_delta(
     }
 }
 
-/// Draws how a path continues at any surface: [`sample_delta`] with `u_lobe` at mirror and
-/// glass, [`sample_visible`] with `u_dir` elsewhere.
+/// Draws how a path continues at any surface: [`sample_delta`] with `u_lobe` at delta
+/// surfaces, the visible normals of a rough conductor or [`sample_visible`] with `u_dir`
+/// elsewhere.
 #[inline]
 pub fn sample(
     material: &GpuMaterial,
@@ -142,6 +325,8 @@ pub fn sample(
 ) -> BsdfSample {
     if is_delta(material) {
         sample_delta(material, incoming, facing, front, u_lobe, transport)
+    } else if material.kind == material_kind::CONDUCTOR {
+        sample_conductor(material, facing, -incoming, u_dir)
     } else {
         sample_visible(material, facing, u_dir)
     }
@@ -162,7 +347,7 @@ pub struct BsdfCase {
     pub facing: [f32; 3],
     /// Number that picks at glass.
     pub u_lobe: f32,
-    /// Pair that draws a diffuse direction.
+    /// Pair that draws a diffuse or glossy direction.
     pub u_dir: [f32; 2],
     /// [`Transport`] as `u32`.
     pub transport: u32,
@@ -170,8 +355,8 @@ pub struct BsdfCase {
     pub _pad: u32,
 }
 
-/// What the BSDF gives for one [`BsdfCase`]: [`sample`], and at its direction [`pdf`] and
-/// [`visible_point_f`]. 48 bytes, bsdf_vectors.wgsl's `BsdfOutcome`.
+/// What the BSDF gives for one [`BsdfCase`]: [`sample`], and at its direction [`eval_cos`]
+/// and [`pdf`]. 48 bytes, bsdf_vectors.wgsl's `BsdfOutcome`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BsdfOutcome {
@@ -183,8 +368,8 @@ pub struct BsdfOutcome {
     pub weight: [f32; 3],
     /// [`BsdfSample::transmitted`] as 0 or 1.
     pub transmitted: u32,
-    /// [`visible_point_f`].
-    pub f: [f32; 3],
+    /// [`eval_cos`] at the sampled direction.
+    pub f_cos: [f32; 3],
     /// [`pdf`] of the sampled direction.
     pub pdf_of_dir: f32,
 }
@@ -197,9 +382,10 @@ impl BsdfCase {
             _ => Transport::Importance,
         };
         let facing = Vec3::from(self.facing);
+        let wo = -Vec3::from(self.incoming);
         let s = sample(
             &self.material,
-            Vec3::from(self.incoming),
+            -wo,
             facing,
             self.front != 0,
             (self.u_lobe, (self.u_dir[0], self.u_dir[1])),
@@ -210,9 +396,21 @@ impl BsdfCase {
             pdf: s.pdf,
             weight: s.weight.into(),
             transmitted: u32::from(s.transmitted),
-            f: visible_point_f(&self.material).into(),
-            pdf_of_dir: pdf(&self.material, facing, s.dir),
+            f_cos: eval_cos(&self.material, facing, wo, s.dir).into(),
+            pdf_of_dir: pdf(&self.material, facing, wo, s.dir),
         }
+    }
+}
+
+/// A conductor of index `eta + i k`, roughness `alpha`, reflectance factor 0.9.
+pub fn conductor(eta: [f32; 3], k: [f32; 3], alpha: f32) -> GpuMaterial {
+    GpuMaterial {
+        albedo: [0.9; 3],
+        kind: material_kind::CONDUCTOR,
+        eta,
+        alpha,
+        k,
+        ..Zeroable::zeroed()
     }
 }
 
@@ -242,6 +440,13 @@ pub fn test_cases() -> Vec<BsdfCase> {
             ior: 1.8,
             ..Zeroable::zeroed()
         },
+        conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.3),
+        conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.05),
+        conductor([1.0, 1.0, 1.0], [0.0, 0.0, 0.0], 0.8),
+        conductor([0.0, 0.0, 0.0], [1.0, 1.0, 1.0], 0.0),
+        // Either side of SMOOTH_ALPHA: a delta lobe, then the narrowest rough one.
+        conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.5 * SMOOTH_ALPHA),
+        conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 2.0 * SMOOTH_ALPHA),
     ];
     let normals = [Vec3::Y, Vec3::new(0.3, -0.5, 0.8).normalize()];
     let mut cases = Vec::new();
@@ -343,18 +548,19 @@ mod tests {
                 let s = sample_visible(&white, n, u);
                 assert_eq!(s.weight, Vec3::ONE);
                 assert!(s.dir.dot(n) >= 0.0);
-                assert_relative_eq!(s.pdf, pdf(&white, n, s.dir), epsilon = 1e-5);
+                assert_relative_eq!(s.pdf, visible_point_pdf(n, s.dir), epsilon = 1e-5);
+                assert_relative_eq!(s.pdf, pdf(&white, n, n, s.dir), epsilon = 1e-5);
                 // Uniform directions: (cos theta, phi) on a grid of the hemisphere.
                 let cos_t = (i as f32 + 0.5) / k as f32;
                 let phi = 2.0 * std::f32::consts::PI * (j as f32 + 0.5) / k as f32;
                 let sin_t = (1.0 - cos_t * cos_t).sqrt();
                 let wi = to_world(Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t), n);
-                integral +=
-                    f64::from(pdf(&white, n, wi)) * 2.0 * std::f64::consts::PI / f64::from(k * k);
+                integral += f64::from(visible_point_pdf(n, wi)) * 2.0 * std::f64::consts::PI
+                    / f64::from(k * k);
             }
         }
         assert_relative_eq!(integral, 1.0, epsilon = 1e-3);
-        assert_eq!(pdf(&white, n, -n), 0.0);
+        assert_eq!(visible_point_pdf(n, -n), 0.0);
         assert_relative_eq!(visible_point_f(&white).x * std::f32::consts::PI, 1.0);
     }
 
@@ -387,7 +593,146 @@ mod tests {
             assert_relative_eq!(reflected as f32 / k as f32, fresnel, epsilon = 1e-3);
         }
         assert!(is_delta(&g));
-        assert_eq!(pdf(&g, n, n), 0.0);
+        assert_eq!(pdf(&g, n, n, n), 0.0);
+    }
+
+    /// A rough conductor's samples agree with its density and value: each weight is
+    /// `f cos / pdf` of the direction drawn, the densities integrate to the share of
+    /// directions that stay above the surface, and over the hemisphere `f cos` integrates to
+    /// the mean weight (a white furnace: at most one, and near one for a smooth lobe; a
+    /// rough one loses what single scattering cannot return, half at alpha 1 seen from
+    /// above, where half the microfacets lean past 45 degrees).
+    #[test]
+    fn a_rough_conductor_s_samples_match_its_density_and_conserve_energy() {
+        let n = Vec3::new(0.2, 0.9, -0.1).normalize();
+        let (t, _) = orthonormal_basis(n);
+        for (alpha, at_least) in [(0.02, 0.985), (0.3, 0.8), (1.0, 0.3)] {
+            // A lossless metal (F = 1) with reflectance factor one.
+            let metal = GpuMaterial {
+                albedo: [1.0; 3],
+                ..conductor([0.0; 3], [1.0; 3], alpha)
+            };
+            for cos_o in [1.0f32, 0.95, 0.5, 0.15] {
+                let wo = (t * (1.0 - cos_o * cos_o).sqrt() + n * cos_o).normalize();
+                let k = 256;
+                let (mut mean_weight, mut valid) = (0.0f64, 0.0f64);
+                for i in 0..k {
+                    for j in 0..k {
+                        let u = ((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                        let s = sample(&metal, -wo, n, true, (0.5, u), Transport::Radiance);
+                        if s.weight == Vec3::ZERO {
+                            continue;
+                        }
+                        valid += 1.0;
+                        mean_weight += f64::from(s.weight.x);
+                        let f_cos = eval_cos(&metal, n, wo, s.dir);
+                        // A narrow lobe's density is steep in the half vector, which the
+                        // evaluation recomputes from the two directions in f32.
+                        let tol = (1e-4 / alpha).max(1e-3);
+                        assert_relative_eq!(s.pdf, pdf(&metal, n, wo, s.dir), max_relative = tol);
+                        assert_relative_eq!(s.weight.x, f_cos.x / s.pdf, max_relative = 2.0 * tol);
+                        assert!(s.weight.x <= 1.0 + 1e-5);
+                    }
+                }
+                let total = f64::from(k * k);
+                if cos_o == 1.0 {
+                    // Seen from straight above, the reflection stays above the surface where
+                    // the microfacet leans less than 45 degrees, whose share of visible normals
+                    // is 1 / (1 + alpha^2).
+                    let share = 1.0 / (1.0 + f64::from(alpha * alpha));
+                    assert_relative_eq!(valid / total, share, max_relative = 2e-3);
+                }
+                let albedo = mean_weight / total;
+                assert!(
+                    albedo <= 1.0 && albedo >= at_least,
+                    "alpha {alpha}, cos {cos_o}: {albedo}"
+                );
+                // The same integral by uniform directions, weighted by their density 1 / 2 pi.
+                let (mut by_eval, mut density) = (0.0f64, 0.0f64);
+                let m = 512;
+                for i in 0..m {
+                    for j in 0..m {
+                        let cos_t = (i as f32 + 0.5) / m as f32;
+                        let phi = 2.0 * PI * (j as f32 + 0.5) / m as f32;
+                        let sin_t = (1.0 - cos_t * cos_t).sqrt();
+                        let wi =
+                            to_world(Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t), n);
+                        let w = 2.0 * std::f64::consts::PI / f64::from(m * m);
+                        by_eval += f64::from(eval_cos(&metal, n, wo, wi).x) * w;
+                        density += f64::from(pdf(&metal, n, wo, wi)) * w;
+                    }
+                }
+                if alpha >= 0.3 {
+                    // A narrow lobe needs a finer grid than this one to integrate.
+                    assert_relative_eq!(by_eval, albedo, max_relative = 0.02);
+                    assert_relative_eq!(density, valid / total, max_relative = 0.02);
+                }
+            }
+        }
+    }
+
+    /// At grazing angles, where `tan` overflows and `cos^2` underflows in f32, the rough
+    /// lobe's value, density and weight stay finite and its weight at most one.
+    #[test]
+    fn a_rough_conductor_stays_finite_at_grazing_angles() {
+        let n = Vec3::Z;
+        for alpha in [2.0 * SMOOTH_ALPHA, 0.3, 1.0] {
+            let metal = conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], alpha);
+            for cos in [1e-3f32, 1e-12, 1e-30, f32::MIN_POSITIVE] {
+                let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+                let wi = Vec3::new(-(1.0 - cos * cos).sqrt(), 0.0, cos);
+                for (o, i) in [(wo, wi), (wo, Vec3::Z), (Vec3::Z, wi)] {
+                    assert!(
+                        eval_cos(&metal, n, o, i).is_finite(),
+                        "alpha {alpha} cos {cos}"
+                    );
+                    assert!(pdf(&metal, n, o, i).is_finite(), "alpha {alpha} cos {cos}");
+                }
+                for u in [(0.01, 0.2), (0.5, 0.5), (0.99, 0.9)] {
+                    let s = sample(&metal, -wo, n, true, (0.5, u), Transport::Radiance);
+                    assert!(s.weight.is_finite() && s.pdf.is_finite(), "{s:?}");
+                    assert!(s.weight.max_element() <= 1.0, "{s:?}");
+                }
+            }
+        }
+    }
+
+    /// The conductor's Fresnel term: `((eta - 1)^2 + k^2) / ((eta + 1)^2 + k^2)` at normal
+    /// incidence, one at grazing incidence, one everywhere for a lossless metal (`eta = 0`),
+    /// and a dielectric's (`k = 0`) equal to the smooth glass's.
+    #[test]
+    fn the_conductor_fresnel_term_meets_its_closed_forms() {
+        let gold = conductor([0.18, 0.42, 1.37], [3.42, 2.35, 1.77], 0.0);
+        let normal = conductor_fresnel(&gold, 1.0);
+        for c in 0..3 {
+            let (e, k) = (gold.eta[c], gold.k[c]);
+            let expected = ((e - 1.0).powi(2) + k * k) / ((e + 1.0).powi(2) + k * k);
+            assert_relative_eq!(normal[c], expected, max_relative = 1e-5);
+        }
+        assert_relative_eq!(conductor_fresnel(&gold, 0.0).x, 1.0, max_relative = 1e-5);
+        let lossless = conductor([0.0; 3], [1.0; 3], 0.0);
+        for cos in [1.0, 0.7, 0.2, 0.01] {
+            assert_relative_eq!(
+                conductor_fresnel(&lossless, cos).x,
+                1.0,
+                max_relative = 1e-5
+            );
+        }
+        let dielectric = conductor([1.5; 3], [0.0; 3], 0.0);
+        for cos in [1.0f32, 0.6, 0.1] {
+            let d = Vec3::new((1.0 - cos * cos).sqrt(), -cos, 0.0);
+            let (glass, _) = fresnel_refract(d, Vec3::Y, 1.0 / 1.5);
+            assert_relative_eq!(
+                conductor_fresnel(&dielectric, cos).x,
+                glass,
+                max_relative = 1e-4
+            );
+        }
+        // A smooth conductor is a delta lobe that reflects its Fresnel term.
+        assert!(is_delta(&gold) && !holds_visible_points(&gold));
+        let d = Vec3::new(0.6, -0.8, 0.0);
+        let s = sample_delta(&gold, d, Vec3::Y, true, 0.5, Transport::Radiance);
+        assert_relative_eq!(s.weight.x, 0.9 * conductor_fresnel(&gold, 0.8).x);
     }
 
     #[test]

@@ -17,14 +17,17 @@ pub struct SceneFeatures {
     pub mirror: bool,
     /// Some surface is glass.
     pub glass: bool,
+    /// Some surface is a conductor (smooth or rough).
+    #[serde(default)]
+    pub conductor: bool,
     /// Some object moves between frames.
     pub moving_objects: bool,
 }
 
 impl SceneFeatures {
-    /// Mirror or glass: photons can form caustics and eye paths can bounce.
+    /// Mirror, glass or conductor: photons can form caustics and eye paths can bounce.
     pub fn specular(&self) -> bool {
-        self.mirror || self.glass
+        self.mirror || self.glass || self.conductor
     }
 }
 
@@ -158,6 +161,10 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 .materials
                 .iter()
                 .any(|m| matches!(m.kind, MaterialKind::Glass { .. })),
+            conductor: scene
+                .materials
+                .iter()
+                .any(|m| matches!(m.kind, MaterialKind::Conductor { .. })),
             moving_objects: !scene.moves.is_empty(),
         },
         extent,
@@ -261,11 +268,24 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
             ior,
             ..Default::default()
         },
+        MaterialKind::Conductor {
+            eta,
+            k,
+            reflectance,
+            alpha,
+        } => GpuMaterial {
+            albedo: reflectance.into(),
+            kind: material_kind::CONDUCTOR,
+            eta: eta.into(),
+            alpha,
+            k: k.into(),
+            ..Default::default()
+        },
         MaterialKind::Light { radiance, albedo } => GpuMaterial {
             albedo: albedo.into(),
             kind: material_kind::DIFFUSE,
             emission: radiance.into(),
-            ior: 0.0,
+            ..Default::default()
         },
     }
 }

@@ -15,6 +15,9 @@ pub mod material_kind {
     pub const MIRROR: u32 = 1;
     /// Smooth dielectric: Fresnel reflection and refraction with index `ior`.
     pub const GLASS: u32 = 2;
+    /// Metal: Fresnel reflection of complex index `eta + i k`, scaled by `albedo`, on GGX
+    /// microfacets of roughness `alpha` (smooth below [`crate::bsdf::SMOOTH_ALPHA`]).
+    pub const CONDUCTOR: u32 = 3;
 }
 
 /// Bits of [`HitPoint::flags`].
@@ -182,11 +185,12 @@ pub struct BvhNode {
     pub count: u32,
 }
 
-/// A material. 32 bytes.
+/// A material. 64 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
-    /// Diffuse albedo or specular reflectance, per channel, in [0, 1].
+    /// Diffuse albedo or specular reflectance (a conductor's factor on its Fresnel term), per
+    /// channel, in [0, 1].
     pub albedo: [f32; 3],
     /// One of [`material_kind`].
     pub kind: u32,
@@ -194,6 +198,14 @@ pub struct GpuMaterial {
     pub emission: [f32; 3],
     /// Index of refraction (glass only).
     pub ior: f32,
+    /// Real part of a conductor's complex index of refraction, per channel.
+    pub eta: [f32; 3],
+    /// GGX roughness `alpha` of a conductor's microfacets (0: smooth).
+    pub alpha: f32,
+    /// Imaginary part (absorption) of a conductor's index, per channel.
+    pub k: [f32; 3],
+    /// Padding.
+    pub _pad: u32,
 }
 
 /// An axis-aligned box: a moved object's box in one of its poses (the boxes whose crossing a
@@ -636,7 +648,7 @@ mod tests {
             ("Photon", size_of::<Photon>(), 32),
             ("GpuTriangle", size_of::<GpuTriangle>(), 64),
             ("BvhNode", size_of::<BvhNode>(), 32),
-            ("GpuMaterial", size_of::<GpuMaterial>(), 32),
+            ("GpuMaterial", size_of::<GpuMaterial>(), 64),
             ("GpuLight", size_of::<GpuLight>(), 64),
             ("GpuCamera", size_of::<GpuCamera>(), 64),
             ("EyePassParams", size_of::<EyePassParams>(), 32),

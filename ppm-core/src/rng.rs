@@ -16,9 +16,11 @@
 //!   `stratified_pair(p.seed, Eye, pixel, 0, start * p.spp + slot % p.spp)`, where `start`
 //!   is the slot's `iterations` when it keeps its statistics, `iterations - 1` for a
 //!   re-trace, and `p.iteration` otherwise: a slot continues its own sequence. The pixel
-//!   centre instead when `p.spp == 1` without `JITTER`. At glass, depth `d` reflects when
-//!   `StreamKey { seed: p.seed, kind: Eye, pass_index: p.iteration, path: slot }.uniform(2 +
-//!   d)` is below the Fresnel reflectance.
+//!   centre instead when `p.spp == 1` without `JITTER`. The bounce at depth `d` draws from
+//!   `StreamKey { seed: p.seed, kind: Eye, pass_index: p.iteration, path: slot }`
+//!   ([`StreamKey::eye_bounce`]): at glass it reflects when dimension `2 + d` is below the
+//!   Fresnel reflectance; at a rough conductor dimensions `EYE_GLOSSY_DIM + 2 d` and the next
+//!   draw the direction.
 //! - **Direct light** ([`PassKind::DirectLight`]). Sample `s` of the pass is point `start *
 //!   p.samples + s` of the stream `StratifiedStream::new(p.seed, DirectLight, slot)`, with
 //!   `start` the slot's `iterations` when the pass adds to its sum and `p.iteration`
@@ -30,7 +32,7 @@
 //!   p.pass_index, path }`: dimensions `0..EMISSION_DIMS` for its emission
 //!   ([`crate::emission`]), then three per bounce `b` from `EMISSION_DIMS + 3 b`: the first
 //!   decides Russian roulette at a diffuse surface (survive below the largest albedo
-//!   channel) or reflection at glass, the next two the cosine-weighted direction. A
+//!   channel) or reflection at glass, the next two the cosine-weighted or glossy direction. A
 //!   negative pass and its positive twin use the same indices, so their unchanged paths
 //!   cancel; difference passes start at [`DIFFERENCE_PASS_BASE`].
 
@@ -103,7 +105,25 @@ pub struct StreamKey {
     pub path: u32,
 }
 
+/// An eye path's first glass dimension: depth `d` picks at glass with dimension `2 + d`.
+pub const EYE_GLASS_DIM: u32 = 2;
+
+/// An eye path's first glossy dimension: depth `d` draws a glossy direction from dimensions
+/// `EYE_GLOSSY_DIM + 2 d` and the next, apart from the glass numbers at any depth.
+pub const EYE_GLOSSY_DIM: u32 = 1 << 16;
+
 impl StreamKey {
+    /// The numbers of an eye path's bounce at `depth`: the one that picks at glass, and the
+    /// pair that draws a glossy direction ([`crate::bsdf::sample`]'s `u`).
+    #[inline]
+    pub fn eye_bounce(&self, depth: u32) -> (f32, (f32, f32)) {
+        let glossy = EYE_GLOSSY_DIM + 2 * depth;
+        (
+            self.uniform(EYE_GLASS_DIM + depth),
+            (self.uniform(glossy), self.uniform(glossy + 1)),
+        )
+    }
+
     /// The 32 random bits for `dimension` of this stream.
     #[inline]
     pub fn bits(&self, dimension: u32) -> u32 {

@@ -7,6 +7,7 @@
 pub mod analytic;
 pub mod canonical;
 pub mod file;
+pub mod material_scenes;
 pub mod meshes;
 pub mod stress;
 
@@ -58,6 +59,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         name: "wedding-band",
         description: "SCENES.md 3: three gold rings throwing caustics, 41,184 triangles; the middle ring moves by (0, 0, 8)",
         build: canonical::wedding_band,
+    },
+    BuiltinScene {
+        name: "cornell-metal",
+        description: "cornell-box with blocks of rough gold (GGX alpha 0.3) and nearly polished copper (alpha 0.05)",
+        build: material_scenes::cornell_metal,
     },
     BuiltinScene {
         name: "furnace",

@@ -236,6 +236,16 @@ pub const STRESS: &[StressCase] = &[
         build: || specular_case(3.0),
     },
     StressCase {
+        name: "conductor-alpha-0",
+        stresses: "a smooth lossless conductor for the furnace's mirror: its Fresnel term is one at every angle",
+        build: || conductor_case(0.0),
+    },
+    StressCase {
+        name: "conductor-alpha-1",
+        stresses: "the roughest conductor: half its visible microfacets reflect below the surface, ending paths",
+        build: || conductor_case(1.0),
+    },
+    StressCase {
         name: "water-furnace",
         stresses: "visible points under water seen from the air: radiance refracted out divides by ior^2",
         build: || water_case(None),
@@ -582,6 +592,28 @@ fn specular_case(ior: f32) -> StressSetup {
         }
     }
     radiance_two(scene, None)
+}
+
+/// The specular furnace with a lossless conductor (`eta = 0`, `k = 1`) of roughness `alpha`
+/// for its mirror: every pixel is 2 when it is smooth; a rough one loses what single
+/// scattering cannot return, so only finiteness is asked.
+fn conductor_case(alpha: f32) -> StressSetup {
+    let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
+    for m in &mut scene.materials {
+        if let MaterialKind::Mirror { .. } = m.kind {
+            m.kind = MaterialKind::Conductor {
+                eta: Vec3::ZERO,
+                k: Vec3::ONE,
+                reflectance: Vec3::ONE,
+                alpha,
+            };
+        }
+    }
+    let mut setup = radiance_two(scene, None);
+    if alpha > 0.0 {
+        setup.expected = Expected::Finite;
+    }
+    setup
 }
 
 /// The water furnace (ior 1.8): every pixel is 2, under the water too, in both frames.

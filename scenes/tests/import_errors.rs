@@ -2,7 +2,8 @@
 //! naming the file, the element or directive, and its line. And never a panic, even on a
 //! file cut short anywhere.
 
-use ppm_core::scene::SceneError;
+use glam::Vec3;
+use ppm_core::scene::{MaterialKind, SceneError};
 use scenes::file::{mitsuba, pbrt};
 use std::path::Path;
 
@@ -86,7 +87,7 @@ fn mitsuba_unknown_element_names_it_and_its_line() {
 fn mitsuba_unsupported_material_names_the_bsdf() {
     let text = MITSUBA_OK.replace(
         "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.8, 0.8, 0.8\"/></bsdf>",
-        "<bsdf type=\"roughconductor\"><float name=\"alpha\" value=\"0.1\"/></bsdf>",
+        "<bsdf type=\"roughplastic\"><float name=\"alpha\" value=\"0.1\"/></bsdf>",
     );
     insta::assert_snapshot!(mitsuba_error(&text));
 }
@@ -207,5 +208,184 @@ fn pbrt_sppm_settings_become_the_render_defaults() {
             e.starts_with("t.pbrt:1: Integrator") && e.contains(named),
             "{bad}: {e}"
         );
+    }
+}
+
+/// The first material of a scene read from `text`.
+fn first_material(scene: Result<ppm_core::scene::Scene, SceneError>) -> MaterialKind {
+    scene.expect("the file loads").materials[0].kind.clone()
+}
+
+#[test]
+fn mitsuba_rough_conductors_read_with_their_index_and_ggx_roughness() {
+    let conductor = |inner: &str| {
+        let text = MITSUBA_OK.replace(
+            "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.8, 0.8, 0.8\"/></bsdf>",
+            inner,
+        );
+        mitsuba::parse_mitsuba(&text, "scenes/test.xml", Path::new("scenes"), "test")
+    };
+    let gold = r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+        <float name="alpha" value="0.2"/><rgb name="eta" value="0.1, 0.4, 1.4"/>
+        <rgb name="k" value="4, 2.4, 1.6"/><rgb name="specular_reflectance" value="1, 0.9, 0.8"/></bsdf>"#;
+    assert_eq!(
+        first_material(conductor(gold)),
+        MaterialKind::Conductor {
+            eta: Vec3::new(0.1, 0.4, 1.4),
+            k: Vec3::new(4.0, 2.4, 1.6),
+            reflectance: Vec3::new(1.0, 0.9, 0.8),
+            alpha: 0.2,
+        }
+    );
+    // Mitsuba's material "none" (its default): a lossless metal, Fresnel factor one.
+    let none = r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+        <float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.3"/></bsdf>"#;
+    assert!(matches!(
+        first_material(conductor(none)),
+        MaterialKind::Conductor {
+            alpha: 0.3,
+            k: Vec3::ONE,
+            eta: Vec3::ZERO,
+            ..
+        }
+    ));
+    let smooth = r#"<bsdf type="conductor"><rgb name="eta" value="0.2, 0.9, 1.1"/><rgb name="k" value="3.9, 2.4, 2.1"/></bsdf>"#;
+    assert!(matches!(
+        first_material(conductor(smooth)),
+        MaterialKind::Conductor { alpha: 0.0, .. }
+    ));
+    for (inner, says) in [
+        (
+            r#"<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>"#,
+            "Beckmann",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+            "anisotropic",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="1.5"/></bsdf>"#,
+            "must be in [0, 1]",
+        ),
+        (
+            r#"<bsdf type="conductor"><rgb name="eta" value="0.2, 0.9, 1.1"/></bsdf>"#,
+            "both eta and k",
+        ),
+    ] {
+        let e = conductor(inner).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains(says) && e.contains("scenes/test.xml"), "{e}");
+    }
+}
+
+#[test]
+fn pbrt_conductors_read_with_pbrt_s_roughness_and_reflectance_rules() {
+    // The floor in the conductor, the light diffuse as our lights are.
+    let conductor = |params: &str| {
+        let text = PBRT_OK.replace(
+            "Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
+            &format!("Material \"conductor\" {params}"),
+        );
+        let text = text.replace(
+            "AttributeBegin",
+            "AttributeBegin\n  Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
+        );
+        pbrt::parse_pbrt(&text, "scenes/test.pbrt", Path::new("scenes"), "test")
+    };
+    // remaproughness (on by default) turns roughness 0.04 into alpha sqrt(0.04) = 0.2.
+    let gold = "\"rgb eta\" [ 0.1 0.4 1.4 ] \"rgb k\" [ 4 2.4 1.6 ] \"float roughness\" [ 0.04 ]";
+    assert_eq!(
+        first_material(conductor(gold)),
+        MaterialKind::Conductor {
+            eta: Vec3::new(0.1, 0.4, 1.4),
+            k: Vec3::new(4.0, 2.4, 1.6),
+            reflectance: Vec3::ONE,
+            alpha: 0.2,
+        }
+    );
+    let raw = format!("{gold} \"bool remaproughness\" false");
+    assert!(matches!(
+        first_material(conductor(&raw)),
+        MaterialKind::Conductor { alpha: 0.04, .. }
+    ));
+    // A reflectance with roughness: pbrt's eta = 1 and k = 2 sqrt(r) / sqrt(1 - r), whose
+    // normal-incidence Fresnel term is r again.
+    let MaterialKind::Conductor { eta, k, .. } = first_material(conductor(
+        "\"rgb reflectance\" [ 0.9 0.5 0.2 ] \"float roughness\" [ 0.1 ]",
+    )) else {
+        panic!("not a conductor");
+    };
+    for (c, r) in [0.9f32, 0.5, 0.2].into_iter().enumerate() {
+        let fresnel =
+            ((eta[c] - 1.0).powi(2) + k[c] * k[c]) / ((eta[c] + 1.0).powi(2) + k[c] * k[c]);
+        assert!((fresnel - r).abs() < 1e-5, "channel {c}: {fresnel} for {r}");
+    }
+    for (params, says) in [
+        (
+            "\"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"",
+            "named or sampled spectrum",
+        ),
+        (
+            "\"rgb eta\" [ 0.1 0.4 1.4 ] \"float uroughness\" [ 0.1 ] \"float vroughness\" [ 0.2 ]",
+            "anisotropic",
+        ),
+        ("\"rgb eta\" [ 0.1 0.4 1.4 ]", "together"),
+    ] {
+        let e = conductor(params).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains(says) && e.contains("scenes/test.pbrt"), "{e}");
+    }
+}
+
+/// Mitsuba 0.6's `sppm` integrator (Mitsuba 3 reads its files, but ships no photon mapper)
+/// sets what means what ours means; a radius of 0 (its heuristic) and -1 passes (until
+/// stopped) leave ours; another integrator changes nothing.
+#[test]
+fn mitsuba_sppm_settings_become_the_render_defaults() {
+    let with = |integrator: &str| {
+        let text = MITSUBA_OK.replace(
+            "<sensor type=\"perspective\">",
+            &format!("{integrator}\n    <sensor type=\"perspective\">"),
+        );
+        mitsuba::parse_mitsuba(&text, "scenes/test.xml", Path::new("scenes"), "test")
+            .map(|s| s.render)
+    };
+    let plain = with("").unwrap();
+    let sppm = with(
+        r#"<integrator type="sppm"><float name="initialRadius" value="0.01"/>
+        <integer name="photonCount" value="40000"/><float name="alpha" value="0.6"/>
+        <integer name="maxPasses" value="300"/><integer name="maxDepth" value="12"/></integrator>"#,
+    )
+    .unwrap();
+    assert_eq!(
+        (
+            sppm.initial_radius,
+            sppm.photons_per_pass,
+            sppm.alpha,
+            sppm.passes
+        ),
+        (0.01, 40_000, 0.6, 300)
+    );
+    let defaults = with(
+        r#"<integrator type="sppm"><float name="initial_radius" value="0"/>
+        <integer name="max_passes" value="-1"/></integrator>"#,
+    )
+    .unwrap();
+    assert_eq!(defaults, plain);
+    let path =
+        with(r#"<integrator type="path"><integer name="max_depth" value="-1"/></integrator>"#);
+    assert_eq!(path.unwrap(), plain);
+    for (bad, says) in [
+        (
+            r#"<integer name="photonCount" value="0"/>"#,
+            "positive photon count",
+        ),
+        (r#"<float name="alpha" value="1.5"/>"#, "must be in (0, 1)"),
+        (
+            r#"<integer name="maxPasses" value="-3"/>"#,
+            "-1 or a positive",
+        ),
+    ] {
+        let e = with(&format!("<integrator type=\"sppm\">{bad}</integrator>")).unwrap_err();
+        let e = e.to_string();
+        assert!(e.contains(says) && e.contains("scenes/test.xml"), "{e}");
     }
 }

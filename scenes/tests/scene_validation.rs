@@ -182,3 +182,41 @@ fn command_line_overrides_are_checked_too() {
     params.initial_radius = f32::NAN;
     insta::assert_snapshot!(params.validate("command line").unwrap_err().to_string());
 }
+
+#[test]
+fn conductor_rougher_than_one() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "metal = { type = \"conductor\", eta = [0.2, 0.9, 1.1], k = [3.9, 2.4, 2.1], alpha = 1.5 }\nlamp = { type"
+    ));
+}
+
+#[test]
+fn conductor_with_negative_absorption() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "metal = { type = \"conductor\", eta = [0.2, 0.9, 1.1], k = [3.9, -2.4, 2.1] }\nlamp = { type"
+    ));
+}
+
+/// A conductor needs its index; its reflectance factor defaults to one and its roughness to
+/// zero (smooth).
+#[test]
+fn a_conductor_loads_with_its_defaults() {
+    let text = VALID.replacen(
+        "lamp = { type",
+        "metal = { type = \"conductor\", eta = [0.2, 0.9, 1.1], k = [3.9, 2.4, 2.1] }\nlamp = { type",
+        1,
+    );
+    let scene = parse_scene(&text, "probe.toml", Path::new("scenes")).unwrap();
+    let metal = scene.materials.iter().find(|m| m.name == "metal").unwrap();
+    assert_eq!(
+        metal.kind,
+        ppm_core::scene::MaterialKind::Conductor {
+            eta: glam::Vec3::new(0.2, 0.9, 1.1),
+            k: glam::Vec3::new(3.9, 2.4, 2.1),
+            reflectance: glam::Vec3::ONE,
+            alpha: 0.0,
+        }
+    );
+}

@@ -7,6 +7,7 @@ use glam::Vec3;
 use ppm_core::image::Image;
 use ppm_core::metrics::rmse;
 use ppm_core::params::{DirectMode, RenderParams};
+use ppm_core::scene::MaterialKind;
 use scenes::analytic::{furnace, furnace_radiance, specular_furnace};
 use tests::render_cpu;
 
@@ -78,4 +79,25 @@ fn furnace_converges_to_le_over_one_minus_albedo_when_photons_carry_direct_light
 fn specular_furnace_keeps_its_radiance_through_mirror_and_glass() {
     let albedo = Vec3::splat(0.5);
     converges(&specular_furnace(albedo, 1.0), albedo, DirectMode::Explicit);
+}
+
+/// A smooth lossless conductor (`eta = 0`, `k = 1`: Fresnel factor one at every angle) in
+/// place of the mirror keeps the radiance too: this fails if the conductor's delta lobe or
+/// its Fresnel term lose or gain energy.
+#[test]
+fn a_lossless_smooth_conductor_keeps_the_furnace_radiance() {
+    let albedo = Vec3::splat(0.5);
+    let mut scene = specular_furnace(albedo, 1.0);
+    let mirror = scene
+        .materials
+        .iter_mut()
+        .find(|m| matches!(m.kind, MaterialKind::Mirror { .. }))
+        .expect("the specular furnace has a mirror");
+    mirror.kind = MaterialKind::Conductor {
+        eta: Vec3::ZERO,
+        k: Vec3::ONE,
+        reflectance: Vec3::ONE,
+        alpha: 0.0,
+    };
+    converges(&scene, albedo, DirectMode::Explicit);
 }

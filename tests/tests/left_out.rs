@@ -126,7 +126,10 @@ fn specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_sa
         assert!(photon[0].iter().any(|s| !s.movers) && photon[0].iter().any(|s| s.movers));
         let says = |lines: &[String], what: &str| lines.iter().any(|l| l.contains(what));
         assert_eq!(
-            says(&left_out, "eye pass: mirror and glass code not compiled"),
+            says(
+                &left_out,
+                "eye pass: mirror, glass and conductor code not compiled"
+            ),
             !specular,
             "{name}: {left_out:?}"
         );

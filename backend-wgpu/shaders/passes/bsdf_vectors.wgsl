@@ -19,7 +19,7 @@ struct BsdfOutcome {
     pdf: f32,
     weight: vec3<f32>,
     transmitted: u32,
-    f: vec3<f32>,
+    f_cos: vec3<f32>,
     pdf_of_dir: f32,
 }
 
@@ -34,5 +34,7 @@ fn bsdf_vectors_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     }
     let c = cases[i];
     let s = bsdf_sample(c.material, c.incoming, c.facing, c.front != 0u, c.u_lobe, c.u_dir, c.transport);
-    results[i] = BsdfOutcome(s.dir, s.pdf, s.weight, select(0u, 1u, s.transmitted), visible_point_f(c.material), bsdf_pdf(c.material, c.facing, s.dir));
+    let wo = -c.incoming;
+    let f_cos = bsdf_eval_cos(c.material, c.facing, wo, s.dir);
+    results[i] = BsdfOutcome(s.dir, s.pdf, s.weight, select(0u, 1u, s.transmitted), f_cos, bsdf_pdf(c.material, c.facing, wo, s.dir));
 }

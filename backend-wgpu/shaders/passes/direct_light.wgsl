@@ -43,7 +43,7 @@ fn estimate_reflected(material: GpuMaterial, hp: HitPoint, slot: u32) -> vec3<f3
             if cos_x > 0.0 && cos_l > 0.0 && !occluded(origin, w, dist - 2.0 * params.ray_epsilon) {
                 let le = scene_material(light.material).emission;
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-                let pb = bsdf_pdf(material, hp.normal, w);
+                let pb = visible_point_pdf(hp.normal, w);
                 sum += f * le * (cos_x / pl * power_heuristic(pl, pb));
             }
         }

@@ -10,10 +10,13 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(6) var<storage, read_write> slot_bounds: array<GpuBounds>;
 
+// Dimensions of an eye path's key (ppm_core::rng::EYE_GLASS_DIM, EYE_GLOSSY_DIM): DIM_GLASS +
+// depth picks at glass, DIM_GLOSSY + 2 depth and the next draw a glossy bounce.
 const DIM_GLASS: u32 = 2u;
+const DIM_GLOSSY: u32 = 65536u;
 
-// False for a scene without mirrors or glass: every surface is diffuse, and the specular
-// bounce (Fresnel, refraction) is compiled out (backend_wgpu::Specialisation).
+// False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
+// bounces through them are compiled out (backend_wgpu::Specialisation).
 override SPECULAR: bool = true;
 
 // The slot before this iteration's eye path: fresh, or its statistics without a visible point.
@@ -87,7 +90,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         hi = max(hi, position);
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
-        if !SPECULAR || !bsdf_is_delta(material) {
+        if !SPECULAR || bsdf_holds_visible_points(material) {
             out.position = position;
             out.normal = facing;
             out.material = tri.material;
@@ -98,7 +101,13 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         out.flags |= HIT_EYE_CHAINED;
         let u = stream_uniform(key, DIM_GLASS + depth);
-        let bounce = bsdf_sample_delta(material, dir, facing, front, u, TRANSPORT_RADIANCE);
+        let u_dir = vec2<f32>(stream_uniform(key, DIM_GLOSSY + 2u * depth), stream_uniform(key, DIM_GLOSSY + 2u * depth + 1u));
+        let bounce = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_RADIANCE);
+        if all(bounce.weight == vec3<f32>(0.0)) {
+            // A glossy direction below the surface: no visible point.
+            rays = depth + 1u;
+            break;
+        }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = select(facing, -facing, bounce.transmitted);

@@ -28,7 +28,8 @@
 // carry no region or guided code.
 override EMISSION: u32 = 0u;
 
-// False for a scene without mirrors or glass: the delta lobes are compiled out.
+// False for a scene without mirrors, glass or conductors: the bounces through them are
+// compiled out.
 override SPECULAR: bool = true;
 
 // False for passes that never test the movers' boxes (all but local mode's correction): the
@@ -127,8 +128,8 @@ fn trace_photon(path: u32) -> Traced {
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
-        let delta = SPECULAR && bsdf_is_delta(material);
-        if !delta && (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
+        let stores = !SPECULAR || bsdf_holds_visible_points(material);
+        if stores && (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
             let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
             if slot < arrayLength(&photons) {
                 photons[slot] = Photon(position, path, power, oct_encode(facing));
@@ -138,21 +139,24 @@ fn trace_photon(path: u32) -> Traced {
                 }
             }
         }
-        // Dimension d picks the lobe at a delta surface and plays Russian roulette elsewhere
-        // (backend-cpu's photon_pass.rs).
+        // Dimension d picks the lobe at a delta surface and plays Russian roulette where
+        // photons are stored (backend-cpu's photon_pass.rs).
         let u = stream_uniform(key, d);
+        let u_dir = vec2<f32>(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u));
         var scattered: BsdfSample;
-        if delta {
-            scattered = bsdf_sample_delta(material, dir, facing, front, u, TRANSPORT_IMPORTANCE);
-            power *= scattered.weight;
-        } else {
-            let u_dir = vec2<f32>(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u));
+        if stores {
             scattered = bsdf_sample_visible(material, facing, u_dir);
             let survive = max(scattered.weight.x, max(scattered.weight.y, scattered.weight.z));
             if u >= survive {
                 break;
             }
             power *= scattered.weight / survive;
+        } else {
+            scattered = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_IMPORTANCE);
+            if all(scattered.weight == vec3<f32>(0.0)) {
+                break;
+            }
+            power *= scattered.weight;
         }
         dir = scattered.dir;
         let side = select(facing, -facing, scattered.transmitted);

@@ -4,6 +4,7 @@
 const MATERIAL_DIFFUSE: u32 = 0u;
 const MATERIAL_MIRROR: u32 = 1u;
 const MATERIAL_GLASS: u32 = 2u;
+const MATERIAL_CONDUCTOR: u32 = 3u;
 
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
@@ -72,6 +73,10 @@ struct GpuMaterial {
     kind: u32,
     emission: vec3<f32>,
     ior: f32,
+    eta: vec3<f32>,
+    alpha: f32,
+    k: vec3<f32>,
+    _pad: u32,
 }
 
 struct GpuLight {
@@ -246,6 +251,8 @@ fn is_finite_vec3(v: vec3<f32>) -> bool {
 
 // The largest finite f32: the corners of the box of no point (ppm_core's GpuBounds::NOTHING).
 const F32_MAX: f32 = 3.4028235e38;
+// The smallest positive normal f32 (Rust's f32::MIN_POSITIVE).
+const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
 
 struct GpuBounds {
     min: vec3<f32>,

@@ -16,8 +16,6 @@ use ppm_core::layout::{
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey, stratified_pair};
 use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
 
-/// An eye path's dimension `DIM_GLASS + depth` picks reflection or refraction at glass.
-const DIM_GLASS: u32 = 2;
 /// A direct-light sample's stratified pairs: the point on the light, the cosine direction,
 /// and (first number) which light.
 const PAIR_LIGHT_POINT: u32 = 0;
@@ -125,7 +123,7 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if !bsdf::is_delta(material) {
+        if bsdf::holds_visible_points(material) {
             hp.position = position.into();
             hp.normal = facing.into();
             hp.material = tri.material;
@@ -135,10 +133,13 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
                 | (tri.object << hit_flags::OBJECT_SHIFT);
             return u64::from(depth) + 1;
         }
-        // Mirror or glass: follow the bounce.
+        // Mirror, glass or conductor: follow the bounce.
         hp.flags |= hit_flags::EYE_CHAINED;
-        let u = key.uniform(DIM_GLASS + depth);
-        let bounce = bsdf::sample_delta(material, dir, facing, front, u, Transport::Radiance);
+        let u = key.eye_bounce(depth);
+        let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
+        if bounce.weight == Vec3::ZERO {
+            return u64::from(depth) + 1;
+        }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
@@ -213,7 +214,7 @@ fn reflected(
                 && !occluded(scene, origin, w, dist - 2.0 * params.ray_epsilon)
             {
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-                let pb = bsdf::pdf(material, n, w);
+                let pb = bsdf::visible_point_pdf(n, w);
                 sum += f * emission(light.material) * (cos_x / pl * power_heuristic(pl, pb));
             }
         }
@@ -264,8 +265,8 @@ pub fn photon_path(
             -normal
         };
         let d = EMISSION_DIMS + bounce * DIMS_PER_BOUNCE;
-        let delta = bsdf::is_delta(material);
-        if !delta && (bounce > 0 || params.first_hit == first_hit::DEPOSIT) {
+        let stores = bsdf::holds_visible_points(material);
+        if stores && (bounce > 0 || params.first_hit == first_hit::DEPOSIT) {
             out.push(Photon {
                 position: position.into(),
                 path: key.path,
@@ -273,7 +274,7 @@ pub fn photon_path(
                 normal_oct: oct_encode(facing),
             });
         }
-        // Dimension d picks at glass and plays roulette at a diffuse surface.
+        // Dimension d picks at glass and plays roulette where photons are stored.
         let u = key.uniform(d);
         let b = bsdf::sample(
             material,
@@ -283,12 +284,14 @@ pub fn photon_path(
             (u, (key.uniform(d + 1), key.uniform(d + 2))),
             Transport::Importance,
         );
-        if !delta {
+        if stores {
             let survive = b.weight.max_element();
             if u >= survive {
                 break;
             }
             power *= b.weight / survive;
+        } else if b.weight == Vec3::ZERO {
+            break;
         } else {
             power *= b.weight;
         }

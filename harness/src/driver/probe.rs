@@ -104,9 +104,13 @@ pub(super) struct EyePath {
     pub visible: Option<HitPoint>,
 }
 
+/// Dimensions `DIM_GLOSSY + 2 depth` and the next of a probe's key draw a glossy bounce
+/// (dimension `depth` picks at glass).
+const DIM_GLOSSY: u32 = 1 << 16;
+
 /// Traces the eye path through point `(jx, jy)` of `pixel` in `pose` (`scene`) to its first
-/// non-specular surface, glass choices drawn from `key`; it stops at the first surface of
-/// one of `groups`.
+/// diffuse surface, glass choices and glossy bounces drawn from `key`; it stops at the first
+/// surface of one of `groups`.
 pub(super) fn eye_path(
     scene: &SceneData,
     pose: &CompiledScene,
@@ -142,7 +146,7 @@ pub(super) fn eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if !bsdf::is_delta(material) {
+        if bsdf::holds_visible_points(material) {
             let front = if front { hit_flags::FRONT } else { 0 };
             return EyePath {
                 met: false,
@@ -156,8 +160,17 @@ pub(super) fn eye_path(
                 }),
             };
         }
-        let u = key.uniform(depth);
-        let bounce = bsdf::sample_delta(material, dir, facing, front, u, Transport::Radiance);
+        let u = (
+            key.uniform(depth),
+            (
+                key.uniform(DIM_GLOSSY + 2 * depth),
+                key.uniform(DIM_GLOSSY + 2 * depth + 1),
+            ),
+        );
+        let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
+        if bounce.weight == Vec3::ZERO {
+            return nothing;
+        }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };

@@ -87,6 +87,16 @@ pub fn reference_key(scene: &Scene, request: &ReferenceRequest) -> u64 {
                 h.u32(2);
                 h.floats(&[ior]);
             }
+            MaterialKind::Conductor {
+                eta,
+                k,
+                reflectance,
+                alpha,
+            } => {
+                h.u32(4);
+                h.floats(&[eta.to_array(), k.to_array(), reflectance.to_array()].concat());
+                h.floats(&[alpha]);
+            }
             MaterialKind::Light { radiance, albedo } => {
                 h.u32(3);
                 h.floats(&radiance.to_array());

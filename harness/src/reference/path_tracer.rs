@@ -102,13 +102,14 @@ impl PathTracer<'_> {
             }
             let u = Bounce::new(sampler, bounce);
             let delta = bsdf::is_delta(material);
+            if bsdf::holds_visible_points(material)
+                && bsdf::visible_point_f(material).max_element() <= 0.0
+            {
+                break;
+            }
             if !delta {
-                let f = bsdf::visible_point_f(material);
-                if f.max_element() <= 0.0 {
-                    break;
-                }
                 let x = position + facing * self.ray_epsilon;
-                radiance += throughput * f * self.light_sample(x, material, facing, &u);
+                radiance += throughput * self.light_sample(x, material, facing, -dir, &u);
             }
             let scattered = bsdf::sample(
                 material,
@@ -125,6 +126,9 @@ impl PathTracer<'_> {
             };
             origin = position + side * self.ray_epsilon;
             dir = scattered.dir;
+            if scattered.weight == Vec3::ZERO {
+                break;
+            }
             throughput *= scattered.weight;
             bsdf_pdf = (!delta).then_some(scattered.pdf);
             if bounce >= ROULETTE_AFTER {
@@ -138,10 +142,9 @@ impl PathTracer<'_> {
         radiance
     }
 
-    /// Irradiance-like estimate `Le cos_x cos_l / (d^2 p_area)` from one point on the lights,
-    /// weighted against the BSDF's bounce by the power heuristic (the caller multiplies by
-    /// `f`, the same for every direction at a visible point).
-    fn light_sample(&self, x: Vec3, material: &GpuMaterial, n: Vec3, u: &Bounce) -> Vec3 {
+    /// Light reflected towards `wo`, `f Le cos_x cos_l / (d^2 p_area)`, from one point on the
+    /// lights, weighted against the BSDF's bounce by the power heuristic.
+    fn light_sample(&self, x: Vec3, material: &GpuMaterial, n: Vec3, wo: Vec3, u: &Bounce) -> Vec3 {
         let lights = &self.scene.lights;
         if lights.is_empty() {
             return Vec3::ZERO;
@@ -165,7 +168,8 @@ impl PathTracer<'_> {
         }
         let pl = self.light_pdf(light, dist, cos_l);
         let le = Vec3::from(self.scene.materials[light.material as usize].emission);
-        le * (cos_x / pl) * power_heuristic(pl, bsdf::pdf(material, n, w))
+        let f_cos = bsdf::eval_cos(material, n, wo, w);
+        f_cos * le / pl * power_heuristic(pl, bsdf::pdf(material, n, wo, w))
     }
 
     /// Solid-angle density with which light sampling picks a point of `light` seen at

@@ -64,6 +64,18 @@ pub enum MaterialKind {
         /// Index of refraction, positive.
         ior: f32,
     },
+    /// Metal: Fresnel reflection of complex index `eta + i k` (per channel), times
+    /// `reflectance`, on GGX microfacets of roughness `alpha` (0: smooth).
+    Conductor {
+        /// Real part of the index, non-negative.
+        eta: Vec3,
+        /// Imaginary part (absorption), non-negative.
+        k: Vec3,
+        /// Factor on the Fresnel term, in [0, 1] (Mitsuba 3's `specular_reflectance`).
+        reflectance: Vec3,
+        /// GGX roughness, in [0, 1]: the microfacet slopes' spread.
+        alpha: f32,
+    },
     /// One-sided Lambertian area light, emitting along the triangle normal (`(v1-v0) x (v2-v0)`).
     Light {
         /// Emitted radiance `Le`, non-negative.
@@ -74,9 +86,13 @@ pub enum MaterialKind {
 }
 
 impl MaterialKind {
-    /// Whether the surface bends light (mirror or glass): eye and photon paths continue through it.
+    /// Whether eye and photon paths continue through the surface (mirror, glass, conductor)
+    /// rather than stop at it.
     pub fn is_specular(&self) -> bool {
-        matches!(self, Self::Mirror { .. } | Self::Glass { .. })
+        matches!(
+            self,
+            Self::Mirror { .. } | Self::Glass { .. } | Self::Conductor { .. }
+        )
     }
 }
 

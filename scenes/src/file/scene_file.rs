@@ -55,6 +55,11 @@ struct RenderFile {
     estimator: Option<Estimator>,
 }
 
+/// A conductor's default reflectance factor.
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 enum MaterialFile {
@@ -66,6 +71,14 @@ enum MaterialFile {
     },
     Glass {
         ior: f32,
+    },
+    Conductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+        #[serde(default = "white")]
+        reflectance: [f32; 3],
+        #[serde(default)]
+        alpha: f32,
     },
     Light {
         radiance: [f32; 3],
@@ -232,6 +245,18 @@ impl Converter<'_> {
     }
 
     /// A colour whose channels lie in [0, max].
+    /// A GGX roughness: finite, in [0, 1].
+    fn roughness(&self, field: &str, alpha: f32) -> Result<f32, SceneError> {
+        if !(0.0..=1.0).contains(&alpha) {
+            return Err(self.err(
+                field,
+                alpha,
+                "must be in [0, 1] (GGX roughness; 0 is smooth)",
+            ));
+        }
+        Ok(alpha)
+    }
+
     fn colour(&self, field: &str, v: [f32; 3], max: Option<f32>) -> Result<Vec3, SceneError> {
         let c = self.vec3(field, v)?;
         for (i, x) in v.iter().enumerate() {
@@ -353,6 +378,17 @@ impl Converter<'_> {
                 }
                 MaterialKind::Glass { ior: *ior }
             }
+            MaterialFile::Conductor {
+                eta,
+                k,
+                reflectance,
+                alpha,
+            } => MaterialKind::Conductor {
+                eta: self.colour(&field("eta"), *eta, None)?,
+                k: self.colour(&field("k"), *k, None)?,
+                reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
+                alpha: self.roughness(&field("alpha"), *alpha)?,
+            },
             MaterialFile::Light { radiance, albedo } => MaterialKind::Light {
                 radiance: self.colour(&field("radiance"), *radiance, None)?,
                 albedo: self.colour(&field("albedo"), *albedo, Some(1.0))?,

@@ -43,6 +43,7 @@ pub fn parse_mitsuba(
         bsdfs: HashMap::new(),
         default_material: None,
         camera: None,
+        sppm: SppmSettings::default(),
     };
     let root = doc.root_element();
     if root.tag_name().name() != "scene" {
@@ -59,7 +60,42 @@ pub fn parse_mitsuba(
             "the scene has no <sensor type=\"perspective\">",
         ));
     };
-    reader.builder.finish(name, camera, mirrored)
+    let sppm = reader.sppm;
+    let mut scene = reader.builder.finish(name, camera, mirrored)?;
+    sppm.apply(&mut scene.render);
+    Ok(scene)
+}
+
+/// The settings of Mitsuba 0.6's `sppm` integrator (whose files Mitsuba 3 still reads; it
+/// ships no photon mapper of its own) that mean what ours mean: the initial radius (0, its
+/// default, asks for a heuristic and is not taken), photons per pass, the fraction `alpha`
+/// of new photons kept, and the passes (-1: until stopped). Its `maxDepth` counts every
+/// bounce of a path, where ours bound eye paths and photon paths apart, and is not taken;
+/// neither is `granularity`, a work-splitting setting.
+#[derive(Default)]
+struct SppmSettings {
+    radius: Option<f32>,
+    photons: Option<u32>,
+    alpha: Option<f32>,
+    passes: Option<u32>,
+}
+
+impl SppmSettings {
+    /// Makes these the scene's render defaults.
+    fn apply(&self, render: &mut ppm_core::scene::RenderDefaults) {
+        if let Some(r) = self.radius {
+            render.initial_radius = r;
+        }
+        if let Some(n) = self.photons {
+            render.photons_per_pass = n;
+        }
+        if let Some(a) = self.alpha {
+            render.alpha = a;
+        }
+        if let Some(n) = self.passes {
+            render.passes = n;
+        }
+    }
 }
 
 struct Reader<'a, 'input> {
@@ -71,6 +107,7 @@ struct Reader<'a, 'input> {
     bsdfs: HashMap<String, usize>,
     default_material: Option<usize>,
     camera: Option<(Camera, bool)>,
+    sppm: SppmSettings,
 }
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -196,7 +233,7 @@ impl<'input> Reader<'_, 'input> {
                 let value = self.required(node, "value")?;
                 self.defaults.insert(name, value);
             }
-            "integrator" => {}
+            "integrator" => self.integrator(node)?,
             "sensor" => self.sensor(node)?,
             "bsdf" => {
                 let id = self.attr(node, "id")?;
@@ -427,6 +464,53 @@ impl<'input> Reader<'_, 'input> {
         Ok((m, exact))
     }
 
+    /// Reads an `sppm` integrator's settings that mean what ours do ([`SppmSettings`], by
+    /// Mitsuba 0.6's names or their Mitsuba 3 spelling); another integrator's settings are
+    /// another method's, and are ignored.
+    fn integrator(&mut self, node: Node) -> Result<()> {
+        if self.attr(node, "type")?.as_deref() != Some("sppm") {
+            return Ok(());
+        }
+        for p in node.children().filter(Node::is_element) {
+            let name = p.attribute("name").unwrap_or_default();
+            match name {
+                "initialRadius" | "initial_radius" => {
+                    let r = self.number(p, "value")?;
+                    if r < 0.0 {
+                        return Err(self.err(p, format!("{r}: a radius is not negative")));
+                    }
+                    self.sppm.radius = (r > 0.0).then_some(r);
+                }
+                "photonCount" | "photon_count" => {
+                    let n = self.integer(p)?;
+                    let n = u32::try_from(n).ok().filter(|n| *n > 0).ok_or_else(|| {
+                        self.err(p, format!("{n}: must be a positive photon count"))
+                    })?;
+                    self.sppm.photons = Some(n);
+                }
+                "alpha" => {
+                    let a = self.number(p, "value")?;
+                    if !(a > 0.0 && a < 1.0) {
+                        return Err(self.err(p, format!("{a}: must be in (0, 1)")));
+                    }
+                    self.sppm.alpha = Some(a);
+                }
+                "maxPasses" | "max_passes" => {
+                    let n = self.integer(p)?;
+                    if n != -1 {
+                        let n = u32::try_from(n).ok().filter(|n| *n > 0).ok_or_else(|| {
+                            self.err(p, format!("{n}: must be -1 or a positive pass count"))
+                        })?;
+                        self.sppm.passes = Some(n);
+                    }
+                }
+                // maxDepth, rrDepth, granularity (see SppmSettings).
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
     fn bsdf(&self, node: Node) -> Result<MaterialKind> {
         let ty = self.required(node, "type")?;
         let params: Vec<Node> = node.children().filter(Node::is_element).collect();
@@ -460,8 +544,14 @@ impl<'input> Reader<'_, 'input> {
                 }
                 Ok(MaterialKind::Diffuse { albedo })
             }
-            "conductor" => {
+            "conductor" | "roughconductor" => {
+                let rough = ty == "roughconductor";
                 let mut reflectance = Vec3::ONE;
+                let (mut eta, mut k) = (None, None);
+                let mut alpha = if rough { 0.1 } else { 0.0 };
+                let mut ggx = false;
+                // alpha_u or alpha_v, which must agree (isotropic).
+                let mut alpha_uv = None;
                 for p in &params {
                     if named(p, "specular_reflectance") {
                         reflectance = self.colour(*p, Some(1.0))?;
@@ -469,18 +559,65 @@ impl<'input> Reader<'_, 'input> {
                         let m = self.required(*p, "value")?;
                         if m != "none" {
                             return Err(self.err(*p, format!(
-                                "a conductor with Fresnel reflectance is {SUBSET}: only material=\"none\" (a perfect mirror)"
+                                "a named conductor preset is {SUBSET}: give material=\"none\" (a perfect mirror) or rgb eta and k"
                             )));
                         }
-                    } else if named(p, "eta") || named(p, "k") {
-                        return Err(self.err(*p, format!(
-                            "a conductor with Fresnel reflectance is {SUBSET}: only material=\"none\" (a perfect mirror)"
-                        )));
+                    } else if named(p, "eta") {
+                        eta = Some(self.colour(*p, None)?);
+                    } else if named(p, "k") {
+                        k = Some(self.colour(*p, None)?);
+                    } else if rough && named(p, "distribution") {
+                        let d = self.required(*p, "value")?;
+                        if d != "ggx" {
+                            return Err(self.err(
+                                *p,
+                                format!(
+                                    "the {d} distribution is {SUBSET}: give distribution=\"ggx\""
+                                ),
+                            ));
+                        }
+                        ggx = true;
+                    } else if rough
+                        && (named(p, "alpha") || named(p, "alpha_u") || named(p, "alpha_v"))
+                    {
+                        let a = self.number(*p, "value")?;
+                        if !(0.0..=1.0).contains(&a) {
+                            return Err(
+                                self.err(*p, format!("{a}: must be in [0, 1] (GGX roughness)"))
+                            );
+                        }
+                        if !named(p, "alpha") && alpha_uv.replace(a).is_some_and(|b| b != a) {
+                            return Err(self.err(*p, format!("anisotropic roughness is {SUBSET}")));
+                        }
+                        alpha = a;
+                    } else if rough && named(p, "sample_visible") {
+                        // A sampling strategy: the image is the same either way.
                     } else {
-                        return Err(self.err(*p, "unknown parameter of a conductor"));
+                        return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                Ok(MaterialKind::Mirror { reflectance })
+                if rough && !ggx {
+                    return Err(self.err(node, format!(
+                        "a roughconductor without distribution=\"ggx\" is Beckmann's (Mitsuba's default), {SUBSET}"
+                    )));
+                }
+                match (eta, k) {
+                    (None, None) if !rough => Ok(MaterialKind::Mirror { reflectance }),
+                    // Mitsuba's material "none": a lossless metal, Fresnel factor one.
+                    (None, None) => Ok(MaterialKind::Conductor {
+                        eta: Vec3::ZERO,
+                        k: Vec3::ONE,
+                        reflectance,
+                        alpha,
+                    }),
+                    (Some(eta), Some(k)) => Ok(MaterialKind::Conductor {
+                        eta,
+                        k,
+                        reflectance,
+                        alpha,
+                    }),
+                    _ => Err(self.err(node, "a conductor needs both eta and k, or neither")),
+                }
             }
             "dielectric" => {
                 let (mut int_ior, mut ext_ior) = (1.5046f32, 1.000277f32);
@@ -510,7 +647,7 @@ impl<'input> Reader<'_, 'input> {
             }
             _ => Err(self.err(
                 node,
-                format!("{SUBSET} (diffuse, conductor, dielectric, twosided)"),
+                format!("{SUBSET} (diffuse, conductor, roughconductor, dielectric, twosided)"),
             )),
         }
     }

@@ -6,9 +6,12 @@ use std::fmt::Write;
 
 /// The scene in Mitsuba 3's XML format (`scene version="3.0.0"`), meshes as PLY files.
 ///
-/// Diffuse and mirror surfaces are wrapped in `twosided` (Mitsuba's `diffuse` and `conductor`
-/// are black from behind, ours reflect on both sides); a mirror is a `conductor` with
-/// `material = "none"` (Fresnel factor 1) scaled by our reflectance, which is exact; a light is
+/// Diffuse, mirror and conductor surfaces are wrapped in `twosided` (Mitsuba's `diffuse` and
+/// `conductor` are black from behind, ours reflect on both sides); a mirror is a `conductor`
+/// with `material = "none"` (Fresnel factor 1) scaled by our reflectance, which is exact; a
+/// conductor is a `conductor`, or a `roughconductor` with the GGX distribution, of the same
+/// `eta`, `k` and reflectance factor (exact but for Mitsuba's masking term, listed in the
+/// notes); a light is
 /// a `twosided` diffuse surface carrying an `area` emitter, which emits on the side of the
 /// face normal as ours does (`face_normals` keeps Mitsuba from smoothing the normals).
 pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
@@ -19,6 +22,19 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
          paths after 16 specular bounces and photons after 16 bounces"
             .into(),
     );
+    if scene
+        .materials
+        .iter()
+        .any(|m| matches!(m.kind, MaterialKind::Conductor { alpha, .. } if alpha > 0.0))
+    {
+        notes.push(
+            "Mitsuba's roughconductor masks and shadows with the separable Smith term \
+             G1(wo) G1(wi), ours (as pbrt-v4's) with the height-correlated one, which is larger: \
+             a rough conductor comes out a little darker there (0.4-0.6% for GGX alpha 0.3, \
+             docs/materials.md)"
+                .into(),
+        );
+    }
     let c = &scene.camera;
     let (near, far) = clip_range(scene);
     let mut x = String::new();
@@ -101,6 +117,37 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                     "            <rgb name=\"specular_reflectance\" value=\"{}\"/>",
                     list3(*reflectance, ", ")
                 );
+                let _ = writeln!(w, "        </bsdf>");
+                let _ = writeln!(w, "    </bsdf>");
+            }
+            MaterialKind::Conductor {
+                eta,
+                k,
+                reflectance,
+                alpha,
+            } => {
+                let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
+                if *alpha > 0.0 {
+                    let _ = writeln!(w, "        <bsdf type=\"roughconductor\">");
+                    let _ = writeln!(
+                        w,
+                        "            <string name=\"distribution\" value=\"ggx\"/>"
+                    );
+                    let _ = writeln!(w, "            <float name=\"alpha\" value=\"{alpha}\"/>");
+                } else {
+                    let _ = writeln!(w, "        <bsdf type=\"conductor\">");
+                }
+                for (name, value) in [
+                    ("eta", eta),
+                    ("k", k),
+                    ("specular_reflectance", reflectance),
+                ] {
+                    let _ = writeln!(
+                        w,
+                        "            <rgb name=\"{name}\" value=\"{}\"/>",
+                        list3(*value, ", ")
+                    );
+                }
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }

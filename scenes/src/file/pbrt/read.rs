@@ -508,21 +508,67 @@ impl Reader<'_> {
             }
             "conductor" => {
                 let mut reflectance = None;
+                let (mut eta, mut k) = (None, None);
+                let (mut roughness, mut remap) = (0.0f32, true);
+                // uroughness or vroughness, which must agree (isotropic).
+                let mut uv = None;
                 for p in params {
                     match p.name.as_str() {
                         "reflectance" => reflectance = Some(d.colour(p, Some(1.0))?),
-                        "roughness" | "uroughness" | "vroughness" => smooth(p)?,
-                        "remaproughness" => {}
+                        "roughness" | "uroughness" | "vroughness" => {
+                            let r = d.float(p)?;
+                            if !(0.0..=1.0).contains(&r) {
+                                return Err(d.param_err(p, "must be in [0, 1]"));
+                            }
+                            if p.name != "roughness" && uv.replace(r).is_some_and(|u| u != r) {
+                                return Err(
+                                    d.param_err(p, format!("anisotropic roughness is {SUBSET}"))
+                                );
+                            }
+                            roughness = r;
+                        }
+                        "remaproughness" => remap = d.boolean(p)?,
+                        "eta" | "k" if p.ty == "rgb" => {
+                            let v = d.colour(p, None)?;
+                            if p.name == "eta" {
+                                eta = Some(v);
+                            } else {
+                                k = Some(v);
+                            }
+                        }
                         "eta" | "k" => {
-                            return Err(d.param_err(p, format!("a conductor given by eta and k is {SUBSET}: give \"rgb reflectance\"")));
+                            return Err(d.param_err(p, format!("a conductor given by a named or sampled spectrum is {SUBSET}: give \"rgb eta\" and \"rgb k\", or \"rgb reflectance\"")));
                         }
                         _ => return Err(unknown(p)),
                     }
                 }
-                let reflectance = reflectance.ok_or_else(|| {
-                    d.err(format!("a conductor without \"rgb reflectance\" (pbrt's default is copper's eta and k) is {SUBSET}"))
-                })?;
-                Ok(MaterialKind::Mirror { reflectance })
+                // pbrt-v4's TrowbridgeReitzDistribution::RoughnessToAlpha.
+                let alpha = if remap { roughness.sqrt() } else { roughness };
+                match (eta, k, reflectance) {
+                    // As our export writes a mirror.
+                    (None, None, Some(reflectance)) if alpha == 0.0 => {
+                        Ok(MaterialKind::Mirror { reflectance })
+                    }
+                    // pbrt-v4's ConductorMaterial: the index whose normal-incidence
+                    // reflectance is `r`.
+                    (None, None, Some(r)) => {
+                        let r = r.clamp(Vec3::ZERO, Vec3::splat(0.9999));
+                        Ok(MaterialKind::Conductor {
+                            eta: Vec3::ONE,
+                            k: 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5),
+                            reflectance: Vec3::ONE,
+                            alpha,
+                        })
+                    }
+                    (Some(eta), Some(k), None) => Ok(MaterialKind::Conductor {
+                        eta,
+                        k,
+                        reflectance: Vec3::ONE,
+                        alpha,
+                    }),
+                    (None, None, None) => Err(d.err(format!("a conductor without \"rgb reflectance\" or \"rgb eta\" and \"rgb k\" (pbrt's default is copper's named spectra) is {SUBSET}"))),
+                    _ => Err(d.err("a conductor takes \"rgb eta\" and \"rgb k\" together, or \"rgb reflectance\" alone")),
+                }
             }
             "dielectric" => {
                 let mut ior = 1.5;

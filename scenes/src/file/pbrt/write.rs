@@ -13,7 +13,9 @@ pub const PBRT_MAX_DEPTH: u32 = 100;
 /// `Scale -1 1 1` before `LookAt` turns pbrt's left-handed camera space into our image
 /// orientation; `WorldBegin` resets the transform, so shapes are in world space. Diffuse and
 /// dielectric surfaces are exact; a mirror is pbrt's `conductor` given `reflectance`, which
-/// pbrt treats as the Fresnel reflectance at normal incidence (listed in the notes).
+/// pbrt treats as the Fresnel reflectance at normal incidence (listed in the notes); a
+/// conductor is pbrt's `conductor` of the same `eta`, `k` and GGX alpha (`remaproughness`
+/// off), without our reflectance factor, which pbrt lacks (listed when it is not one).
 pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
@@ -33,6 +35,18 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
              grazing angles"
                 .into(),
         );
+    }
+    for m in &scene.materials {
+        if let MaterialKind::Conductor { reflectance, .. } = m.kind
+            && reflectance != glam::Vec3::ONE
+        {
+            notes.push(format!(
+                "pbrt-v4's conductor has no reflectance factor: conductor \"{}\" reflects its \
+                 Fresnel term there, not times ({})",
+                m.name,
+                list3(reflectance, ", ")
+            ));
+        }
     }
     notes.push(format!(
         "pbrt's path tracer stops at depth {PBRT_MAX_DEPTH} with Russian roulette; ours stops \
@@ -109,6 +123,12 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
             MaterialKind::Glass { ior } => writeln!(
                 w,
                 "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] \"float roughness\" [ 0 ]"
+            ),
+            MaterialKind::Conductor { eta, k, alpha, .. } => writeln!(
+                w,
+                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] \"rgb eta\" [ {} ] \"rgb k\" [ {} ] \"float roughness\" [ {alpha} ] \"bool remaproughness\" false",
+                list3(*eta, " "),
+                list3(*k, " ")
             ),
         };
     }
