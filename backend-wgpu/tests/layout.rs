@@ -9,6 +9,7 @@ use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
 const BSDF_WGSL: &str = include_str!("../shaders/shared/bsdf.wgsl");
+const RNG_WGSL: &str = include_str!("../shaders/shared/rng.wgsl");
 
 /// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
 /// layout.wgsl or in the assembled pass shaders.
@@ -314,6 +315,8 @@ fn shared_constants_agree() {
         ("MATERIAL_GLASS", material_kind::GLASS),
         ("MATERIAL_CONDUCTOR", material_kind::CONDUCTOR),
         ("TRANSPORT_RADIANCE", Transport::Radiance as u32),
+        ("EYE_GLASS_DIM", ppm_core::rng::EYE_GLASS_DIM),
+        ("EYE_GLOSSY_DIM", ppm_core::rng::EYE_GLOSSY_DIM),
         ("TRANSPORT_IMPORTANCE", Transport::Importance as u32),
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
@@ -350,8 +353,9 @@ fn shared_constants_agree() {
         let line = LAYOUT_WGSL
             .lines()
             .chain(BSDF_WGSL.lines())
+            .chain(RNG_WGSL.lines())
             .find(|l| l.starts_with(&format!("const {name}: u32 = ")))
-            .unwrap_or_else(|| panic!("layout.wgsl and bsdf.wgsl lack {name}"));
+            .unwrap_or_else(|| panic!("layout.wgsl, bsdf.wgsl and rng.wgsl lack {name}"));
         let literal = line
             .rsplit("= ")
             .next()

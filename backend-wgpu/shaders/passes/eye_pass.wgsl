@@ -10,10 +10,6 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(6) var<storage, read_write> slot_bounds: array<GpuBounds>;
 
-// Dimensions of an eye path's key (ppm_core::rng::EYE_GLASS_DIM, EYE_GLOSSY_DIM): DIM_GLASS +
-// depth picks at glass, DIM_GLOSSY + 2 depth and the next draw a glossy bounce.
-const DIM_GLASS: u32 = 2u;
-const DIM_GLOSSY: u32 = 65536u;
 
 // False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
 // bounces through them are compiled out (backend_wgpu::Specialisation).
@@ -100,8 +96,9 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             break;
         }
         out.flags |= HIT_EYE_CHAINED;
-        let u = stream_uniform(key, DIM_GLASS + depth);
-        let u_dir = vec2<f32>(stream_uniform(key, DIM_GLOSSY + 2u * depth), stream_uniform(key, DIM_GLOSSY + 2u * depth + 1u));
+        let u = stream_uniform(key, EYE_GLASS_DIM + depth);
+        let glossy = EYE_GLOSSY_DIM + 2u * depth;
+        let u_dir = vec2<f32>(stream_uniform(key, glossy), stream_uniform(key, glossy + 1u));
         let bounce = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_RADIANCE);
         if all(bounce.weight == vec3<f32>(0.0)) {
             // A glossy direction below the surface: no visible point.

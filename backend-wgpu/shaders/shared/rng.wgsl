@@ -6,6 +6,11 @@ const PASS_PHOTON: u32 = 3u;
 const PASS_REGION: u32 = 4u;
 const PASS_GUIDED: u32 = 5u;
 
+// An eye path's dimensions (ppm_core::rng::EYE_GLASS_DIM, EYE_GLOSSY_DIM): depth d picks at
+// glass with EYE_GLASS_DIM + d and draws a glossy bounce from EYE_GLOSSY_DIM + 2 d and the next.
+const EYE_GLASS_DIM: u32 = 2u;
+const EYE_GLOSSY_DIM: u32 = 65536u;
+
 struct StreamKey {
     seed: u32,
     kind: u32,
