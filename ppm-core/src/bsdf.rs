@@ -265,9 +265,9 @@ pub fn sample_visible(material: &GpuMaterial, facing: Vec3, u: (f32, f32)) -> Bs
 }
 
 /// Continues a path at a delta surface: mirrors reflect with their reflectance, smooth
-/// conductors with it times their Fresnel term; glass
-/// reflects with probability equal to the Fresnel term, else refracts, the weight then
-/// `(eta_i / eta_t)^2` for radiance and one for flux ([`Transport`]). `front` says whether
+/// conductors with it times their Fresnel term; glass reflects with probability equal to the
+/// Fresnel term, else refracts, the weight then `(eta_i / eta_t)^2` for radiance and one for
+/// flux ([`Transport`]). `front` says whether
 /// `facing` is the triangle's own normal (the path is entering); `u_lobe` picks at glass.
 #[inline]
 pub fn sample_delta(

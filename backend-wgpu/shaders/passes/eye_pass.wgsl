@@ -10,7 +10,6 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(6) var<storage, read_write> slot_bounds: array<GpuBounds>;
 
-
 // False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
 // bounces through them are compiled out (backend_wgpu::Specialisation).
 override SPECULAR: bool = true;
