@@ -3,7 +3,7 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::bsdf::{self, Transport};
+use ppm_core::bsdf;
 use ppm_core::emission::{EMISSION_DIMS, Emission, PhotonSource};
 use ppm_core::geometry::oct_encode;
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, photon_flags};
@@ -163,8 +163,7 @@ fn trace_photon(
         };
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         let front = facing == normal;
-        let stores = bsdf::holds_visible_points(material);
-        if stores
+        if bsdf::holds_visible_points(material)
             && (stores_all || crossed)
             && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
         {
@@ -175,30 +174,11 @@ fn trace_photon(
                 normal_oct: oct_encode(facing),
             });
         }
-        // Dimension d picks the lobe at a delta surface and plays Russian roulette where
-        // photons are stored (survival: the largest channel of the sampled weight); d + 1 and
-        // d + 2 draw a diffuse or glossy direction.
-        let u = key.uniform(d);
-        let scattered = bsdf::sample(
-            material,
-            dir,
-            facing,
-            front,
-            (u, (key.uniform(d + 1), key.uniform(d + 2))),
-            Transport::Importance,
-        );
-        if stores {
-            let survive = scattered.weight.max_element();
-            if u >= survive {
-                break;
-            }
-            power *= scattered.weight / survive;
-        } else if scattered.weight == Vec3::ZERO {
-            // A glossy direction below the surface.
+        let u = (key.uniform(d), (key.uniform(d + 1), key.uniform(d + 2)));
+        let Some(scattered) = bsdf::photon_bounce(material, dir, facing, front, u) else {
             break;
-        } else {
-            power *= scattered.weight;
-        }
+        };
+        power *= scattered.weight;
         dir = scattered.dir;
         let side = if scattered.transmitted {
             -facing

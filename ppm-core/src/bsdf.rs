@@ -332,6 +332,33 @@ pub fn sample(
     }
 }
 
+/// How a photon continues from a surface it reached (the contract's photon bounce,
+/// `ppm_core::rng`): `u.0` picks the lobe at a delta surface and plays Russian roulette where
+/// photons are stored, surviving below the largest channel of the sampled weight; `u.1`
+/// draws a diffuse or glossy direction. The sample's `weight` is the factor on the photon's
+/// power (divided by the survival where roulette played); `None` ends the path: absorbed, or
+/// a glossy direction below the surface.
+#[inline]
+pub fn photon_bounce(
+    material: &GpuMaterial,
+    incoming: Vec3,
+    facing: Vec3,
+    front: bool,
+    u: (f32, (f32, f32)),
+) -> Option<BsdfSample> {
+    let mut scattered = sample(material, incoming, facing, front, u, Transport::Importance);
+    if holds_visible_points(material) {
+        let survive = scattered.weight.max_element();
+        if u.0 >= survive {
+            return None;
+        }
+        scattered.weight /= survive;
+    } else if scattered.weight == Vec3::ZERO {
+        return None;
+    }
+    Some(scattered)
+}
+
 /// One input of the BSDF: a backend's twin must give [`BsdfCase::expected`]. 80 bytes, the
 /// layout of `BsdfCase` in the wgpu backend's bsdf_vectors.wgsl.
 #[repr(C)]
@@ -733,6 +760,40 @@ mod tests {
         let d = Vec3::new(0.6, -0.8, 0.0);
         let s = sample_delta(&gold, d, Vec3::Y, true, 0.5, Transport::Radiance);
         assert_relative_eq!(s.weight.x, 0.9 * conductor_fresnel(&gold, 0.8).x);
+    }
+
+    /// A photon's roulette is unbiased: over its number, the expected factor on its power is
+    /// the albedo, while only the largest channel's share of photons survives; a delta
+    /// surface keeps every photon.
+    #[test]
+    fn a_photon_bounce_keeps_the_expected_power() {
+        let red = GpuMaterial {
+            albedo: [0.6, 0.3, 0.1],
+            ..Zeroable::zeroed()
+        };
+        let k = 10_000;
+        let (mut power, mut survivors) = (Vec3::ZERO, 0);
+        for i in 0..k {
+            let u = ((i as f32 + 0.5) / k as f32, (0.3, 0.7));
+            if let Some(s) = photon_bounce(&red, -Vec3::Z, Vec3::Z, true, u) {
+                power += s.weight;
+                survivors += 1;
+            }
+        }
+        assert_relative_eq!(survivors as f32 / k as f32, 0.6, epsilon = 1e-3);
+        assert!(
+            (power / k as f32 - Vec3::new(0.6, 0.3, 0.1))
+                .abs()
+                .max_element()
+                < 1e-3
+        );
+        let mirror = GpuMaterial {
+            albedo: [0.9; 3],
+            kind: material_kind::MIRROR,
+            ..Zeroable::zeroed()
+        };
+        let kept = photon_bounce(&mirror, -Vec3::Z, Vec3::Z, true, (0.99, (0.5, 0.5)));
+        assert_eq!(kept.map(|s| s.weight), Some(Vec3::splat(0.9)));
     }
 
     #[test]

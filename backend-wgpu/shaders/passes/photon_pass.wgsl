@@ -140,7 +140,7 @@ fn trace_photon(path: u32) -> Traced {
             }
         }
         // Dimension d picks the lobe at a delta surface and plays Russian roulette where
-        // photons are stored (backend-cpu's photon_pass.rs).
+        // photons are stored (ppm_core::bsdf::photon_bounce).
         let u = stream_uniform(key, d);
         let u_dir = vec2<f32>(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u));
         var scattered: BsdfSample;

@@ -265,8 +265,9 @@ pub fn photon_path(
             -normal
         };
         let d = EMISSION_DIMS + bounce * DIMS_PER_BOUNCE;
-        let stores = bsdf::holds_visible_points(material);
-        if stores && (bounce > 0 || params.first_hit == first_hit::DEPOSIT) {
+        if bsdf::holds_visible_points(material)
+            && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
+        {
             out.push(Photon {
                 position: position.into(),
                 path: key.path,
@@ -274,27 +275,11 @@ pub fn photon_path(
                 normal_oct: oct_encode(facing),
             });
         }
-        // Dimension d picks at glass and plays roulette where photons are stored.
-        let u = key.uniform(d);
-        let b = bsdf::sample(
-            material,
-            dir,
-            facing,
-            facing == normal,
-            (u, (key.uniform(d + 1), key.uniform(d + 2))),
-            Transport::Importance,
-        );
-        if stores {
-            let survive = b.weight.max_element();
-            if u >= survive {
-                break;
-            }
-            power *= b.weight / survive;
-        } else if b.weight == Vec3::ZERO {
+        let u = (key.uniform(d), (key.uniform(d + 1), key.uniform(d + 2)));
+        let Some(b) = bsdf::photon_bounce(material, dir, facing, facing == normal, u) else {
             break;
-        } else {
-            power *= b.weight;
-        }
+        };
+        power *= b.weight;
         dir = b.dir;
         let side = if b.transmitted { -facing } else { facing };
         origin = position + side * params.ray_epsilon;
