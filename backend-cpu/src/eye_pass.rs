@@ -138,8 +138,9 @@ fn trace_eye_path(
         };
         let tri = &scene.triangles[hit.triangle as usize];
         out.eye_met |= tri.group;
-        let material = &scene.materials[tri.material as usize];
         let position = origin + dir * hit.t;
+        let (material, texture) = scene.surface(&hit, position);
+        let material = &material;
         *vertices = SlotBounds::new(
             Vec3::from(vertices.min).min(position),
             Vec3::from(vertices.max).max(position),
@@ -151,7 +152,8 @@ fn trace_eye_path(
             out.position = position.into();
             out.normal = facing.into();
             out.material = tri.material;
-            out.throughput = throughput.into();
+            // The texture's factor rides in the throughput (ppm_core::textures).
+            out.throughput = (throughput * texture).into();
             out.flags |= hit_flags::VALID
                 | if front { hit_flags::FRONT } else { 0 }
                 | (tri.object << hit_flags::OBJECT_SHIFT);

@@ -153,8 +153,9 @@ fn trace_photon(
             break;
         };
         let tri = &scene.triangles[hit.triangle as usize];
-        let material = &scene.materials[tri.material as usize];
         let position = origin + dir * hit.t;
+        let (material, _) = scene.surface(&hit, position);
+        let material = &material;
         let normal = Vec3::from(tri.normal);
         let facing = if dir.dot(normal) < 0.0 {
             normal

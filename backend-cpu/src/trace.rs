@@ -8,6 +8,7 @@ use obvhs::ray::{Ray, RayHit};
 use ppm_core::compile::CompiledScene;
 use ppm_core::geometry::{intersect_triangle, segment_meets_box};
 use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL};
+use ppm_core::textures::SurfaceTextures;
 
 /// The scene as the CPU passes read it: the same flat buffers a GPU backend binds.
 #[derive(Clone)]
@@ -24,6 +25,8 @@ pub struct SceneData {
     pub emitters: Vec<u32>,
     /// Boxes the moving objects stay inside ([`CompiledScene::movers`]).
     pub movers: Vec<GpuBounds>,
+    /// Texture coordinates and images (their texels shared, not copied).
+    pub textures: SurfaceTextures,
 }
 
 /// The nearest surface a ray meets.
@@ -47,6 +50,7 @@ impl SceneData {
                 .filter(|&i| scene.triangles[i as usize].light != NO_MATERIAL)
                 .collect(),
             movers: scene.movers.clone(),
+            textures: scene.textures.clone(),
         }
     }
 
@@ -87,6 +91,15 @@ impl SceneData {
             })
             .reduce(|a, b| if b.t < a.t { b } else { a })?;
         (nearest.t < f32::INFINITY && !self.occluded(origin, dir, nearest.t)).then_some(nearest)
+    }
+
+    /// The material of triangle `hit.triangle` at `position`, its colour scaled by its
+    /// texture there, and that factor (one where it has none).
+    #[inline]
+    pub fn surface(&self, hit: &Hit, position: Vec3) -> (GpuMaterial, Vec3) {
+        let tri = &self.triangles[hit.triangle as usize];
+        let material = &self.materials[tri.material as usize];
+        self.textures.shaded(material, hit.triangle, tri, position)
     }
 
     /// Whether anything lies between `origin` and `origin + dir * tmax`.

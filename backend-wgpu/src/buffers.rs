@@ -6,8 +6,11 @@ use crate::table::{Table, Texel};
 use bytemuck::Pod;
 use bytemuck::Zeroable;
 use ppm_core::compile::CompiledScene;
-use ppm_core::layout::{BvhNode, GpuBounds, GpuLight, GpuMaterial, GpuTriangle};
+use ppm_core::layout::{
+    BvhNode, GpuBounds, GpuLight, GpuMaterial, GpuTexture, GpuTriangle, GpuTriangleUv,
+};
 use ppm_core::passes::BackendError;
+use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
 /// Usage of every storage buffer: bindable, and copyable both ways for resets and read-back.
@@ -102,12 +105,18 @@ pub struct SceneBuffers {
     /// Camera uniform.
     pub camera: wgpu::Buffer,
     /// Every scene record in one table (scene.wgsl): materials (four texels each), triangles
-    /// in BVH leaf order (four), flattened BVH nodes (two), emitting triangles (four) and the
-    /// boxes of moving objects (two; none when nothing moves).
+    /// in BVH leaf order (four), flattened BVH nodes (two), emitting triangles (four), the
+    /// boxes of moving objects (two; none when nothing moves), and, in a textured scene, the
+    /// triangles' texture coordinates (two) and the texture headers (two).
     pub table: Table,
     /// Where each kind starts in `table`, and how many lights and boxes it holds (uniform
     /// [`SceneIndex`]).
     pub index: wgpu::Buffer,
+    /// Every texture's texels (`scene_texels` in textures.wgsl; one zeroed element when the
+    /// scene has no texture). Moves keep it: they change geometry, never textures.
+    pub texels: wgpu::Buffer,
+    /// What `texels` holds, to know a later pose's as the same.
+    texel_data: Arc<Vec<[u32; 2]>>,
     /// Camera as uploaded (resolution decides the hit-point count).
     pub camera_value: ppm_core::layout::GpuCamera,
     /// Emitting triangles.
@@ -122,14 +131,21 @@ const _: () = assert!(
         && size_of::<BvhNode>().is_multiple_of(TEXEL_BYTES)
         && size_of::<GpuLight>().is_multiple_of(TEXEL_BYTES)
         && size_of::<GpuBounds>().is_multiple_of(TEXEL_BYTES)
+        && size_of::<GpuTexture>().is_multiple_of(TEXEL_BYTES)
+        && size_of::<GpuTriangleUv>().is_multiple_of(TEXEL_BYTES)
 );
 
 /// Deepest BVH the shaders' fixed traversal stack (`STACK_SIZE` in bvh.wgsl) can walk.
 const MAX_BVH_DEPTH: usize = 62;
 
 impl SceneBuffers {
-    /// Uploads `scene`; refuses a BVH too deep for the traversal stack.
-    pub fn new(ctx: &GpuContext, scene: &CompiledScene) -> Result<Self, BackendError> {
+    /// Uploads `scene`, its texels too unless `earlier` (an earlier pose's buffers) holds
+    /// the same; refuses a BVH too deep for the traversal stack or texels beyond a binding.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &CompiledScene,
+        earlier: Option<&SceneBuffers>,
+    ) -> Result<Self, BackendError> {
         if scene.bvh_depth > MAX_BVH_DEPTH {
             return Err(BackendError::Limit(format!(
                 "BVH depth {} exceeds the shaders' traversal stack ({MAX_BVH_DEPTH})",
@@ -161,12 +177,33 @@ impl SceneBuffers {
             movers: append(bytemuck::cast_slice(&scene.movers)),
             light_count: scene.lights.len() as u32,
             mover_count: scene.movers.len() as u32,
-            ..Default::default()
+            uvs: append(bytemuck::cast_slice(&scene.textures.uvs)),
+            textures: append(bytemuck::cast_slice(&scene.textures.headers)),
+        };
+        let same = |e: &&SceneBuffers| {
+            Arc::ptr_eq(&e.texel_data, &scene.textures.texels)
+                || e.texel_data == scene.textures.texels
+        };
+        let texels = match earlier.filter(same) {
+            Some(kept) => kept.texels.clone(),
+            None => {
+                let all = &scene.textures.texels[..];
+                let bytes = std::mem::size_of_val(all) as u64;
+                let limit = ctx.limits().max_storage_buffer_binding_size;
+                if bytes > limit {
+                    return Err(BackendError::Limit(format!(
+                        "the scene's textures hold {bytes} bytes of texels; this adapter binds at most {limit} (max_storage_buffer_binding_size)"
+                    )));
+                }
+                storage_init(ctx, "texels", all)
+            }
         };
         Ok(Self {
             camera: uniform(ctx, "camera", &scene.camera),
             table: Table::with_data(ctx, "scene", Texel::Words4, &bytes)?,
             index: uniform(ctx, "scene index", &index),
+            texels,
+            texel_data: scene.textures.texels.clone(),
             camera_value: scene.camera,
             light_count: scene.lights.len(),
         })

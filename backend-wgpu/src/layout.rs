@@ -63,8 +63,8 @@ pub struct SceneIndex {
     pub light_count: u32,
     /// Boxes of moving objects.
     pub mover_count: u32,
-    /// Padding.
-    pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
+    /// First texel of the triangles' texture coordinates (none without a texture).
+    pub uvs: u32,
+    /// First texel of the texture headers.
+    pub textures: u32,
 }

@@ -365,7 +365,7 @@ impl SceneUpload for WgpuBackend {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         let buffers = self
             .ctx
-            .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene))??;
+            .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene, None))??;
         self.scene = Some(buffers);
         self.features = Some(scene.features);
         self.hit_points = None;
@@ -665,9 +665,9 @@ impl PhotonPass for WgpuBackend {
 
 impl DynamicBackend for WgpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        let buffers = self
-            .ctx
-            .scoped("scene update", || SceneBuffers::new(&self.ctx, scene))??;
+        let buffers = self.ctx.scoped("scene update", || {
+            SceneBuffers::new(&self.ctx, scene, self.scene.as_ref())
+        })??;
         self.scene = Some(buffers);
         self.map = None;
         Ok(())

@@ -51,7 +51,7 @@ impl EyePassKernel {
         };
         self.variants[spec.index()].get_or_init(|| {
             let slots = [
-                Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite,
+                Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Read,
             ];
             // The eye pass declares SPECULAR and GLASS, not MOVERS.
             let mut constants = spec.constants();
@@ -92,6 +92,7 @@ impl EyePassKernel {
                 slots.hit_points,
                 slots.counters,
                 bounds,
+                &scene.texels,
             ],
         );
         kernel.dispatch(encoder, &group, slots.count);
@@ -189,7 +190,7 @@ impl PhotonPassKernel {
         self.trace[emission as usize][spec.index()].get_or_init(|| {
             let slots = [
                 Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite,
-                ReadWrite,
+                ReadWrite, Read,
             ];
             let mut constants = spec.constants();
             constants.push(("EMISSION", f64::from(emission)));
@@ -231,6 +232,7 @@ impl PhotonPassKernel {
                 targets.recorded,
                 targets.weights,
                 targets.crossed,
+                &scene.texels,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);

@@ -97,6 +97,20 @@ fn buffer_elements_match_their_wgsl_twins() {
         eta,
         alpha,
         k,
+        texture
+    });
+    same_layout!(GpuTexture {
+        first,
+        width,
+        height,
+        nearest,
+        scale,
+        offset
+    });
+    same_layout!(GpuTriangleUv {
+        uv0,
+        uv1,
+        uv2,
         _pad
     });
     same_layout!(GpuBounds {
@@ -289,8 +303,8 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
         movers,
         light_count,
         mover_count,
-        _pad0,
-        _pad1
+        uvs,
+        textures
     });
     same_layout!(ScanParams {
         count,

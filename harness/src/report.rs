@@ -135,6 +135,12 @@ pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -
     if !features.glass {
         out.push("Fresnel sampling and refraction: no glass".to_owned());
     }
+    if !features.textured {
+        out.push(
+            "texture coordinates, images and lookups: no texture (one word tested a hit)"
+                .to_owned(),
+        );
+    }
     if !features.specular() {
         out.push(
             "specular eye chains and caustic photon paths: no mirror, glass or conductor"

@@ -4,6 +4,7 @@ use crate::layout::{
     BvhNode, GpuBounds, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
 };
 use crate::scene::{Camera, MaterialKind, Scene};
+use crate::textures::{SurfaceTextures, compile_textures};
 use glam::{Vec3, Vec3A};
 use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
@@ -20,6 +21,9 @@ pub struct SceneFeatures {
     /// Some surface is a conductor (smooth or rough).
     #[serde(default)]
     pub conductor: bool,
+    /// Some material's colour comes from an image texture.
+    #[serde(default)]
+    pub textured: bool,
     /// Some object moves between frames.
     pub moving_objects: bool,
 }
@@ -73,6 +77,8 @@ pub struct CompiledScene {
     /// and trace only what follows a crossing of one ([`photon_flags`](crate::layout::photon_flags)).
     /// Empty (nothing tests them) until a move sets them ([`mover_boxes`]).
     pub movers: Vec<GpuBounds>,
+    /// Texture coordinates and images, empty for an untextured scene.
+    pub textures: SurfaceTextures,
 }
 
 /// Margin of the movers' boxes, relative to the scene's extent: ten times the ray offset,
@@ -81,7 +87,7 @@ pub const MOVER_MARGIN_RELATIVE: f32 = 1e-4;
 
 /// Flattens `scene` for an image of `width` x `height`.
 pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
-    let materials: Vec<GpuMaterial> = scene
+    let mut materials: Vec<GpuMaterial> = scene
         .materials
         .iter()
         .map(|m| gpu_material(&m.kind))
@@ -139,6 +145,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             }
         })
         .collect();
+    let textures = compile_textures(scene, &bvh.primitive_indices, &mut materials);
     let light_power = assign_light_distribution(&mut lights, &materials);
     let nodes = flat_nodes(&bvh);
     let bvh_depth = tree_depth(&nodes);
@@ -165,6 +172,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 .materials
                 .iter()
                 .any(|m| matches!(m.kind, MaterialKind::Conductor { .. })),
+            textured: !textures.is_empty(),
             moving_objects: !scene.moves.is_empty(),
         },
         extent,
@@ -173,6 +181,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         bvh_built_cost,
         bvh_depth,
         movers: Vec::new(),
+        textures,
     }
 }
 

@@ -60,6 +60,15 @@ pub fn srgb_encode(v: f32) -> f32 {
     }
 }
 
+/// The linear value of an sRGB-encoded one in [0, 1] (the inverse of [`srgb_encode`]).
+pub fn srgb_decode(v: f32) -> f32 {
+    if v <= 0.040_45 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

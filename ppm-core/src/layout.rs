@@ -204,8 +204,44 @@ pub struct GpuMaterial {
     pub alpha: f32,
     /// Imaginary part (absorption) of a conductor's index, per channel.
     pub k: [f32; 3],
+    /// One plus the index of the texture that scales `albedo` at each point
+    /// ([`GpuTexture`]); 0 when `albedo` is uniform.
+    pub texture: u32,
+}
+
+/// An image texture's header (docs/materials.md, "Textures"); its texels, two words each
+/// ([`pack_texel`](crate::scene::pack_texel)), are `first .. first + width * height` of the
+/// scene's texel buffer, rows from the top. 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// Index of the top-left texel in the scene's texel buffer.
+    pub first: u32,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// 1: the nearest texel; 0: bilinear.
+    pub nearest: u32,
+    /// `(s, t) = scale * uv + offset`.
+    pub scale: [f32; 2],
+    /// See `scale`.
+    pub offset: [f32; 2],
+}
+
+/// The texture coordinates of one triangle's vertices, in the triangle buffer's order. 32
+/// bytes; only scenes with a texture have them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangleUv {
+    /// At `v0`.
+    pub uv0: [f32; 2],
+    /// At `v1`.
+    pub uv1: [f32; 2],
+    /// At `v2`.
+    pub uv2: [f32; 2],
     /// Padding.
-    pub _pad: u32,
+    pub _pad: [u32; 2],
 }
 
 /// An axis-aligned box: a moved object's box in one of its poses (the boxes whose crossing a

@@ -7,7 +7,8 @@
 //! - [`rng`], [`sampling`], [`geometry`], [`bsdf`]: math that exists once here and once in
 //!   WGSL; [`bsdf`] is what every material does with light.
 //! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
-//!   ([`scene::path`]), and the flattening into buffers. Files are the `scenes` crate's.
+//!   ([`scene::path`]), and the flattening into buffers; [`textures`]: the colour a
+//!   texture gives a surface point. Files are the `scenes` crate's.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping; [`screen_cover`]: the pixels a
 //!   mesh may cover, and [`reach`]: where a slot's paths and light may pass, for local mode's
 //!   resets and corrections.
@@ -36,4 +37,5 @@ pub mod rng;
 pub mod sampling;
 pub mod scene;
 pub mod screen_cover;
+pub mod textures;
 pub mod update;

@@ -98,6 +98,7 @@ fn refit(before: &CompiledScene, after: &Scene, changed: &[usize]) -> Option<Com
         bvh_built_cost: before.bvh_built_cost,
         bvh_depth: before.bvh_depth,
         movers: Vec::new(),
+        textures: before.textures.clone(),
     })
 }
 

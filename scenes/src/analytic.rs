@@ -73,11 +73,13 @@ pub fn furnace(albedo: Vec3, le: f32) -> Scene {
                 radiance: Vec3::splat(le),
                 albedo,
             },
+            texture: None,
         }],
         objects: vec![Object {
             name: "walls".into(),
             material: 0,
             triangles,
+            uvs: Vec::new(),
         }],
         render: RenderDefaults {
             initial_radius: 0.1,
@@ -110,15 +112,18 @@ pub fn specular_furnace(albedo: Vec3, le: f32) -> Scene {
         kind: MaterialKind::Mirror {
             reflectance: Vec3::ONE,
         },
+        texture: None,
     });
     scene.materials.push(Material {
         name: "glass".into(),
         kind: MaterialKind::Glass { ior: 1.5 },
+        texture: None,
     });
     scene.objects.push(Object {
         name: "mirror".into(),
         material: 1,
         triangles: mirror,
+        uvs: Vec::new(),
     });
     // The furnace's walls face inwards; a closed glass body faces outwards, so the cube takes
     // them with their winding reversed.
@@ -130,6 +135,7 @@ pub fn specular_furnace(albedo: Vec3, le: f32) -> Scene {
             .into_iter()
             .map(|t| [t[0], t[2], t[1]].map(|v| v * 0.3))
             .collect(),
+        uvs: Vec::new(),
     });
     scene.camera.eye = Vec3::new(0.0, 0.0, -0.8);
     scene
@@ -189,11 +195,13 @@ pub fn water_furnace(albedo: Vec3, le: f32, ior: f32) -> Scene {
             radiance: Vec3::splat(radiance),
             albedo,
         },
+        texture: None,
     };
     let object = |name: &str, material, triangles| Object {
         name: String::from(name),
         material,
         triangles,
+        uvs: Vec::new(),
     };
     let mut scene = furnace(albedo, le);
     scene.name = format!("water-furnace(albedo={albedo:?}, le={le}, ior={ior})");
@@ -203,10 +211,12 @@ pub fn water_furnace(albedo: Vec3, le: f32, ior: f32) -> Scene {
         Material {
             name: "water".into(),
             kind: MaterialKind::Glass { ior },
+            texture: None,
         },
         Material {
             name: "lossless-white".into(),
             kind: MaterialKind::Diffuse { albedo: Vec3::ONE },
+            texture: None,
         },
     ];
     scene.objects = vec![

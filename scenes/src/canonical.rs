@@ -28,6 +28,7 @@ pub fn cornell_bunny() -> Result<Scene, SceneError> {
         name: "bunny".into(),
         material: white,
         triangles: blob(250.0, 368.0, 351.0),
+        uvs: Vec::new(),
     });
     scene.moves = vec![Move {
         object: scene.objects.len() - 1,
@@ -85,12 +86,14 @@ pub fn wedding_band() -> Result<Scene, SceneError> {
             kind: MaterialKind::Diffuse {
                 albedo: Vec3::splat(0.8),
             },
+            texture: None,
         },
         Material {
             name: "gold".into(),
             kind: MaterialKind::Mirror {
                 reflectance: v(0.95, 0.78, 0.35),
             },
+            texture: None,
         },
         Material {
             name: "light".into(),
@@ -98,12 +101,14 @@ pub fn wedding_band() -> Result<Scene, SceneError> {
                 radiance: Vec3::splat(WEDDING_BAND_RADIANCE),
                 albedo: Vec3::ZERO,
             },
+            texture: None,
         },
     ];
     let object = |name: &str, material, triangles: Vec<[Vec3; 3]>| Object {
         name: name.into(),
         material,
         triangles,
+        uvs: Vec::new(),
     };
     Ok(Scene {
         name: "wedding-band".into(),

@@ -66,6 +66,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         build: material_scenes::cornell_metal,
     },
     BuiltinScene {
+        name: "cornell-textured",
+        description: "cornell-box with a checkered floor and a back wall painted with coloured rings (image textures)",
+        build: material_scenes::cornell_textured,
+    },
+    BuiltinScene {
         name: "furnace",
         description: "closed box whose walls all emit Le = 1 and reflect albedo 0.5: radiance is exactly 2 everywhere",
         build: || Ok(analytic::furnace(glam::Vec3::splat(0.5), 1.0)),

@@ -1,8 +1,9 @@
 //! A test scene per material beyond the canonical ones: the Cornell box with its blocks in
 //! that material, which docs/materials.md measures against Mitsuba 3 rendering our export.
 
-use glam::Vec3;
-use ppm_core::scene::{Material, MaterialKind, Scene, SceneError};
+use glam::{Vec2, Vec3};
+use ppm_core::scene::{Material, MaterialKind, Scene, SceneError, Texture, TextureFilter};
+use std::sync::Arc;
 
 /// Gold's complex index of refraction at the wavelengths of red, green and blue (650, 550
 /// and 450 nm; Johnson and Christy 1972).
@@ -38,8 +39,83 @@ pub fn cornell_metal() -> Result<Scene, SceneError> {
                 reflectance: Vec3::ONE,
                 alpha,
             },
+            texture: None,
         });
         scene.objects[object].material = scene.materials.len() - 1;
     }
     Ok(scene)
+}
+
+/// `cornell-textured`: cornell-box with a checkered floor (nearest texel, hard edges) and a
+/// back wall painted with soft coloured rings (a 64x64 image, bilinear); textures generated
+/// here, so the scene needs no file. The rest, the light and the move as cornell-box.
+pub fn cornell_textured() -> Result<Scene, SceneError> {
+    let mut scene = crate::cornell_box_file()?;
+    scene.name = "cornell-textured".into();
+    let invalid = |e| SceneError::invalid("cornell-textured", "textures", "generated", e);
+    let floor = Texture::checkerboard(
+        Vec3::new(0.8, 0.8, 0.75),
+        Vec3::new(0.15, 0.2, 0.35),
+        Vec2::splat(8.0),
+    )
+    .map_err(invalid)?;
+    let rings = Texture::from_linear("rings", 64, 64, &rings(64), TextureFilter::Bilinear)
+        .map_err(invalid)?;
+    for (object, texture) in [("floor", floor), ("back-wall", rings)] {
+        let index = scene.object_index(object).expect("cornell-box has it");
+        let base = &scene.materials[scene.objects[index].material];
+        let material = Material {
+            name: format!("{object}-texture"),
+            texture: Some(Arc::new(texture)),
+            ..Material::new(
+                "",
+                MaterialKind::Diffuse {
+                    albedo: match base.kind {
+                        MaterialKind::Diffuse { albedo } => albedo,
+                        _ => Vec3::ONE,
+                    },
+                },
+            )
+        };
+        scene.materials.push(material);
+        let object = &mut scene.objects[index];
+        object.material = scene.materials.len() - 1;
+        object.uvs = planar_uvs(&object.triangles);
+    }
+    Ok(scene)
+}
+
+/// Texture coordinates spanning the unit square over a flat object's bounding box, along
+/// its two longest sides.
+fn planar_uvs(triangles: &[[Vec3; 3]]) -> Vec<[Vec2; 3]> {
+    let lo = triangles
+        .iter()
+        .flatten()
+        .fold(Vec3::INFINITY, |a, &v| a.min(v));
+    let hi = triangles
+        .iter()
+        .flatten()
+        .fold(Vec3::NEG_INFINITY, |a, &v| a.max(v));
+    let size = hi - lo;
+    let mut axes = [0, 1, 2];
+    axes.sort_by(|&a, &b| size[b].total_cmp(&size[a]));
+    let (u, v) = (axes[0].min(axes[1]), axes[0].max(axes[1]));
+    triangles
+        .iter()
+        .map(|t| t.map(|p| Vec2::new((p[u] - lo[u]) / size[u], (p[v] - lo[v]) / size[v])))
+        .collect()
+}
+
+/// Concentric rings whose colour turns around the hue circle, on a light grey ground.
+fn rings(n: u32) -> Vec<Vec3> {
+    (0..n * n)
+        .map(|i| {
+            let (x, y) = ((i % n) as f32 + 0.5, (i / n) as f32 + 0.5);
+            let r = (Vec2::new(x, y) / n as f32 - 0.5).length() * 2.0;
+            let phase = r * 9.0;
+            let wave = 0.5 + 0.5 * phase.cos();
+            let hue = Vec3::new(phase.sin(), (phase + 2.1).sin(), (phase + 4.2).sin()) * 0.35 + 0.5;
+            Vec3::splat(0.7).lerp(hue, wave)
+        })
+        .collect()
 }

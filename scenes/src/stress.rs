@@ -125,11 +125,13 @@ fn add_object(scene: &mut Scene, name: &str, kind: MaterialKind, triangles: Vec<
     scene.materials.push(Material {
         name: format!("{name}-material"),
         kind,
+        texture: None,
     });
     scene.objects.push(Object {
         name: name.into(),
         material: scene.materials.len() - 1,
         triangles,
+        uvs: Vec::new(),
     });
 }
 

@@ -74,3 +74,59 @@ fn unreadable_scene_file_names_the_file() {
         "{err}"
     );
 }
+
+/// A textured quad: the image's left column lies at the quad's first corner (u = 0), its
+/// bottom row at v = 0; an image that is not there names the field and the file.
+#[test]
+fn a_textured_quad_reads_its_image_through_the_quad_coordinates() {
+    use glam::Vec2;
+    use ppm_core::scene::unpack_texel;
+    let dir = std::env::temp_dir().join(format!("ppm-textured-quad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 2x2: top row red, green; bottom row blue, white (8-bit sRGB, 255 decodes to 1).
+    let rgb = [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255];
+    scenes::file::image::write_png_rgb(&dir.join("four.png"), &rgb, 2, 2).unwrap();
+    let scene = |texture: &str| {
+        format!(
+            r#"
+name = "textured-quad"
+[camera]
+eye = [0.5, 0.5, -2.0]
+look_at = [0.5, 0.5, 0.0]
+fov = 45.0
+width = 4
+height = 4
+[materials]
+paint = {{ type = "diffuse", texture = "{texture}" }}
+lamp = {{ type = "light", radiance = [1.0, 1.0, 1.0] }}
+[[objects]]
+name = "quad"
+material = "paint"
+quads = [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]]
+[[objects]]
+name = "lamp"
+material = "lamp"
+triangles = [[[0.0, 2.0, -1.0], [1.0, 2.0, -1.0], [0.0, 2.0, 0.0]]]
+"#
+        )
+    };
+    let loaded = scenes::file::parse_scene(&scene("four.png"), "quad.toml", &dir).unwrap();
+    let quad = &loaded.objects[0];
+    let texture = loaded.materials[quad.material].texture.as_ref().unwrap();
+    assert_eq!(quad.uvs.len(), 2);
+    // The corner at (0, 0, 0) has uv (0, 0): near it the bottom-left texel (blue).
+    assert_eq!(quad.uvs[0][0], Vec2::ZERO);
+    let at = |u: f32, v: f32| texture.lookup(Vec2::new(u, v));
+    assert_eq!(at(0.25, 0.25), Vec3::Z);
+    assert_eq!(at(0.75, 0.75), Vec3::Y);
+    assert_eq!(at(0.25, 0.75), Vec3::X);
+    assert_eq!(unpack_texel(texture.texels[3]), Vec3::ONE);
+    let err = scenes::file::parse_scene(&scene("gone.png"), "quad.toml", &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("materials.paint.texture") && err.contains("gone.png"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

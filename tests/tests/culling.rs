@@ -28,6 +28,7 @@ fn furnace_with_mover(lo: Vec3, hi: Vec3, shift: Vec3) -> Scene {
         kind: MaterialKind::Diffuse {
             albedo: Vec3::splat(0.5),
         },
+        texture: None,
     });
     scene.objects.push(Object {
         name: "mover".into(),
@@ -36,6 +37,7 @@ fn furnace_with_mover(lo: Vec3, hi: Vec3, shift: Vec3) -> Scene {
             [lo, lo + Vec3::X * e, lo + Vec3::Y * e],
             [hi, hi - Vec3::Z * e, hi - Vec3::Y * e],
         ],
+        uvs: Vec::new(),
     });
     scene.moves.push(Move {
         object: scene.objects.len() - 1,

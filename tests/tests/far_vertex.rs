@@ -21,6 +21,7 @@ fn with_far_vertex() -> Scene {
     scene.materials.push(Material {
         name: "black".into(),
         kind: MaterialKind::Diffuse { albedo: Vec3::ZERO },
+        texture: None,
     });
     scene.objects.push(Object {
         name: "far-wall".into(),
@@ -30,6 +31,7 @@ fn with_far_vertex() -> Scene {
             Vec3::new(1e4, -1e4, -2000.0),
             Vec3::new(278.0, 1e8, -2000.0),
         ]],
+        uvs: Vec::new(),
     });
     scene
 }

@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bsdf bvh tables scene materials
+// #import layout rng qmc sampling geometry bsdf bvh tables scene materials textures
 // Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -9,6 +9,7 @@
 @group(0) @binding(4) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(6) var<storage, read_write> slot_bounds: array<GpuBounds>;
+@group(0) @binding(7) var<storage, read> scene_texels: array<vec2<u32>>;
 
 // False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
 // bounces through them are compiled out (backend_wgpu::Specialisation).
@@ -79,8 +80,10 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         let tri = scene_triangle(hit.triangle);
         out.eye_met |= tri.group;
-        let material = scene_material(tri.material);
         let position = origin + dir * hit.t;
+        var material = scene_material(tri.material);
+        let texture = texture_factor(material, hit.triangle, tri, position);
+        material.albedo *= texture;
         lo = min(lo, position);
         hi = max(hi, position);
         let front = dot(dir, tri.normal) < 0.0;
@@ -89,7 +92,8 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             out.position = position;
             out.normal = facing;
             out.material = tri.material;
-            out.throughput = throughput;
+            // The texture's factor rides in the throughput (ppm_core::textures).
+            out.throughput = throughput * texture;
             out.flags |= HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
             rays = depth + 1u;
             break;

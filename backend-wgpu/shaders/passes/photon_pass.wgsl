@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials
+// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures
 // Photon pass (docs/algorithm.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -23,6 +23,7 @@
 @group(0) @binding(7) var<storage, read> recorded: array<RecordedPath>;
 @group(0) @binding(8) var<storage, read_write> weights: array<f32>;
 @group(0) @binding(9) var<storage, read_write> crossed: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read> scene_texels: array<vec2<u32>>;
 
 // The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
 // carry no region or guided code.
@@ -123,8 +124,9 @@ fn trace_photon(path: u32) -> Traced {
             break;
         }
         let tri = scene_triangle(hit.triangle);
-        let material = scene_material(tri.material);
         let position = origin + dir * hit.t;
+        var material = scene_material(tri.material);
+        material.albedo *= texture_factor(material, hit.triangle, tri, position);
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;

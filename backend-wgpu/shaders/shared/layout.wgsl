@@ -76,7 +76,23 @@ struct GpuMaterial {
     eta: vec3<f32>,
     alpha: f32,
     k: vec3<f32>,
-    _pad: u32,
+    texture: u32,
+}
+
+struct GpuTexture {
+    first: u32,
+    width: u32,
+    height: u32,
+    nearest: u32,
+    scale: vec2<f32>,
+    offset: vec2<f32>,
+}
+
+struct GpuTriangleUv {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    _pad: vec2<u32>,
 }
 
 struct GpuLight {

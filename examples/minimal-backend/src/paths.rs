@@ -15,6 +15,7 @@ use ppm_core::layout::{
 };
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey, stratified_pair};
 use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
+use ppm_core::textures::SurfaceTextures;
 
 /// A direct-light sample's stratified pairs: the point on the light, the cosine direction,
 /// and (first number) which light.
@@ -36,6 +37,8 @@ pub struct Scene {
     pub materials: Vec<GpuMaterial>,
     /// Emitting triangles, with the distribution that picks one by power.
     pub lights: Vec<GpuLight>,
+    /// Texture coordinates and images.
+    pub textures: SurfaceTextures,
 }
 
 impl Scene {
@@ -47,7 +50,16 @@ impl Scene {
             bvh: scene.bvh.clone(),
             materials: scene.materials.clone(),
             lights: scene.lights.clone(),
+            textures: scene.textures.clone(),
         }
+    }
+
+    /// Triangle `index`'s material at `position`, its colour scaled by its texture there,
+    /// and that factor.
+    fn surface(&self, index: u32, position: Vec3) -> (GpuMaterial, Vec3) {
+        let tri = &self.triangles[index as usize];
+        let material = &self.materials[tri.material as usize];
+        self.textures.shaded(material, index, tri, position)
     }
 }
 
@@ -118,8 +130,11 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         };
         let tri = &scene.triangles[index as usize];
         hp.eye_met |= tri.group;
-        let material = &scene.materials[tri.material as usize];
         let position = origin + dir * t;
+        // A textured colour: scaled here, and carried by the slot's throughput where the
+        // path stops (ppm_core::textures).
+        let (material, texture) = scene.surface(index, position);
+        let material = &material;
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
@@ -127,7 +142,7 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
             hp.position = position.into();
             hp.normal = facing.into();
             hp.material = tri.material;
-            hp.throughput = throughput.into();
+            hp.throughput = (throughput * texture).into();
             hp.flags |= hit_flags::VALID
                 | if front { hit_flags::FRONT } else { 0 }
                 | (tri.object << hit_flags::OBJECT_SHIFT);
@@ -256,8 +271,9 @@ pub fn photon_path(
             break;
         };
         let tri = &scene.triangles[index as usize];
-        let material = &scene.materials[tri.material as usize];
         let position = origin + dir * t;
+        let (material, _) = scene.surface(index, position);
+        let material = &material;
         let normal = Vec3::from(tri.normal);
         let facing = if dir.dot(normal) < 0.0 {
             normal

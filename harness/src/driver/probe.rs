@@ -141,8 +141,9 @@ pub(super) fn eye_path(
                 visible: None,
             };
         }
-        let material = &scene.materials[tri.material as usize];
         let position = origin + dir * hit.t;
+        let (material, texture) = scene.surface(&hit, position);
+        let material = &material;
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
@@ -154,7 +155,7 @@ pub(super) fn eye_path(
                     position: position.into(),
                     normal: facing.into(),
                     material: tri.material,
-                    throughput: throughput.into(),
+                    throughput: (throughput * texture).into(),
                     flags: hit_flags::VALID | front,
                     ..HitPoint::empty(pixel)
                 }),

@@ -82,9 +82,10 @@ impl PathTracer<'_> {
                 break;
             };
             let tri = &self.scene.triangles[hit.triangle as usize];
-            let material = &self.scene.materials[tri.material as usize];
-            let normal = Vec3::from(tri.normal);
             let position = origin + dir * hit.t;
+            let (material, _) = self.scene.surface(&hit, position);
+            let material = &material;
+            let normal = Vec3::from(tri.normal);
             let cos_front = -dir.dot(normal);
             let front = cos_front > 0.0;
             let facing = if front { normal } else { -normal };

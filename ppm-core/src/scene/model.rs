@@ -1,7 +1,9 @@
 //! The scene model: what a scene is, independent of any file format or backend.
 
+use super::texture::Texture;
 use crate::params::Estimator;
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec2, Vec3};
+use std::sync::Arc;
 
 /// A complete scene: camera, materials, named objects, render defaults and the move of frame 1.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,6 +46,20 @@ pub struct Material {
     pub name: String,
     /// What the surface does with light.
     pub kind: MaterialKind,
+    /// An image that scales the kind's colour (a diffuse albedo, a mirror's or conductor's
+    /// reflectance) point by point; `None` for a uniform colour. Glass and lights take none.
+    pub texture: Option<Arc<Texture>>,
+}
+
+impl Material {
+    /// A material of uniform colour.
+    pub fn new(name: impl Into<String>, kind: MaterialKind) -> Self {
+        Self {
+            name: name.into(),
+            kind,
+            texture: None,
+        }
+    }
 }
 
 /// Surface behaviours (SCENES.md conventions).
@@ -105,6 +121,9 @@ pub struct Object {
     pub material: usize,
     /// Triangles, vertices in world space.
     pub triangles: Vec<[Vec3; 3]>,
+    /// Texture coordinates of each triangle's vertices, or empty: a triangle without them
+    /// reads `(0, 0)`, `(1, 0)`, `(1, 1)` at its vertices (pbrt-v4's default).
+    pub uvs: Vec<[Vec2; 3]>,
 }
 
 /// A rigid transform of one named object: rotation about the object's bounding-box centre, then

@@ -17,19 +17,19 @@ pub(crate) fn room(objects: Vec<Object>) -> Scene {
             height: 8,
         },
         materials: vec![
-            Material {
-                name: "white".into(),
-                kind: MaterialKind::Diffuse {
+            Material::new(
+                "white",
+                MaterialKind::Diffuse {
                     albedo: Vec3::splat(0.5),
                 },
-            },
-            Material {
-                name: "lamp".into(),
-                kind: MaterialKind::Light {
+            ),
+            Material::new(
+                "lamp",
+                MaterialKind::Light {
                     radiance: Vec3::ONE,
                     albedo: Vec3::ZERO,
                 },
-            },
+            ),
         ],
         objects,
         render: RenderDefaults::default(),
@@ -43,5 +43,6 @@ pub(crate) fn object(name: &str, material: usize, triangles: Vec<[Vec3; 3]>) -> 
         name: name.into(),
         material,
         triangles,
+        uvs: Vec::new(),
     }
 }

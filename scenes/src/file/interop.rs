@@ -8,11 +8,13 @@
 //! Mitsuba's `look_at` as written and pbrt's `LookAt` after `Scale -1 1 1`.
 
 use crate::file::mesh::{MeshData, write_ply};
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
+use ppm_core::scene::Texture;
 use ppm_core::scene::{
     Camera, Material, MaterialKind, Object, RenderDefaults, Scene, SceneError, check_magnitudes,
 };
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Settings of an export that are not part of the scene.
@@ -152,6 +154,13 @@ pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions) -> Vec<String
         ));
     }
     for (i, m) in scene.materials.iter().enumerate() {
+        if let Some(t) = &m.texture {
+            notes.push(format!(
+                "material '{}' is textured ({}, {}x{}): the texture is not written yet, the \
+                 other renderer sees its colour without it",
+                m.name, t.name, t.width, t.height
+            ));
+        }
         let used = scene.objects.iter().any(|o| o.material == i);
         if !used && matches!(m.kind, MaterialKind::Light { .. }) {
             notes.push(format!(
@@ -218,9 +227,20 @@ impl SceneBuilder {
 
     /// Declares a surface material (diffuse, mirror or glass); returns its index.
     pub fn declare(&mut self, name: &str, kind: MaterialKind) -> usize {
+        self.declare_textured(name, kind, None)
+    }
+
+    /// Declares a surface material whose colour `texture` may scale; returns its index.
+    pub fn declare_textured(
+        &mut self,
+        name: &str,
+        kind: MaterialKind,
+        texture: Option<Arc<Texture>>,
+    ) -> usize {
         self.materials.push(Material {
             name: name.to_owned(),
             kind,
+            texture,
         });
         self.usage.push(Usage::Unused);
         self.origin.push(self.materials.len() - 1);
@@ -243,6 +263,13 @@ impl SceneBuilder {
         let base = self.materials[surface].clone();
         let kind = match (emission, &base.kind) {
             (None, kind) => kind.clone(),
+            (Some(_), _) if base.texture.is_some() => {
+                return Err(format!(
+                    "material '{}' emits and is textured: a textured light is outside the \
+                     subset ppm renders",
+                    base.name
+                ));
+            }
             (Some(radiance), MaterialKind::Diffuse { albedo }) => MaterialKind::Light {
                 radiance,
                 albedo: *albedo,
@@ -266,6 +293,7 @@ impl SceneBuilder {
             self.materials.push(Material {
                 name: format!("{}-{suffix}-{}", base.name, self.materials.len()),
                 kind: kind.clone(),
+                texture: base.texture.clone(),
             });
             self.usage.push(Usage::Unused);
             self.origin.push(surface);
@@ -394,19 +422,23 @@ pub(crate) fn vertical_fov(horizontal_deg: f64, width: u32, height: u32) -> f32 
 /// The triangles of `mesh` in world space. Without vertex normals the winding is reversed
 /// where `flip` says so; with them each triangle turns to the side its (transformed) normals
 /// point to, reversed where `flip_normals` says so: both renderers orient a face by its
-/// shading normals when a mesh has them, and their flags act on the normals then.
+/// shading normals when a mesh has them, and their flags act on the normals then. With the
+/// triangles come their vertices' texture coordinates, in the same order (none when the mesh
+/// has none).
 pub(crate) fn mesh_triangles(
     mesh: &MeshData,
     to_world: Option<DMat4>,
     flip: bool,
     flip_normals: bool,
-) -> Vec<[Vec3; 3]> {
+) -> (Vec<[Vec3; 3]>, Vec<[Vec2; 3]>) {
     let point = |p: Vec3| match to_world {
         Some(m) => m.transform_point3(p.as_dvec3()).as_vec3(),
         None => p,
     };
     let normal_matrix = to_world.map(|m| DMat3::from_mat4(m).inverse().transpose());
-    mesh.triangles
+    let mut uvs = Vec::new();
+    let triangles = mesh
+        .triangles
         .iter()
         .map(|t| {
             let v = t.map(|i| point(mesh.positions[i as usize]));
@@ -420,9 +452,14 @@ pub(crate) fn mesh_triangles(
                 let face = (v[1] - v[0]).cross(v[2] - v[0]);
                 reverse = (face.dot(n) < 0.0) != flip_normals;
             }
-            if reverse { [v[0], v[2], v[1]] } else { v }
+            let order = if reverse { [0, 2, 1] } else { [0, 1, 2] };
+            if let Some(uv) = &mesh.uvs {
+                uvs.push(order.map(|k| uv[t[k] as usize]));
+            }
+            order.map(|k| v[k])
         })
-        .collect()
+        .collect();
+    (triangles, uvs)
 }
 
 /// Whether a transform turns right-handed frames into left-handed ones.
@@ -467,6 +504,7 @@ pub(crate) fn unit_rectangle() -> MeshData {
             Vec3::new(-1.0, 1.0, 0.0),
             Vec3::new(1.0, 1.0, 0.0),
         ],
+        uvs: None,
         normals: None,
         triangles: vec![[1, 2, 0], [1, 3, 2]],
     }

@@ -15,6 +15,11 @@ pub const SCENE_FILE_LIMIT: u64 = 64 << 20;
 /// BVH builder and a render of this tool handle in hours.
 pub const MESH_FILE_LIMIT: u64 = 2 << 30;
 
+/// Largest texture image file (compressed), and the most bytes its decoded pixels may take:
+/// 16384 x 16384 RGBA at 8 bits is 1 GiB; the texture kept is reduced to
+/// [`MAX_TEXTURE_SIDE`](ppm_core::scene::MAX_TEXTURE_SIDE) anyway.
+pub const TEXTURE_FILE_LIMIT: u64 = 1 << 30;
+
 /// Reads a file of at most `limit` bytes, refusing anything that is not a regular file (a
 /// device such as `/dev/zero`, a pipe, a folder) before reading a byte. The error says what is
 /// wrong, without the path (the caller names the file).

@@ -5,7 +5,7 @@
 //! file stores each `f32` bit for bit, so an exported mesh comes back identical.
 
 use crate::file::limits::{MESH_FILE_LIMIT, check_file_size, read_limited};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
@@ -20,6 +20,8 @@ pub struct MeshData {
     pub normals: Option<Vec<Vec3>>,
     /// Vertex indices of each triangle (polygons are split into fans).
     pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex texture coordinates, when the file has them.
+    pub uvs: Option<Vec<Vec2>>,
 }
 
 impl MeshData {
@@ -92,7 +94,9 @@ pub fn read_obj(path: &Path) -> Result<MeshData, String> {
         .map_err(|e| format!("cannot load OBJ {}: {e}", path.display()))?;
     let mut mesh = MeshData::default();
     let mut normals = Vec::new();
+    let mut uvs = Vec::new();
     let mut all_have_normals = true;
+    let mut all_have_uvs = true;
     for model in &models {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
@@ -112,6 +116,12 @@ pub fn read_obj(path: &Path) -> Result<MeshData, String> {
             all_have_normals = false;
             normals.extend(std::iter::repeat_n(Vec3::ZERO, count));
         }
+        if m.texcoords.len() == count * 2 {
+            uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+        } else {
+            all_have_uvs = false;
+            uvs.extend(std::iter::repeat_n(Vec2::ZERO, count));
+        }
         mesh.triangles.extend(
             m.indices
                 .chunks_exact(3)
@@ -120,6 +130,9 @@ pub fn read_obj(path: &Path) -> Result<MeshData, String> {
     }
     if all_have_normals && !mesh.positions.is_empty() {
         mesh.normals = Some(normals);
+    }
+    if all_have_uvs && !mesh.positions.is_empty() {
+        mesh.uvs = Some(uvs);
     }
     let count = mesh.positions.len() as u32;
     if mesh.triangles.iter().flatten().any(|&i| i >= count) {
@@ -301,16 +314,29 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, String> {
     };
     let mut mesh = MeshData::default();
     let mut normals = Vec::new();
+    let mut uvs = Vec::new();
     for element in &elements {
         let find = |name: &str| element.properties.iter().position(|p| p.name == name);
         let xyz = [find("x"), find("y"), find("z")];
         let nxyz = [find("nx"), find("ny"), find("nz")];
+        // The spellings of texture coordinates PLY writers use (pbrt-v4 reads the same).
+        let uv = [
+            ("u", "v"),
+            ("s", "t"),
+            ("texture_u", "texture_v"),
+            ("texture_s", "texture_t"),
+        ]
+        .into_iter()
+        .map(|(u, v)| [find(u), find(v)])
+        .find(|uv| !uv.contains(&None))
+        .unwrap_or([None, None]);
         let indices = find("vertex_indices").or_else(|| find("vertex_index"));
         let is_vertex = element.name == "vertex";
         if is_vertex && xyz.contains(&None) {
             return Err("the vertex element lacks x, y or z".into());
         }
         let has_normals = is_vertex && !nxyz.contains(&None);
+        let has_uvs = is_vertex && !uv.contains(&None);
         // An element without properties has nothing to read, however many it counts.
         let count = if element.properties.is_empty() {
             0
@@ -318,12 +344,17 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, String> {
             element.count
         };
         for _ in 0..count {
-            let mut scalars = [0.0f64; 6];
+            let mut scalars = [0.0f64; 8];
             for (k, p) in element.properties.iter().enumerate() {
                 match p.list {
                     None => {
                         let v = reader.read(p.value)?;
-                        if let Some(slot) = xyz.iter().chain(&nxyz).position(|&i| i == Some(k)) {
+                        if let Some(slot) = xyz
+                            .iter()
+                            .chain(&nxyz)
+                            .chain(&uv)
+                            .position(|&i| i == Some(k))
+                        {
                             scalars[slot] = v;
                         }
                     }
@@ -362,6 +393,9 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, String> {
                 if has_normals {
                     normals.push(v(3));
                 }
+                if has_uvs {
+                    uvs.push(Vec2::new(scalars[6] as f32, scalars[7] as f32));
+                }
             }
         }
         if element.name == "face" && indices.is_none() {
@@ -370,6 +404,9 @@ fn parse_ply(bytes: &[u8]) -> Result<MeshData, String> {
     }
     if normals.len() == mesh.positions.len() && !normals.is_empty() {
         mesh.normals = Some(normals);
+    }
+    if uvs.len() == mesh.positions.len() && !uvs.is_empty() {
+        mesh.uvs = Some(uvs);
     }
     let count = mesh.positions.len() as u32;
     if let Some(t) = mesh

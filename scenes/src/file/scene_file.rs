@@ -5,7 +5,8 @@
 //! and the value.
 
 use crate::file::limits::{MESH_FILE_LIMIT, SCENE_FILE_LIMIT, check_file_size, read_text_limited};
-use glam::{DVec3, EulerRot, Quat, Vec3};
+use crate::file::texture_image::{ImageOptions, read_texture};
+use glam::{DVec3, EulerRot, Quat, Vec2, Vec3};
 use ppm_core::params::Estimator;
 use ppm_core::scene::{
     Camera, MAX_COORDINATE, Material, MaterialKind, Move, Object, RenderDefaults, Scene,
@@ -14,6 +15,7 @@ use ppm_core::scene::{
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -64,7 +66,10 @@ fn white() -> [f32; 3] {
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 enum MaterialFile {
     Diffuse {
-        albedo: [f32; 3],
+        /// Required unless `texture` is given (then 1 by default, a factor on it).
+        albedo: Option<[f32; 3]>,
+        /// An image file, relative to the scene file, whose colour scales the albedo.
+        texture: Option<String>,
     },
     Mirror {
         reflectance: [f32; 3],
@@ -366,9 +371,29 @@ impl Converter<'_> {
     fn material(&self, name: &str, m: &MaterialFile) -> Result<Material, SceneError> {
         let field = |f: &str| format!("materials.{name}.{f}");
         let kind = match m {
-            MaterialFile::Diffuse { albedo } => MaterialKind::Diffuse {
-                albedo: self.colour(&field("albedo"), *albedo, Some(1.0))?,
-            },
+            MaterialFile::Diffuse { albedo, texture } => {
+                let albedo = match (albedo, texture) {
+                    (Some(a), _) => self.colour(&field("albedo"), *a, Some(1.0))?,
+                    (None, Some(_)) => Vec3::ONE,
+                    (None, None) => {
+                        return Err(self.err(
+                            field("albedo"),
+                            "missing",
+                            "a diffuse material needs an albedo or a texture",
+                        ));
+                    }
+                };
+                if let Some(file) = texture {
+                    let path = self.base.join(file);
+                    let texture = read_texture(&path, ImageOptions::default())
+                        .map_err(|e| self.err(field("texture"), format!("\"{file}\""), &e))?;
+                    return Ok(Material {
+                        texture: Some(Arc::new(texture)),
+                        ..Material::new(name, MaterialKind::Diffuse { albedo })
+                    });
+                }
+                MaterialKind::Diffuse { albedo }
+            }
             MaterialFile::Mirror { reflectance } => MaterialKind::Mirror {
                 reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
             },
@@ -397,6 +422,7 @@ impl Converter<'_> {
         Ok(Material {
             name: name.to_owned(),
             kind,
+            texture: None,
         })
     }
 
@@ -424,12 +450,20 @@ impl Converter<'_> {
         let rotate = self.vec3(&format!("{at}.rotate"), o.rotate)?;
         let translate = self.vec3(&format!("{at}.translate"), o.translate)?;
         let mut triangles = Vec::new();
+        // A quad spans the unit square from its first corner; a triangle given alone reads
+        // pbrt's default coordinates, as one from an OBJ without them.
+        let mut uvs = Vec::new();
+        let quad_uvs = [
+            [Vec2::ZERO, Vec2::X, Vec2::ONE],
+            [Vec2::ZERO, Vec2::ONE, Vec2::Y],
+        ];
         for (q, quad) in o.quads.iter().enumerate() {
             let mut v = [Vec3::ZERO; 4];
             for (k, p) in quad.iter().enumerate() {
                 v[k] = self.vec3(&format!("{at}.quads[{q}][{k}]"), *p)?;
             }
             triangles.extend(quad_triangles(v));
+            uvs.extend(quad_uvs);
         }
         for (t, tri) in o.triangles.iter().enumerate() {
             let mut v = [Vec3::ZERO; 3];
@@ -437,9 +471,12 @@ impl Converter<'_> {
                 v[k] = self.vec3(&format!("{at}.triangles[{t}][{k}]"), *p)?;
             }
             triangles.push(v);
+            uvs.push([Vec2::ZERO, Vec2::X, Vec2::ONE]);
         }
         if let Some(obj) = &o.obj {
-            triangles.extend(self.load_obj(&format!("{at}.obj"), obj)?);
+            let (t, uv) = self.load_obj(&format!("{at}.obj"), obj)?;
+            triangles.extend(t);
+            uvs.extend(uv);
         }
         let rotation = euler_degrees(rotate);
         for v in triangles.iter_mut().flatten() {
@@ -449,10 +486,18 @@ impl Converter<'_> {
             name: o.name.clone(),
             material,
             triangles,
+            uvs,
         })
     }
 
-    fn load_obj(&self, field: &str, name: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
+    /// The triangles of an OBJ file and their texture coordinates (pbrt's default where the
+    /// file has none).
+    #[allow(clippy::type_complexity)]
+    fn load_obj(
+        &self,
+        field: &str,
+        name: &str,
+    ) -> Result<(Vec<[Vec3; 3]>, Vec<[Vec2; 3]>), SceneError> {
         let path: PathBuf = self.base.join(name);
         check_file_size(&path, MESH_FILE_LIMIT).map_err(|e| {
             self.err(
@@ -474,8 +519,17 @@ impl Converter<'_> {
             )
         })?;
         let mut triangles = Vec::new();
+        let mut uvs = Vec::new();
         for model in &models {
             let p = &model.mesh.positions;
+            let tc = &model.mesh.texcoords;
+            let uv = |i: u32| -> Vec2 {
+                let i = i as usize * 2;
+                match tc.get(i..i + 2) {
+                    Some(&[u, v]) if u.is_finite() && v.is_finite() => Vec2::new(u, v),
+                    _ => Vec2::ZERO,
+                }
+            };
             let vertex = |i: u32| -> Result<Vec3, SceneError> {
                 let i = i as usize * 3;
                 let Some(&[x, y, z]) = p.get(i..i + 3) else {
@@ -510,12 +564,17 @@ impl Converter<'_> {
             };
             for t in model.mesh.indices.chunks_exact(3) {
                 triangles.push([vertex(t[0])?, vertex(t[1])?, vertex(t[2])?]);
+                uvs.push(if tc.is_empty() {
+                    [Vec2::ZERO, Vec2::X, Vec2::ONE]
+                } else {
+                    [uv(t[0]), uv(t[1]), uv(t[2])]
+                });
             }
         }
         if triangles.is_empty() {
             return Err(self.err(field, format!("\"{name}\""), "holds no triangles"));
         }
-        Ok(triangles)
+        Ok((triangles, uvs))
     }
 
     fn movement(&self, i: usize, m: &MoveFile, objects: &[Object]) -> Result<Move, SceneError> {

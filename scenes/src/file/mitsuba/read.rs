@@ -761,7 +761,7 @@ impl<'input> Reader<'_, 'input> {
         let analytic = ty == "rectangle" || ty == "cube";
         let plain_flip = flip ^ (analytic && swaps_handedness(to_world));
         let to_world = to_world.filter(|m| *m != DMat4::IDENTITY);
-        let triangles = mesh_triangles(&mesh, to_world, plain_flip, flip);
+        let (triangles, uvs) = mesh_triangles(&mesh, to_world, plain_flip, flip);
         if triangles.iter().flatten().any(|v| !v.is_finite()) {
             return Err(self.err(node, "a vertex is not finite"));
         }
@@ -788,6 +788,7 @@ impl<'input> Reader<'_, 'input> {
             name,
             material,
             triangles,
+            uvs,
         });
         Ok(())
     }

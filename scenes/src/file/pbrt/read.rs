@@ -4,12 +4,14 @@ use super::lexer::{Param, Token, tokenize};
 use crate::file::interop::{SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness};
 use crate::file::mesh::{MeshData, read_ply};
 use crate::file::scene_file::SceneSource;
-use glam::{DMat4, DQuat, DVec3, Vec3};
-use ppm_core::scene::SceneError;
+use crate::file::texture_image::{Encoding, ImageOptions, read_texture};
+use glam::{DMat4, DQuat, DVec3, Vec2, Vec3};
 use ppm_core::scene::{Camera, MaterialKind, Object};
 use ppm_core::scene::{MAX_COORDINATE, RenderDefaults, Scene};
-use std::collections::HashMap;
+use ppm_core::scene::{SceneError, Texture, TextureFilter};
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Reads a pbrt-v4 scene file; PLY file names are relative to its folder.
 pub fn load_pbrt_file(path: &Path) -> std::result::Result<Scene, SceneError> {
@@ -43,6 +45,8 @@ pub fn parse_pbrt(
         camera: None,
         resolution: (1280, 720),
         sppm: SppmSettings::default(),
+        textures: HashMap::new(),
+        float_textures: HashSet::new(),
     };
     let mut i = 0;
     while i < tokens.len() {
@@ -162,6 +166,10 @@ struct Reader<'a> {
     camera: Option<CameraDirective>,
     resolution: (u32, u32),
     sppm: SppmSettings,
+    /// `Texture "name" "spectrum"` by name, read when declared.
+    textures: HashMap<String, Arc<Texture>>,
+    /// `Texture "name" "float"`: declared, refused where a material uses one.
+    float_textures: HashSet<String>,
 }
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -304,8 +312,10 @@ impl Reader<'_> {
             "WorldEnd" => {}
             "Material" => {
                 let ty = d.string(0)?;
-                let kind = self.material(&d, &ty, &d.params(1)?)?;
-                let index = self.builder.declare(&format!("material-{line}"), kind);
+                let (kind, texture) = self.material(&d, &ty, &d.params(1)?)?;
+                let index =
+                    self.builder
+                        .declare_textured(&format!("material-{line}"), kind, texture);
                 self.state.material = Some(index);
             }
             "MakeNamedMaterial" => {
@@ -317,8 +327,8 @@ impl Reader<'_> {
                     .ok_or_else(|| d.err("has no \"string type\""))?;
                 let ty = d.one_string(ty)?;
                 let rest: Vec<Param> = params.into_iter().filter(|p| p.name != "type").collect();
-                let kind = self.material(&d, &ty, &rest)?;
-                let index = self.builder.declare(&n, kind);
+                let (kind, texture) = self.material(&d, &ty, &rest)?;
+                let index = self.builder.declare_textured(&n, kind, texture);
                 self.named.insert(n, index);
             }
             "NamedMaterial" => {
@@ -336,7 +346,8 @@ impl Reader<'_> {
                     "{SUBSET}: light comes only from AreaLightSource \"diffuse\" on shapes"
                 )));
             }
-            "Texture" | "MakeNamedMedium" | "MediumInterface" | "ObjectBegin" | "ObjectEnd"
+            "Texture" => self.texture(&d)?,
+            "MakeNamedMedium" | "MediumInterface" | "ObjectBegin" | "ObjectEnd"
             | "ObjectInstance" | "Include" | "Import" | "Attribute" | "ActiveTransform"
             | "TransformTimes" => return Err(d.err(SUBSET)),
             _ => return Err(d.err("unknown directive")),
@@ -480,7 +491,146 @@ impl Reader<'_> {
         ))
     }
 
-    fn material(&mut self, d: &Directive, ty: &str, params: &[Param]) -> Result<MaterialKind> {
+    /// A `Texture` directive: a spectrum `imagemap` (read now) or 2D `checkerboard` with
+    /// `uv` mapping; a float texture is noted, and refused where a material uses it.
+    fn texture(&mut self, d: &Directive) -> Result<()> {
+        let name = d.string(0)?;
+        let ty = d.string(1)?;
+        let class = d.string(2)?;
+        match ty.as_str() {
+            "float" => {
+                self.float_textures.insert(name);
+                return Ok(());
+            }
+            "spectrum" | "color" => {}
+            _ => return Err(d.err(format!("texture type \"{ty}\" is unknown"))),
+        }
+        let mut options = ImageOptions::default();
+        let (mut scale, mut offset) = (Vec2::ONE, Vec2::ZERO);
+        let (mut filename, mut even, mut odd) = (None, Vec3::ONE, Vec3::ZERO);
+        for p in d.params(3)? {
+            match (class.as_str(), p.name.as_str()) {
+                (_, "uscale") => scale.x = d.float(&p)?,
+                (_, "vscale") => scale.y = d.float(&p)?,
+                (_, "udelta") => offset.x = d.float(&p)?,
+                (_, "vdelta") => offset.y = d.float(&p)?,
+                (_, "mapping") => {
+                    let m = d.one_string(&p)?;
+                    if m != "uv" {
+                        return Err(d.param_err(&p, format!("mapping \"{m}\" is {SUBSET} (uv)")));
+                    }
+                }
+                ("imagemap", "filename") => filename = Some(d.one_string(&p)?),
+                ("imagemap", "filter") => {
+                    // Without MIP maps, trilinear and EWA lookups are bilinear ones.
+                    options.filter = match d.one_string(&p)?.as_str() {
+                        "point" => TextureFilter::Nearest,
+                        _ => TextureFilter::Bilinear,
+                    }
+                }
+                ("imagemap", "encoding") => {
+                    let e = d.one_string(&p)?;
+                    options.encoding = match e.as_str() {
+                        "sRGB" => Encoding::Srgb,
+                        "linear" => Encoding::Linear,
+                        g => match g.strip_prefix("gamma ").map(str::parse::<f32>) {
+                            Some(Ok(gamma)) if gamma > 0.0 => Encoding::Gamma(gamma),
+                            _ => {
+                                return Err(d.param_err(
+                                    &p,
+                                    format!("encoding \"{e}\" is unknown (sRGB, linear, gamma G)"),
+                                ));
+                            }
+                        },
+                    }
+                }
+                ("imagemap", "scale") => options.scale = d.float(&p)?,
+                ("imagemap", "invert") => options.invert = d.boolean(&p)?,
+                ("imagemap", "wrap") => {
+                    let w = d.one_string(&p)?;
+                    if w != "repeat" {
+                        return Err(d.param_err(&p, format!("wrap \"{w}\" is {SUBSET} (repeat)")));
+                    }
+                }
+                ("imagemap", "maxanisotropy") => {}
+                ("checkerboard", "tex1") => even = d.colour(&p, Some(1.0))?,
+                ("checkerboard", "tex2") => odd = d.colour(&p, Some(1.0))?,
+                ("checkerboard", "dimension") => {
+                    if d.float(&p)? != 2.0 {
+                        return Err(d.param_err(&p, format!("a 3D checkerboard is {SUBSET}")));
+                    }
+                }
+                _ => {
+                    return Err(d.param_err(&p, format!("unknown parameter of a {class} texture, or one outside the subset ppm renders")));
+                }
+            }
+        }
+        if !(scale.is_finite() && offset.is_finite()) || options.scale < 0.0 {
+            return Err(
+                d.err("uscale, vscale, udelta, vdelta must be finite and scale non-negative")
+            );
+        }
+        let mut texture = match class.as_str() {
+            "imagemap" => {
+                let file = filename.ok_or_else(|| d.err("has no \"string filename\""))?;
+                read_texture(&self.base.join(&file), options).map_err(|e| d.err(e))?
+            }
+            "checkerboard" => Texture::checkerboard(even, odd, Vec2::ONE).map_err(|e| d.err(e))?,
+            _ => {
+                return Err(d.err(format!(
+                    "a {class} texture is {SUBSET} (imagemap, checkerboard)"
+                )));
+            }
+        };
+        texture.offset = offset * texture.scale;
+        texture.scale *= scale;
+        self.textures.insert(name, Arc::new(texture));
+        Ok(())
+    }
+
+    /// The texture a material's `"texture NAME"` parameter names.
+    fn texture_param(&self, d: &Directive, p: &Param) -> Result<Arc<Texture>> {
+        let name = d.one_string(p)?;
+        if let Some(t) = self.textures.get(&name) {
+            return Ok(t.clone());
+        }
+        Err(d.param_err(
+            p,
+            if self.float_textures.contains(&name) {
+                format!(
+                    "\"{name}\" is a float texture: a textured {} is {SUBSET}",
+                    p.name
+                )
+            } else {
+                format!("no Texture \"{name}\" before it")
+            },
+        ))
+    }
+
+    /// A material, and the texture on its colour: a diffuse `"texture reflectance"` (its
+    /// albedo then 1, the texture's values taken whole).
+    fn material(
+        &mut self,
+        d: &Directive,
+        ty: &str,
+        params: &[Param],
+    ) -> Result<(MaterialKind, Option<Arc<Texture>>)> {
+        let textured = |p: &&Param| p.name == "reflectance" && p.ty == "texture";
+        if let (Some(p), "diffuse") = (params.iter().find(textured), ty) {
+            let texture = self.texture_param(d, p)?;
+            let rest: Vec<Param> = params.iter().filter(|p| !textured(p)).cloned().collect();
+            return Ok((
+                match self.material_kind(d, ty, &rest)? {
+                    MaterialKind::Diffuse { .. } => MaterialKind::Diffuse { albedo: Vec3::ONE },
+                    kind => kind,
+                },
+                Some(texture),
+            ));
+        }
+        Ok((self.material_kind(d, ty, params)?, None))
+    }
+
+    fn material_kind(&mut self, d: &Directive, ty: &str, params: &[Param]) -> Result<MaterialKind> {
         let smooth = |p: &Param| -> Result<()> {
             if d.float(p)? != 0.0 {
                 return Err(d.param_err(p, format!("a rough surface is {SUBSET}")));
@@ -639,7 +789,14 @@ impl Reader<'_> {
                         "P" => mesh.positions = d.points(p)?,
                         "N" => mesh.normals = Some(d.points(p)?),
                         "indices" => indices = Some(d.integers(p)?),
-                        "uv" | "st" | "S" | "faceIndices" => {}
+                        "uv" | "st" => {
+                            let v = d.floats(p)?;
+                            if v.len() % 2 != 0 || v.iter().any(|x| !x.is_finite()) {
+                                return Err(d.param_err(p, "texture coordinates come in finite pairs"));
+                            }
+                            mesh.uvs = Some(v.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect());
+                        }
+                        "S" | "faceIndices" => {}
                         _ => return Err(d.param_err(p, "unknown parameter of a triangle mesh, or one outside the subset ppm renders")),
                     }
                 }
@@ -661,6 +818,13 @@ impl Reader<'_> {
                     .is_some_and(|n| n.len() != mesh.positions.len())
                 {
                     return Err(d.err("\"N\" does not have one normal per point"));
+                }
+                if mesh
+                    .uvs
+                    .as_ref()
+                    .is_some_and(|uv| uv.len() != mesh.positions.len())
+                {
+                    return Err(d.err("\"uv\" does not have one pair per point"));
                 }
                 mesh.triangles = indices
                     .chunks_exact(3)
@@ -690,7 +854,7 @@ impl Reader<'_> {
         let to_world = Some(self.state.ctm).filter(|m| *m != DMat4::IDENTITY);
         let flip = self.state.reverse ^ swaps_handedness(to_world);
         // pbrt negates the normals under ReverseOrientation (not for a mirroring transform).
-        let triangles = mesh_triangles(&mesh, to_world, flip, self.state.reverse);
+        let (triangles, uvs) = mesh_triangles(&mesh, to_world, flip, self.state.reverse);
         if triangles.iter().flatten().any(|v| !v.is_finite()) {
             return Err(d.err("a vertex is not finite"));
         }
@@ -723,6 +887,7 @@ impl Reader<'_> {
             name,
             material,
             triangles,
+            uvs,
         });
         Ok(())
     }

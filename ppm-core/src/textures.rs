@@ -1,0 +1,225 @@
+//! A compiled scene's textures, and the colour they give a surface point: what every backend
+//! asks where a path meets a textured material (textures.wgsl is the WGSL twin).
+//!
+//! A texture scales its material's colour. Where a path bounces, the backends sample the
+//! material with its colour scaled ([`SurfaceTextures::shaded`]); where an eye path stops,
+//! the factor goes into the slot's throughput instead, so a slot keeps its material's index
+//! and size while the gather and the direct-light pass, which read `f` from the material,
+//! still weigh by the textured colour: a diffuse `f` is the colour over pi, linear in it.
+
+use crate::layout::{GpuMaterial, GpuTexture, GpuTriangle, GpuTriangleUv};
+use crate::scene::{Scene, Texture, sample};
+use glam::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// Texture coordinates, headers and texels of a scene, as the backends bind them; all empty
+/// for an untextured scene, which then pays for none of it.
+#[derive(Clone, Debug, Default)]
+pub struct SurfaceTextures {
+    /// Per triangle, in the triangle buffer's order.
+    pub uvs: Vec<GpuTriangleUv>,
+    /// One per distinct texture; [`GpuMaterial::texture`] is one plus an index here.
+    pub headers: Vec<GpuTexture>,
+    /// Every texture's texels, one after the other (shared: moves do not change them).
+    pub texels: Arc<Vec<[u32; 2]>>,
+}
+
+impl SurfaceTextures {
+    /// Whether the scene has no texture.
+    pub fn is_empty(&self) -> bool {
+        self.headers.is_empty()
+    }
+
+    /// The factor on `material`'s colour at `position` on triangle `index` (`tri`): one
+    /// where the material has no texture.
+    #[inline]
+    pub fn factor(
+        &self,
+        material: &GpuMaterial,
+        index: u32,
+        tri: &GpuTriangle,
+        position: Vec3,
+    ) -> Vec3 {
+        if material.texture == 0 {
+            return Vec3::ONE;
+        }
+        let uv = surface_uv(&self.uvs[index as usize], tri, position);
+        sample(
+            &self.headers[material.texture as usize - 1],
+            &self.texels,
+            uv,
+        )
+    }
+
+    /// `material` with its colour scaled by its texture at the point, and the factor.
+    #[inline]
+    pub fn shaded(
+        &self,
+        material: &GpuMaterial,
+        index: u32,
+        tri: &GpuTriangle,
+        position: Vec3,
+    ) -> (GpuMaterial, Vec3) {
+        let factor = self.factor(material, index, tri, position);
+        let albedo = Vec3::from(material.albedo) * factor;
+        (
+            GpuMaterial {
+                albedo: albedo.into(),
+                ..*material
+            },
+            factor,
+        )
+    }
+}
+
+/// The texture coordinates at `position` on `tri`, interpolated from its vertices' by the
+/// point's barycentric coordinates (recovered from the position: the hit tests return only
+/// the distance).
+#[inline]
+pub fn surface_uv(uv: &GpuTriangleUv, tri: &GpuTriangle, position: Vec3) -> Vec2 {
+    let (e1, e2) = (Vec3::from(tri.e1), Vec3::from(tri.e2));
+    let w = position - Vec3::from(tri.v0);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (dw1, dw2) = (w.dot(e1), w.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    let (b1, b2) = if det > 0.0 {
+        ((d22 * dw1 - d12 * dw2) / det, (d11 * dw2 - d12 * dw1) / det)
+    } else {
+        (0.0, 0.0)
+    };
+    let uv0 = Vec2::from(uv.uv0);
+    uv0 + (Vec2::from(uv.uv1) - uv0) * b1 + (Vec2::from(uv.uv2) - uv0) * b2
+}
+
+/// pbrt-v4's coordinates for a triangle given none.
+const DEFAULT_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::ONE];
+
+/// The textures of `scene`, its triangles numbered as `compile_scene` numbers them (objects
+/// in order) and put in buffer order by `order`; the materials' texture fields set.
+pub(crate) fn compile_textures(
+    scene: &Scene,
+    order: &[u32],
+    materials: &mut [GpuMaterial],
+) -> SurfaceTextures {
+    let mut distinct: Vec<&Arc<Texture>> = Vec::new();
+    for (material, gpu) in scene.materials.iter().zip(materials.iter_mut()) {
+        let Some(texture) = &material.texture else {
+            continue;
+        };
+        let index = match distinct.iter().position(|t| Arc::ptr_eq(t, texture)) {
+            Some(i) => i,
+            None => {
+                distinct.push(texture);
+                distinct.len() - 1
+            }
+        };
+        gpu.texture = index as u32 + 1;
+    }
+    if distinct.is_empty() {
+        return SurfaceTextures::default();
+    }
+    let mut headers = Vec::with_capacity(distinct.len());
+    let mut texels = Vec::new();
+    for t in distinct {
+        headers.push(GpuTexture {
+            first: texels.len() as u32,
+            ..crate::scene::gpu_texture(t)
+        });
+        texels.extend_from_slice(&t.texels);
+    }
+    let numbered: Vec<GpuTriangleUv> = scene
+        .objects
+        .iter()
+        .flat_map(|o| (0..o.triangles.len()).map(move |i| o.uvs.get(i).unwrap_or(&DEFAULT_UVS)))
+        .map(|uv| GpuTriangleUv {
+            uv0: uv[0].into(),
+            uv1: uv[1].into(),
+            uv2: uv[2].into(),
+            _pad: [0; 2],
+        })
+        .collect();
+    SurfaceTextures {
+        uvs: order.iter().map(|&p| numbered[p as usize]).collect(),
+        headers,
+        texels: Arc::new(texels),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::compile::compile_scene;
+    use crate::scene::{Material, MaterialKind, Object, TextureFilter};
+
+    /// A unit quad in the z = 0 plane with a 2x1 texture, black on the left, white on the right.
+    fn quad_scene() -> Scene {
+        let texture = Texture::from_linear(
+            "halves",
+            2,
+            1,
+            &[Vec3::ZERO, Vec3::ONE],
+            TextureFilter::Nearest,
+        )
+        .unwrap();
+        let quad = [
+            [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0)],
+            [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+        ];
+        let mut scene = crate::scene::testing::room(Vec::new());
+        scene.materials = vec![Material {
+            texture: Some(Arc::new(texture)),
+            ..Material::new(
+                "floor",
+                MaterialKind::Diffuse {
+                    albedo: Vec3::splat(0.5),
+                },
+            )
+        }];
+        scene.objects = vec![Object {
+            name: "floor".into(),
+            material: 0,
+            triangles: quad.to_vec(),
+            uvs: quad
+                .iter()
+                .map(|t| t.map(|v| Vec2::new(v.x, v.y)))
+                .collect(),
+        }];
+        scene
+    }
+
+    #[test]
+    fn a_hit_reads_its_texel_through_the_bvh_order() {
+        let compiled = compile_scene(&quad_scene(), 4, 4);
+        let t = &compiled.textures;
+        assert_eq!(t.uvs.len(), compiled.triangles.len());
+        assert_eq!(compiled.materials[0].texture, 1);
+        for (i, tri) in compiled.triangles.iter().enumerate() {
+            for (p, expected) in [
+                (Vec3::new(0.2, 0.6, 0.0), 0.0),
+                (Vec3::new(0.8, 0.3, 0.0), 1.0),
+            ] {
+                // Only the triangle that holds the point is asked about it.
+                let b = surface_uv(&t.uvs[i], tri, p);
+                if (0.0..=1.0).contains(&b.x) && (0.0..=1.0).contains(&b.y) {
+                    let (shaded, factor) = t.shaded(&compiled.materials[0], i as u32, tri, p);
+                    assert_eq!(factor, Vec3::splat(expected));
+                    assert_eq!(Vec3::from(shaded.albedo), Vec3::splat(0.5 * expected));
+                    assert_relative_eq_uv(b, p);
+                }
+            }
+        }
+    }
+
+    fn assert_relative_eq_uv(uv: Vec2, p: Vec3) {
+        assert!((uv - Vec2::new(p.x, p.y)).length() < 1e-6, "{uv} at {p}");
+    }
+
+    #[test]
+    fn untextured_scenes_carry_no_texture_data() {
+        let mut scene = quad_scene();
+        scene.materials[0].texture = None;
+        let compiled = compile_scene(&scene, 4, 4);
+        assert!(compiled.textures.is_empty() && compiled.textures.uvs.is_empty());
+        assert!(!compiled.features.textured);
+    }
+}
