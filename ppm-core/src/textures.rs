@@ -127,15 +127,24 @@ pub(crate) fn compile_textures(
         });
         texels.extend_from_slice(&t.texels);
     }
+    // Coordinates on an untextured material are never read: zero, so that two scenes that
+    // differ only there compile alike.
     let numbered: Vec<GpuTriangleUv> = scene
         .objects
         .iter()
-        .flat_map(|o| (0..o.triangles.len()).map(move |i| o.uvs.get(i).unwrap_or(&DEFAULT_UVS)))
-        .map(|uv| GpuTriangleUv {
-            uv0: uv[0].into(),
-            uv1: uv[1].into(),
-            uv2: uv[2].into(),
-            _pad: [0; 2],
+        .flat_map(|o| {
+            let textured = scene.materials[o.material].texture.is_some();
+            (0..o.triangles.len())
+                .map(move |i| textured.then(|| o.uvs.get(i).unwrap_or(&DEFAULT_UVS)))
+        })
+        .map(|uv| match uv {
+            Some(uv) => GpuTriangleUv {
+                uv0: uv[0].into(),
+                uv1: uv[1].into(),
+                uv2: uv[2].into(),
+                _pad: [0; 2],
+            },
+            None => GpuTriangleUv::default(),
         })
         .collect();
     SurfaceTextures {

@@ -61,21 +61,12 @@ pub fn cornell_textured() -> Result<Scene, SceneError> {
     .map_err(invalid)?;
     let rings = Texture::from_linear("rings", 64, 64, &rings(64), TextureFilter::Bilinear)
         .map_err(invalid)?;
-    for (object, texture) in [("floor", floor), ("back-wall", rings)] {
+    for (object, name, texture) in [("floor", "checkers", floor), ("back-wall", "rings", rings)] {
         let index = scene.object_index(object).expect("cornell-box has it");
-        let base = &scene.materials[scene.objects[index].material];
+        // The texture holds the whole colour.
         let material = Material {
-            name: format!("{object}-texture"),
             texture: Some(Arc::new(texture)),
-            ..Material::new(
-                "",
-                MaterialKind::Diffuse {
-                    albedo: match base.kind {
-                        MaterialKind::Diffuse { albedo } => albedo,
-                        _ => Vec3::ONE,
-                    },
-                },
-            )
+            ..Material::new(name.to_owned(), MaterialKind::Diffuse { albedo: Vec3::ONE })
         };
         scene.materials.push(material);
         let object = &mut scene.objects[index];

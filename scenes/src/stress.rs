@@ -6,7 +6,10 @@ use crate::analytic::{box_triangles, furnace, specular_furnace, water_furnace};
 use glam::Vec3;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, RenderParams};
-use ppm_core::scene::{Material, MaterialKind, Object, Scene, quad_triangles};
+use ppm_core::scene::{
+    Material, MaterialKind, Object, Scene, Texture, TextureFilter, quad_triangles,
+};
+use std::sync::Arc;
 
 /// What a case must produce besides finite, in-range statistics.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -246,6 +249,16 @@ pub const STRESS: &[StressCase] = &[
         name: "conductor-alpha-1",
         stresses: "the roughest conductor: half its visible microfacets reflect below the surface, ending paths",
         build: || conductor_case(1.0),
+    },
+    StressCase {
+        name: "texture-1x1",
+        stresses: "a mirror's reflectance read from a one-texel image: every lookup wraps onto it",
+        build: || textured_mirror_case(1),
+    },
+    StressCase {
+        name: "texture-16k",
+        stresses: "a 16384 x 16384 image: reduced to 4096 a side as it is read, a 128 MiB texel buffer",
+        build: || textured_mirror_case(16384),
     },
     StressCase {
         name: "water-furnace",
@@ -616,6 +629,23 @@ fn conductor_case(alpha: f32) -> StressSetup {
         setup.expected = Expected::Finite;
     }
     setup
+}
+
+/// The specular furnace with its mirror's reflectance read from a `side` x `side` white
+/// image: every lookup reads 1 (a half float holds it exactly), so every pixel stays 2.
+fn textured_mirror_case(side: u32) -> StressSetup {
+    let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
+    let white = Texture::from_fn("white", side, side, TextureFilter::Bilinear, |_, _| {
+        Vec3::ONE
+    })
+    .expect("a white image is a valid texture");
+    let white = Arc::new(white);
+    for m in &mut scene.materials {
+        if let MaterialKind::Mirror { .. } = m.kind {
+            m.texture = Some(white.clone());
+        }
+    }
+    radiance_two(scene, None)
 }
 
 /// The water furnace (ior 1.8): every pixel is 2, under the water too, in both frames.

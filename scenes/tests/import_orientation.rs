@@ -81,3 +81,39 @@ fn mitsuba_rectangle_faces_plus_z_unless_flipped() {
     let turned = r#"<transform name="to_world"><scale z="-1"/></transform>"#;
     assert_eq!(mitsuba_lamp(turned), -Vec3::Z);
 }
+
+/// A pbrt sphere light: tessellated, every facet faces outwards (away from its centre), or
+/// inwards under ReverseOrientation; pbrt transforms a sphere's normal as a normal, so a
+/// mirroring transform then turns it in (ours follows). Two spheres sharing one material
+/// with different radiances become two lights.
+#[test]
+fn pbrt_sphere_lights_face_outwards_unless_reversed() {
+    let facing = |before: &str| -> (f32, usize) {
+        let text = format!(
+            "Scale -1 1 1\nLookAt 0 5 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+             MakeNamedMaterial \"null\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0 0 0 ]\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -1 0 -1  1 0 -1  1 0 1 ] \"integer indices\" [ 0 1 2 ]\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 2 2 2 ]\nNamedMaterial \"null\"\n\
+             Translate 0 9 0\nShape \"sphere\" \"float radius\" [ 0.5 ]\nAttributeEnd\n\
+             AttributeBegin\n{before}\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\nNamedMaterial \"null\"\n\
+             Translate 0 3 0\nShape \"sphere\" \"float radius\" [ 0.5 ]\nAttributeEnd\n"
+        );
+        let scene = pbrt::parse_pbrt(&text, "t.pbrt", Path::new("."), "t").unwrap();
+        let light = scene.objects.last().unwrap();
+        let centre = light.bounds_centre();
+        let outwards = light
+            .triangles
+            .iter()
+            .filter(|t| (t[1] - t[0]).cross(t[2] - t[0]).dot(t[0] - centre) > 0.0)
+            .count();
+        let lights = scene
+            .materials
+            .iter()
+            .filter(|m| matches!(m.kind, ppm_core::scene::MaterialKind::Light { .. }))
+            .count();
+        (outwards as f32 / light.triangles.len() as f32, lights)
+    };
+    assert_eq!(facing(""), (1.0, 2));
+    assert_eq!(facing("ReverseOrientation"), (0.0, 2));
+    assert_eq!(facing("Scale -1 1 1"), (0.0, 2));
+}

@@ -73,7 +73,48 @@ pub fn check_magnitudes(scene: &Scene, file: &str) -> Result<(), SceneError> {
             ),
         ));
     }
-    check_lights(scene, file)
+    check_lights(scene, file)?;
+    check_textures(scene, file)
+}
+
+/// Textures scale a reflecting colour: a light or glass takes none (a light's emission
+/// would be scaled with it where an eye path stops, ppm_core::textures), and texture
+/// coordinates are finite, one triple per triangle.
+fn check_textures(scene: &Scene, file: &str) -> Result<(), SceneError> {
+    for (i, m) in scene.materials.iter().enumerate() {
+        let bare = matches!(
+            m.kind,
+            MaterialKind::Light { .. } | MaterialKind::Glass { .. }
+        );
+        if let (Some(t), true) = (&m.texture, bare) {
+            return Err(SceneError::invalid(
+                file,
+                format!("materials[{i}] ({}).texture", m.name),
+                &t.name,
+                "a light or glass takes no texture",
+            ));
+        }
+    }
+    for (i, o) in scene.objects.iter().enumerate() {
+        let field = format!("objects[{i}] ({}).uvs", o.name);
+        if !o.uvs.is_empty() && o.uvs.len() != o.triangles.len() {
+            return Err(SceneError::invalid(
+                file,
+                field,
+                format!("{} triples", o.uvs.len()),
+                format!("one per triangle ({}) or none", o.triangles.len()),
+            ));
+        }
+        if let Some(uv) = o.uvs.iter().flatten().find(|uv| !uv.is_finite()) {
+            return Err(SceneError::invalid(
+                file,
+                field,
+                uv,
+                "texture coordinates must be finite",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Every light has an area that `f32` holds, and all together a power within
@@ -160,5 +201,46 @@ pub fn number(x: f32) -> String {
         format!("{x:e}")
     } else {
         format!("{x}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::testing::{object, room};
+    use crate::scene::{Texture, TextureFilter};
+    use std::sync::Arc;
+
+    #[test]
+    fn a_textured_light_and_bad_coordinates_are_refused_by_name() {
+        let quad = vec![
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec3::X, Vec3::ONE, Vec3::Y],
+        ];
+        let mut scene = room(vec![
+            object("wall", 0, quad.clone()),
+            object("lamp", 1, quad),
+        ]);
+        assert!(check_magnitudes(&scene, "s.toml").is_ok());
+        let grey = Texture::from_linear(
+            "grey.png",
+            1,
+            1,
+            &[Vec3::splat(0.5)],
+            TextureFilter::Nearest,
+        );
+        scene.materials[1].texture = Some(Arc::new(grey.unwrap()));
+        let err = check_magnitudes(&scene, "s.toml").unwrap_err().to_string();
+        assert!(
+            err.contains("materials[1] (lamp).texture") && err.contains("grey.png"),
+            "{err}"
+        );
+        scene.materials[1].texture = None;
+        scene.objects[0].uvs = vec![[glam::Vec2::ZERO; 3]];
+        let err = check_magnitudes(&scene, "s.toml").unwrap_err().to_string();
+        assert!(err.contains("objects[0] (wall).uvs"), "{err}");
+        scene.objects[0].uvs = vec![[glam::Vec2::new(f32::NAN, 0.0); 3]; 2];
+        let err = check_magnitudes(&scene, "s.toml").unwrap_err().to_string();
+        assert!(err.contains("must be finite"), "{err}");
     }
 }

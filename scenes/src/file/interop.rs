@@ -7,12 +7,14 @@
 //! pixel (0, 0) at the top-left. Our camera's image right is `forward x up`, which is
 //! Mitsuba's `look_at` as written and pbrt's `LookAt` after `Scale -1 1 1`.
 
+use crate::file::image::ImageFiles;
 use crate::file::mesh::{MeshData, write_ply};
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
-use ppm_core::scene::Texture;
+use ppm_core::image::Image;
 use ppm_core::scene::{
     Camera, Material, MaterialKind, Object, RenderDefaults, Scene, SceneError, check_magnitudes,
 };
+use ppm_core::scene::{Texture, unpack_texel};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use thiserror::Error;
@@ -43,10 +45,23 @@ pub struct Export {
     pub scene_file: String,
     /// Its contents.
     pub text: String,
-    /// Mesh file names beside it, with their triangles (world space).
-    pub meshes: Vec<(String, Vec<[Vec3; 3]>)>,
+    /// Mesh files beside it.
+    pub meshes: Vec<MeshFile>,
+    /// Texture image file names beside it, with their linear texels.
+    pub textures: Vec<(String, Image)>,
     /// What cannot be expressed exactly, one sentence each.
     pub notes: Vec<String>,
+}
+
+/// One object's mesh as an export writes it.
+#[derive(Clone, Debug)]
+pub struct MeshFile {
+    /// File name.
+    pub name: String,
+    /// Triangles in world space.
+    pub triangles: Vec<[Vec3; 3]>,
+    /// Their vertices' texture coordinates (empty for an object without a texture).
+    pub uvs: Vec<[Vec2; 3]>,
 }
 
 /// Why an export could not be written.
@@ -69,14 +84,27 @@ impl Export {
         mesh_names: Vec<String>,
         notes: Vec<String>,
     ) -> Self {
+        let textures = texture_files(scene)
+            .into_iter()
+            .zip(&scene.materials)
+            .filter_map(|(file, m)| Some((file?, texture_image(m)?)))
+            .collect();
         Export {
             scene_file: format!("{}.{extension}", scene_stem(scene)),
             text,
             meshes: mesh_names
                 .into_iter()
                 .zip(&scene.objects)
-                .map(|(n, o)| (n, o.triangles.clone()))
+                .map(|(name, o)| {
+                    let textured = scene.materials[o.material].texture.is_some();
+                    MeshFile {
+                        name,
+                        triangles: o.triangles.clone(),
+                        uvs: if textured { object_uvs(o) } else { Vec::new() },
+                    }
+                })
                 .collect(),
+            textures,
             notes,
         }
     }
@@ -89,9 +117,16 @@ impl Export {
             move |source| ExportError { path, source }
         };
         std::fs::create_dir_all(dir).map_err(fail(dir))?;
-        for (name, triangles) in &self.meshes {
+        for mesh in &self.meshes {
+            let path = dir.join(&mesh.name);
+            write_ply(&path, &mesh.triangles, &mesh.uvs).map_err(fail(&path))?;
+        }
+        for (name, image) in &self.textures {
             let path = dir.join(name);
-            write_ply(&path, triangles).map_err(fail(&path))?;
+            image.write_exr(&path).map_err(|e| ExportError {
+                path: path.display().to_string(),
+                source: std::io::Error::other(e.to_string()),
+            })?;
         }
         let path = dir.join(&self.scene_file);
         crate::file::output::write_bytes(&path, &self.text).map_err(fail(&path))?;
@@ -113,6 +148,54 @@ pub(crate) fn mesh_names(scene: &Scene) -> Vec<String> {
         names.push(name);
     }
     names
+}
+
+/// Per material, the file its texture is written to (`wood-texture.exr`), unique and safe
+/// for file systems; `None` for an untextured material.
+pub(crate) fn texture_files(scene: &Scene) -> Vec<Option<String>> {
+    let mut names: Vec<Option<String>> = Vec::new();
+    for m in &scene.materials {
+        if m.texture.is_none() {
+            names.push(None);
+            continue;
+        }
+        let stem = safe_stem(&m.name, "material");
+        let mut name = format!("{stem}-texture.exr");
+        let mut k = 2;
+        while names.iter().flatten().any(|n| *n == name) {
+            name = format!("{stem}-texture-{k}.exr");
+            k += 1;
+        }
+        names.push(Some(name));
+    }
+    names
+}
+
+/// A textured material's image as written: its texels times the material's colour (both
+/// formats then read the colour from the image alone), linear.
+fn texture_image(m: &Material) -> Option<Image> {
+    let t = m.texture.as_ref()?;
+    let colour = match m.kind {
+        MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => albedo,
+        MaterialKind::Mirror { reflectance } | MaterialKind::Conductor { reflectance, .. } => {
+            reflectance
+        }
+        MaterialKind::Glass { .. } => Vec3::ONE,
+    };
+    let mut image = Image::new(t.width, t.height);
+    for (p, texel) in image.pixels.iter_mut().zip(&t.texels) {
+        *p = (unpack_texel(*texel) * colour).to_array();
+    }
+    Some(image)
+}
+
+/// An object's texture coordinates as the file says them: pbrt's default where it has none.
+fn object_uvs(o: &Object) -> Vec<[Vec2; 3]> {
+    if o.uvs.len() == o.triangles.len() {
+        o.uvs.clone()
+    } else {
+        vec![[Vec2::ZERO, Vec2::X, Vec2::ONE]; o.triangles.len()]
+    }
 }
 
 /// File stem of the scene file: the scene's name made safe for file systems.
@@ -156,8 +239,9 @@ pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions) -> Vec<String
     for (i, m) in scene.materials.iter().enumerate() {
         if let Some(t) = &m.texture {
             notes.push(format!(
-                "material '{}' is textured ({}, {}x{}): the texture is not written yet, the \
-                 other renderer sees its colour without it",
+                "material '{}' is textured ({}, {}x{}): its image is written as a linear EXR \
+                 with the colour baked in; ours is read bilinear (or nearest) at its one \
+                 resolution, the other renderer may filter by the ray's footprint",
                 m.name, t.name, t.width, t.height
             ));
         }
@@ -211,6 +295,8 @@ pub(crate) struct SceneBuilder {
     usage: Vec<Usage>,
     /// Index of the surface material each material came from (itself for declared ones).
     origin: Vec<usize>,
+    /// Each material as declared: the first shape to use one may turn it into a light.
+    declared: Vec<Material>,
     pub objects: Vec<Object>,
 }
 
@@ -221,6 +307,7 @@ impl SceneBuilder {
             materials: Vec::new(),
             usage: Vec::new(),
             origin: Vec::new(),
+            declared: Vec::new(),
             objects: Vec::new(),
         }
     }
@@ -242,6 +329,8 @@ impl SceneBuilder {
             kind,
             texture,
         });
+        self.declared
+            .push(self.materials[self.materials.len() - 1].clone());
         self.usage.push(Usage::Unused);
         self.origin.push(self.materials.len() - 1);
         self.materials.len() - 1
@@ -260,7 +349,7 @@ impl SceneBuilder {
         {
             return Ok(i);
         }
-        let base = self.materials[surface].clone();
+        let base = self.declared[surface].clone();
         let kind = match (emission, &base.kind) {
             (None, kind) => kind.clone(),
             (Some(_), _) if base.texture.is_some() => {
@@ -297,6 +386,7 @@ impl SceneBuilder {
             });
             self.usage.push(Usage::Unused);
             self.origin.push(surface);
+            self.declared.push(base.clone());
             self.materials.len() - 1
         };
         self.materials[i].kind = kind;
@@ -546,5 +636,71 @@ mod tests {
         );
         assert_eq!(target, Vec3::new(1.0, 2.0, 4.0));
         assert!(camera_pose(m, false).unwrap().3);
+    }
+}
+
+/// Longitude steps of a tessellated sphere (half as many in latitude): its flat facets lie
+/// within 0.12% of the radius of the true sphere and its area is 0.2% smaller
+/// (docs/other-renderers.md).
+pub(crate) const SPHERE_SEGMENTS: u32 = 64;
+
+/// A sphere of `radius` about the origin as triangles facing outwards: rings of
+/// [`SPHERE_SEGMENTS`] quads between the poles, with pbrt's `(phi / 2 pi, theta / pi)`
+/// texture coordinates.
+pub(crate) fn sphere_mesh(radius: f32) -> MeshData {
+    let (n, m) = (SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2);
+    let mut mesh = MeshData::default();
+    let mut uvs = Vec::new();
+    for j in 0..=m {
+        let theta = std::f32::consts::PI * j as f32 / m as f32;
+        for i in 0..=n {
+            let phi = std::f32::consts::TAU * i as f32 / n as f32;
+            let (st, ct) = theta.sin_cos();
+            mesh.positions
+                .push(radius * Vec3::new(st * phi.cos(), st * phi.sin(), -ct));
+            uvs.push(Vec2::new(i as f32 / n as f32, j as f32 / m as f32));
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..m {
+        for i in 0..n {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            // The first ring and the last meet at a pole: one triangle each there.
+            if j > 0 {
+                mesh.triangles.push([a, b, c]);
+            }
+            if j + 1 < m {
+                mesh.triangles.push([a, c, d]);
+            }
+        }
+    }
+    mesh.uvs = Some(uvs);
+    mesh
+}
+
+#[cfg(test)]
+mod sphere_tests {
+    use super::*;
+
+    #[test]
+    fn the_tessellated_sphere_is_closed_faces_out_and_near_the_true_one() {
+        let mesh = sphere_mesh(2.0);
+        let triangles = mesh.triangle_vertices();
+        let mut area = 0.0;
+        for t in &triangles {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            assert!(n.length() > 0.0, "no degenerate facet");
+            let centre = (t[0] + t[1] + t[2]) / 3.0;
+            assert!(n.dot(centre) > 0.0, "facet faces inwards at {centre}");
+            area += 0.5 * n.length();
+        }
+        let true_area = 4.0 * std::f32::consts::PI * 4.0;
+        assert!(
+            (1.0 - area / true_area - 0.002).abs() < 2e-4,
+            "area {area} against {true_area}"
+        );
+        for v in &mesh.positions {
+            assert!((v.length() - 2.0).abs() < 1e-5);
+        }
     }
 }

@@ -34,33 +34,41 @@ impl MeshData {
     }
 }
 
-/// Writes `triangles` as a binary little-endian PLY, vertices shared where their bits are
+/// Writes `triangles` as a binary little-endian PLY, with `uvs` (texture coordinates of
+/// each triangle's vertices, or empty) as `u` and `v`; vertices shared where their bits are
 /// equal, triangles in the given order and winding.
-pub fn write_ply(path: &Path, triangles: &[[Vec3; 3]]) -> std::io::Result<()> {
-    let mut index: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut positions: Vec<Vec3> = Vec::new();
+pub fn write_ply(path: &Path, triangles: &[[Vec3; 3]], uvs: &[[Vec2; 3]]) -> std::io::Result<()> {
+    let textured = !uvs.is_empty();
+    let mut index: HashMap<[u32; 5], u32> = HashMap::new();
+    let mut vertices: Vec<[f32; 5]> = Vec::new();
     let mut faces = Vec::with_capacity(triangles.len());
-    for t in triangles {
-        faces.push(t.map(|v| {
-            *index
-                .entry(v.to_array().map(f32::to_bits))
-                .or_insert_with(|| {
-                    positions.push(v);
-                    (positions.len() - 1) as u32
-                })
+    for (i, t) in triangles.iter().enumerate() {
+        faces.push(std::array::from_fn::<u32, 3, _>(|k| {
+            let uv = uvs.get(i).map_or(Vec2::ZERO, |uv| uv[k]);
+            let vertex = [t[k].x, t[k].y, t[k].z, uv.x, uv.y];
+            *index.entry(vertex.map(f32::to_bits)).or_insert_with(|| {
+                vertices.push(vertex);
+                (vertices.len() - 1) as u32
+            })
         }));
     }
-    let mut out = Vec::with_capacity(200 + positions.len() * 12 + faces.len() * 13);
+    let mut out = Vec::with_capacity(200 + vertices.len() * 20 + faces.len() * 13);
     write!(
         out,
         "ply\nformat binary_little_endian 1.0\ncomment written by ppm export\n\
-         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n{}\
          element face {}\nproperty list uchar int vertex_indices\nend_header\n",
-        positions.len(),
+        vertices.len(),
+        if textured {
+            "property float u\nproperty float v\n"
+        } else {
+            ""
+        },
         faces.len()
     )?;
-    for p in &positions {
-        for c in p.to_array() {
+    let floats = if textured { 5 } else { 3 };
+    for v in &vertices {
+        for c in &v[..floats] {
             out.extend_from_slice(&c.to_le_bytes());
         }
     }
@@ -440,7 +448,7 @@ mod tests {
             ],
         ];
         let path = std::env::temp_dir().join(format!("ppm-ply-{}.ply", std::process::id()));
-        write_ply(&path, &tris).unwrap();
+        write_ply(&path, &tris, &[]).unwrap();
         let mesh = read_ply(&path).unwrap();
         std::fs::remove_file(&path).ok();
         assert_eq!(mesh.positions.len(), 4, "shared vertices are written once");
@@ -452,6 +460,31 @@ mod tests {
                 .collect()
         };
         assert_eq!(bits(&back), bits(&tris));
+        // With texture coordinates: a vertex shared in position but not in coordinates is
+        // written twice, and every coordinate comes back as written.
+        let uvs = vec![
+            [
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.5, 1.0),
+            ],
+            [
+                Vec2::new(0.25, 0.0),
+                Vec2::new(0.5, 1.0),
+                Vec2::new(-3.0, 2.0),
+            ],
+        ];
+        write_ply(&path, &tris, &uvs).unwrap();
+        let mesh = read_ply(&path).unwrap();
+        std::fs::remove_file(&path).ok();
+        assert_eq!(mesh.positions.len(), 5);
+        let read_uvs = mesh.uvs.as_ref().unwrap();
+        let back: Vec<[Vec2; 3]> = mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| read_uvs[i as usize]))
+            .collect();
+        assert_eq!(back, uvs);
     }
 
     #[test]

@@ -16,5 +16,5 @@ pub mod pbrt;
 pub mod scene_file;
 pub mod texture_image;
 
-pub use interop::{Export, ExportError, ExportOptions};
+pub use interop::{Export, ExportError, ExportOptions, MeshFile};
 pub use scene_file::{load_scene_file, parse_scene};

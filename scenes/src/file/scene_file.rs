@@ -110,6 +110,9 @@ struct ObjectFile {
     translate: [f32; 3],
 }
 
+/// Triangles and their vertices' texture coordinates.
+type TexturedTriangles = (Vec<[Vec3; 3]>, Vec<[Vec2; 3]>);
+
 fn one() -> f32 {
     1.0
 }
@@ -492,12 +495,7 @@ impl Converter<'_> {
 
     /// The triangles of an OBJ file and their texture coordinates (pbrt's default where the
     /// file has none).
-    #[allow(clippy::type_complexity)]
-    fn load_obj(
-        &self,
-        field: &str,
-        name: &str,
-    ) -> Result<(Vec<[Vec3; 3]>, Vec<[Vec2; 3]>), SceneError> {
+    fn load_obj(&self, field: &str, name: &str) -> Result<TexturedTriangles, SceneError> {
         let path: PathBuf = self.base.join(name);
         check_file_size(&path, MESH_FILE_LIMIT).map_err(|e| {
             self.err(

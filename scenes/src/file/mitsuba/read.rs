@@ -8,13 +8,15 @@ use crate::file::interop::{
 };
 use crate::file::mesh::{read_obj, read_ply};
 use crate::file::scene_file::SceneSource;
-use glam::{DMat4, DQuat, DVec3, Vec3};
+use crate::file::texture_image::{Encoding, ImageOptions, read_texture};
+use glam::{DMat4, DQuat, DVec3, Vec2, Vec3};
 use ppm_core::scene::Scene;
 use ppm_core::scene::SceneError;
-use ppm_core::scene::{Camera, MaterialKind, Object};
+use ppm_core::scene::{Camera, MaterialKind, Object, Texture, TextureFilter};
 use roxmltree::{Document, Node};
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Reads a Mitsuba 3 scene file; mesh file names are relative to its folder.
 pub fn load_mitsuba_file(path: &Path) -> std::result::Result<Scene, SceneError> {
@@ -237,11 +239,11 @@ impl<'input> Reader<'_, 'input> {
             "sensor" => self.sensor(node)?,
             "bsdf" => {
                 let id = self.attr(node, "id")?;
-                let kind = self.bsdf(node)?;
+                let (kind, texture) = self.bsdf(node)?;
                 let name = id
                     .clone()
                     .unwrap_or_else(|| format!("bsdf-{}", self.builder.materials.len()));
-                let index = self.builder.declare(&name, kind);
+                let index = self.builder.declare_textured(&name, kind, texture);
                 if let Some(id) = id {
                     self.bsdfs.insert(id, index);
                 }
@@ -511,7 +513,84 @@ impl<'input> Reader<'_, 'input> {
         Ok(())
     }
 
-    fn bsdf(&self, node: Node) -> Result<MaterialKind> {
+    /// A BSDF, and the texture on its colour: a diffuse reflectance given by a `bitmap`
+    /// (its albedo then 1).
+    fn bsdf(&self, node: Node) -> Result<(MaterialKind, Option<Arc<Texture>>)> {
+        let ty = self.required(node, "type")?;
+        let elements: Vec<Node> = node.children().filter(Node::is_element).collect();
+        if let ([inner], "twosided") = (elements.as_slice(), ty.as_str())
+            && inner.tag_name().name() == "bsdf"
+        {
+            return self.bsdf(*inner);
+        }
+        if ty == "diffuse" {
+            let bitmap = node.children().find(|p| {
+                p.tag_name().name() == "texture" && p.attribute("name") == Some("reflectance")
+            });
+            if let Some(bitmap) = bitmap {
+                if let Some(other) = node
+                    .children()
+                    .filter(Node::is_element)
+                    .find(|p| *p != bitmap)
+                {
+                    return Err(self.err(other, "unknown parameter of a diffuse BSDF"));
+                }
+                let texture = self.bitmap(bitmap)?;
+                return Ok((MaterialKind::Diffuse { albedo: Vec3::ONE }, Some(texture)));
+            }
+        }
+        Ok((self.bsdf_kind(node)?, None))
+    }
+
+    /// Mitsuba 3's `bitmap` texture: `filename`, `filter_type`, `wrap_mode` (repeat), `raw`,
+    /// and a `to_uv` of scales and translations. Mitsuba's `v = 0` is the image's top row,
+    /// ours the bottom: `(s, t) = (u', 1 - v')` of its mapped `(u', v')`.
+    fn bitmap(&self, node: Node) -> Result<Arc<Texture>> {
+        if self.required(node, "type")? != "bitmap" {
+            return Err(self.err(node, format!("{SUBSET}: only bitmap textures")));
+        }
+        let mut options = ImageOptions::default();
+        let (mut file, mut raw, mut to_uv) = (None, false, DMat4::IDENTITY);
+        for p in node.children().filter(Node::is_element) {
+            match (p.tag_name().name(), p.attribute("name").unwrap_or_default()) {
+                ("string", "filename") => file = Some((p, self.required(p, "value")?)),
+                ("string", "filter_type") => {
+                    options.filter = match self.required(p, "value")?.as_str() {
+                        "bilinear" => TextureFilter::Bilinear,
+                        "nearest" => TextureFilter::Nearest,
+                        other => return Err(self.err(p, format!("filter \"{other}\" is unknown"))),
+                    }
+                }
+                ("string", "wrap_mode") => {
+                    let mode = self.required(p, "value")?;
+                    if mode != "repeat" {
+                        return Err(
+                            self.err(p, format!("wrap mode \"{mode}\" is {SUBSET} (repeat)"))
+                        );
+                    }
+                }
+                ("boolean", "raw") => raw = self.boolean(p)?,
+                ("transform", "to_uv") => to_uv = self.transform(p)?.0,
+                _ => return Err(self.err(p, "unknown parameter of a bitmap texture")),
+            }
+        }
+        if raw {
+            options.encoding = Encoding::Linear;
+        }
+        let (a, d) = (to_uv.x_axis.x, to_uv.y_axis.y);
+        let (tx, ty) = (to_uv.w_axis.x, to_uv.w_axis.y);
+        if to_uv.x_axis.y != 0.0 || to_uv.y_axis.x != 0.0 {
+            return Err(self.err(node, format!("a rotated or sheared to_uv is {SUBSET}")));
+        }
+        let (p, name) = file.ok_or_else(|| self.err(node, "the bitmap has no filename"))?;
+        let mut texture =
+            read_texture(&self.base.join(&name), options).map_err(|e| self.err(p, e))?;
+        texture.scale = Vec2::new(a as f32, -d as f32);
+        texture.offset = Vec2::new(tx as f32, (1.0 - ty) as f32);
+        Ok(Arc::new(texture))
+    }
+
+    fn bsdf_kind(&self, node: Node) -> Result<MaterialKind> {
         let ty = self.required(node, "type")?;
         let params: Vec<Node> = node.children().filter(Node::is_element).collect();
         let named = |n: &Node, name: &str| n.attribute("name") == Some(name);
@@ -531,7 +610,7 @@ impl<'input> Reader<'_, 'input> {
                         format!("different BSDFs on the two sides are {SUBSET}"),
                     ));
                 }
-                self.bsdf(inner[0])
+                self.bsdf_kind(inner[0])
             }
             "diffuse" => {
                 let mut albedo = Vec3::splat(0.5);
@@ -715,9 +794,9 @@ impl<'input> Reader<'_, 'input> {
                     surface = Some(index);
                 }
                 ("bsdf", _) => {
-                    let kind = self.bsdf(p)?;
+                    let (kind, texture) = self.bsdf(p)?;
                     let name = format!("{}-bsdf", node.attribute("id").unwrap_or("shape"));
-                    surface = Some(self.builder.declare(&name, kind));
+                    surface = Some(self.builder.declare_textured(&name, kind, texture));
                 }
                 ("emitter", _) => {
                     if self.required(p, "type")? != "area" {
@@ -776,6 +855,12 @@ impl<'input> Reader<'_, 'input> {
                 )
             }),
         };
+        if self.builder.materials[surface].texture.is_some() && uvs.is_empty() {
+            return Err(self.err(
+                node,
+                format!("a textured shape without texture coordinates is {SUBSET}"),
+            ));
+        }
         let material = self
             .builder
             .material_for(surface, emission)

@@ -1,7 +1,9 @@
 //! Writes a [`Scene`] as a Mitsuba 3 XML scene with PLY meshes beside it.
 
-use crate::file::interop::{Export, ExportOptions, clip_range, common_notes, list3, mesh_names};
-use ppm_core::scene::{MaterialKind, Scene};
+use crate::file::interop::{
+    Export, ExportOptions, clip_range, common_notes, list3, mesh_names, texture_files,
+};
+use ppm_core::scene::{MaterialKind, Scene, Texture, TextureFilter};
 use std::fmt::Write;
 
 /// The scene in Mitsuba 3's XML format (`scene version="3.0.0"`), meshes as PLY files.
@@ -94,17 +96,22 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let _ = writeln!(w, "            <rfilter type=\"box\"/>");
     let _ = writeln!(w, "        </film>");
     let _ = writeln!(w, "    </sensor>");
-    for m in &scene.materials {
+    for (m, file) in scene.materials.iter().zip(texture_files(scene)) {
         let id = xml_attr(&material_id(&m.name));
         match &m.kind {
             MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => {
                 let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
                 let _ = writeln!(w, "        <bsdf type=\"diffuse\">");
-                let _ = writeln!(
-                    w,
-                    "            <rgb name=\"reflectance\" value=\"{}\"/>",
-                    list3(*albedo, ", ")
-                );
+                match (&m.texture, file) {
+                    (Some(t), Some(file)) => write_bitmap(w, t, &file),
+                    _ => {
+                        let _ = writeln!(
+                            w,
+                            "            <rgb name=\"reflectance\" value=\"{}\"/>",
+                            list3(*albedo, ", ")
+                        );
+                    }
+                }
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }
@@ -187,6 +194,44 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     }
     let _ = writeln!(w, "</scene>");
     Export::of(scene, "xml", x, names, notes)
+}
+
+/// A diffuse reflectance read from `file` (the texture's image, colour baked in). Mitsuba's
+/// `v = 0` is the image's top row, ours the bottom: `to_uv` maps our `(s, t)` to
+/// `(s, 1 - t)`.
+fn write_bitmap(w: &mut String, t: &Texture, file: &str) {
+    let filter = match t.filter {
+        TextureFilter::Bilinear => "bilinear",
+        TextureFilter::Nearest => "nearest",
+    };
+    let _ = writeln!(
+        w,
+        "            <texture type=\"bitmap\" name=\"reflectance\">"
+    );
+    let _ = writeln!(
+        w,
+        "                <string name=\"filename\" value=\"{}\"/>",
+        xml_attr(file)
+    );
+    let _ = writeln!(
+        w,
+        "                <string name=\"filter_type\" value=\"{filter}\"/>"
+    );
+    let _ = writeln!(w, "                <boolean name=\"raw\" value=\"true\"/>");
+    let _ = writeln!(w, "                <transform name=\"to_uv\">");
+    let _ = writeln!(
+        w,
+        "                    <scale x=\"{}\" y=\"{}\"/>",
+        t.scale.x, -t.scale.y
+    );
+    let _ = writeln!(
+        w,
+        "                    <translate x=\"{}\" y=\"{}\"/>",
+        t.offset.x,
+        1.0 - t.offset.y
+    );
+    let _ = writeln!(w, "                </transform>");
+    let _ = writeln!(w, "            </texture>");
 }
 
 /// Materials and shapes share Mitsuba's id space, and our scenes reuse names across them

@@ -1,7 +1,9 @@
 //! Reads the subset of pbrt-v4's scene format that we can render.
 
 use super::lexer::{Param, Token, tokenize};
-use crate::file::interop::{SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness};
+use crate::file::interop::{
+    SceneBuilder, camera_pose, look_at, mesh_triangles, sphere_mesh, swaps_handedness,
+};
 use crate::file::mesh::{MeshData, read_ply};
 use crate::file::scene_file::SceneSource;
 use crate::file::texture_image::{Encoding, ImageOptions, read_texture};
@@ -847,12 +849,37 @@ impl Reader<'_> {
                 let (name, _) = filename.ok_or_else(|| d.err("has no \"string filename\""))?;
                 read_ply(&self.base.join(&name)).map_err(|e| d.err(e))?
             }
+            "sphere" => {
+                let mut radius = 1.0;
+                for p in &params {
+                    match p.name.as_str() {
+                        "radius" => {
+                            radius = d.float(p)?;
+                            if !(radius > 0.0 && radius.is_finite()) {
+                                return Err(d.param_err(p, "must be a positive number"));
+                            }
+                        }
+                        "zmin" | "zmax" | "phimax" => {
+                            return Err(d.param_err(p, format!("a partial sphere is {SUBSET}")));
+                        }
+                        _ => return Err(d.param_err(
+                            p,
+                            "unknown parameter of a sphere, or one outside the subset ppm renders",
+                        )),
+                    }
+                }
+                sphere_mesh(radius)
+            }
             _ => {
-                return Err(d.err(format!("{SUBSET} (trianglemesh, plymesh)")));
+                return Err(d.err(format!("{SUBSET} (trianglemesh, plymesh, sphere)")));
             }
         };
         let to_world = Some(self.state.ctm).filter(|m| *m != DMat4::IDENTITY);
-        let flip = self.state.reverse ^ swaps_handedness(to_world);
+        // pbrt turns a sphere's normal outwards through any transform (a normal transform)
+        // before ReverseOrientation and a mirroring transform flip it; a triangle's comes
+        // from its transformed edges, which a mirroring transform already turned.
+        let analytic = ty == "sphere";
+        let flip = self.state.reverse ^ (swaps_handedness(to_world) && !analytic);
         // pbrt negates the normals under ReverseOrientation (not for a mirroring transform).
         let (triangles, uvs) = mesh_triangles(&mesh, to_world, flip, self.state.reverse);
         if triangles.iter().flatten().any(|v| !v.is_finite()) {

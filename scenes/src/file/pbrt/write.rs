@@ -1,7 +1,9 @@
 //! Writes a [`Scene`] as a pbrt-v4 scene file with PLY meshes beside it.
 
-use crate::file::interop::{Export, ExportOptions, common_notes, list3, mesh_names, scene_stem};
-use ppm_core::scene::{MaterialKind, Scene};
+use crate::file::interop::{
+    Export, ExportOptions, common_notes, list3, mesh_names, scene_stem, texture_files,
+};
+use ppm_core::scene::{MaterialKind, Scene, TextureFilter};
 use std::fmt::Write;
 
 /// Path depth given to pbrt's path tracer: beyond the 16 + 16 bounces our eye and photon
@@ -15,7 +17,8 @@ pub const PBRT_MAX_DEPTH: u32 = 100;
 /// dielectric surfaces are exact; a mirror is pbrt's `conductor` given `reflectance`, which
 /// pbrt treats as the Fresnel reflectance at normal incidence (listed in the notes); a
 /// conductor is pbrt's `conductor` of the same `eta`, `k` and GGX alpha (`remaproughness`
-/// off), without our reflectance factor, which pbrt lacks (listed when it is not one).
+/// off), without our reflectance factor, which pbrt lacks (listed when it is not one). A
+/// textured diffuse surface reads an `imagemap` of its image with the colour baked in.
 pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
@@ -107,8 +110,31 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         scene_stem(scene)
     );
     let _ = writeln!(w, "WorldBegin");
-    for m in &scene.materials {
+    for (m, file) in scene.materials.iter().zip(texture_files(scene)) {
         let name = quoted(&m.name);
+        if let (Some(t), Some(file), MaterialKind::Diffuse { .. }) = (&m.texture, file, &m.kind) {
+            // The image holds the colour (interop::texture_image); pbrt's (s, t) mapping and
+            // t flip are ours.
+            let filter = match t.filter {
+                TextureFilter::Bilinear => "bilinear",
+                TextureFilter::Nearest => "point",
+            };
+            let texture = quoted(&format!("{}-texture", m.name));
+            let _ = writeln!(
+                w,
+                "Texture {texture} \"spectrum\" \"imagemap\" \"string filename\" [ {} ] \"string filter\" [ \"{filter}\" ] \"float uscale\" [ {} ] \"float vscale\" [ {} ] \"float udelta\" [ {} ] \"float vdelta\" [ {} ]",
+                quoted(&file),
+                t.scale.x,
+                t.scale.y,
+                t.offset.x,
+                t.offset.y
+            );
+            let _ = writeln!(
+                w,
+                "MakeNamedMaterial {name} \"string type\" [ \"diffuse\" ] \"texture reflectance\" [ {texture} ]"
+            );
+            continue;
+        }
         let _ = match &m.kind {
             MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => writeln!(
                 w,
