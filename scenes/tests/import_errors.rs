@@ -389,3 +389,48 @@ fn mitsuba_sppm_settings_become_the_render_defaults() {
         assert!(e.contains(says) && e.contains("scenes/test.xml"), "{e}");
     }
 }
+
+/// pbrt textures: a checkerboard on a diffuse reflectance is read; a float texture, an
+/// undeclared one, an unknown filter and a missing image are refused with the line.
+#[test]
+fn pbrt_textures_are_read_or_refused_by_line() {
+    let textured = |texture: &str, use_it: &str| {
+        PBRT_OK
+            .replace(
+                "Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
+                &format!("{texture}\nMaterial \"diffuse\" \"texture reflectance\" \"{use_it}\""),
+            )
+            // The lamp gets a plain material of its own: a textured light is refused.
+            .replace("AttributeBegin\n", "AttributeBegin\nMaterial \"diffuse\"\n")
+    };
+    let checks = "Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" [ 4 ] \"rgb tex1\" [ 0.5 0.5 0.5 ]";
+    let scene = pbrt::parse_pbrt(&textured(checks, "c"), "t.pbrt", Path::new("."), "t").unwrap();
+    let floor = &scene.materials[scene.objects[0].material];
+    let t = floor.texture.as_ref().expect("the floor is textured");
+    assert_eq!((t.width, t.height), (2, 2));
+    assert_eq!(
+        t.scale,
+        glam::Vec2::new(2.0, 0.5),
+        "uscale 4 over the 2x2 image"
+    );
+    let rough = "Texture \"r\" \"float\" \"imagemap\" \"string filename\" \"r.png\"";
+    let err = pbrt_error(&textured(rough, "r"));
+    assert!(
+        err.contains("test.pbrt:6") && err.contains("float texture"),
+        "{err}"
+    );
+    let err = pbrt_error(&textured("", "nowhere"));
+    assert!(err.contains("no Texture \"nowhere\""), "{err}");
+    let odd = "Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"i.png\" \"string filter\" \"cubic\"";
+    let err = pbrt_error(&textured(odd, "i"));
+    assert!(
+        err.contains("test.pbrt:5") && err.contains("filter \"cubic\""),
+        "{err}"
+    );
+    let gone = "Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"gone.tga\"";
+    let err = pbrt_error(&textured(gone, "i"));
+    assert!(
+        err.contains("test.pbrt:5") && err.contains("gone.tga"),
+        "{err}"
+    );
+}

@@ -527,7 +527,10 @@ impl Reader<'_> {
                     // Without MIP maps, trilinear and EWA lookups are bilinear ones.
                     options.filter = match d.one_string(&p)?.as_str() {
                         "point" => TextureFilter::Nearest,
-                        _ => TextureFilter::Bilinear,
+                        "bilinear" | "trilinear" | "ewa" | "EWA" => TextureFilter::Bilinear,
+                        other => {
+                            return Err(d.param_err(&p, format!("filter \"{other}\" is unknown (point, bilinear, trilinear, ewa)")));
+                        }
                     }
                 }
                 ("imagemap", "encoding") => {
