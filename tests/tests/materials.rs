@@ -86,8 +86,8 @@ fn cornell_metal_agrees_with_the_path_tracer_on_every_backend() {
 /// A checkered floor (nearest texels) and a back wall of coloured rings (bilinear), in
 /// blocks of 4x4 pixels, smaller than a checker square (6 pixels here): a backend that
 /// reads other texels than the path tracer, or applies a texture twice where an eye path
-/// stops (floor ratio 0.62-0.71, tried by hand), fails. Measured on both backends: ratios
-/// 0.996-1.005, RMSE 0.0229. (Both estimators share ppm-core's lookup: its conventions are
+/// stops (floor ratio 0.62-0.70, tried by hand), fails. Measured on both backends: ratios
+/// 0.994-1.007, RMSE 0.0219. (Both estimators share ppm-core's lookup: its conventions are
 /// the unit tests' and docs/materials.md's comparison with Mitsuba's.)
 #[test]
 fn cornell_textured_agrees_with_the_path_tracer_on_every_backend() {
