@@ -157,3 +157,32 @@ fn tall_and_wide_cameras_round_trip_exactly() {
         }
     }
 }
+
+/// A texture on another colour than a diffuse reflectance is not written, and both exports
+/// say so rather than drop it silently.
+#[test]
+fn a_texture_the_formats_cannot_take_is_named_in_the_notes() {
+    use ppm_core::scene::{Texture, TextureFilter};
+    let mut scene = scenes::builtin("specular-furnace").unwrap().load().unwrap();
+    let white = Texture::from_linear("white", 1, 1, &[glam::Vec3::ONE], TextureFilter::Nearest);
+    let mirror = scene
+        .materials
+        .iter_mut()
+        .find(|m| matches!(m.kind, MaterialKind::Mirror { .. }))
+        .unwrap();
+    mirror.texture = Some(std::sync::Arc::new(white.unwrap()));
+    let name = mirror.name.clone();
+    let options = ExportOptions::default();
+    for export in [
+        mitsuba::export_mitsuba(&scene, &options),
+        pbrt::export_pbrt(&scene, &options),
+    ] {
+        assert!(export.textures.is_empty());
+        let note = format!("'{name}' is textured (white): only a diffuse reflectance's");
+        assert!(
+            export.notes.iter().any(|n| n.contains(&note)),
+            "{:?}",
+            export.notes
+        );
+    }
+}

@@ -96,7 +96,7 @@ impl Export {
                 .into_iter()
                 .zip(&scene.objects)
                 .map(|(name, o)| {
-                    let textured = scene.materials[o.material].texture.is_some();
+                    let textured = texture_written(&scene.materials[o.material]);
                     MeshFile {
                         name,
                         triangles: o.triangles.clone(),
@@ -150,12 +150,18 @@ pub(crate) fn mesh_names(scene: &Scene) -> Vec<String> {
     names
 }
 
+/// Whether an export writes `m`'s texture: both formats take an image as a diffuse
+/// reflectance; a texture on another colour is left out (the notes say so).
+fn texture_written(m: &Material) -> bool {
+    m.texture.is_some() && matches!(m.kind, MaterialKind::Diffuse { .. })
+}
+
 /// Per material, the file its texture is written to (`wood-texture.exr`), unique and safe
-/// for file systems; `None` for an untextured material.
+/// for file systems; `None` for a material whose texture is not written or that has none.
 pub(crate) fn texture_files(scene: &Scene) -> Vec<Option<String>> {
     let mut names: Vec<Option<String>> = Vec::new();
     for m in &scene.materials {
-        if m.texture.is_none() {
+        if !texture_written(m) {
             names.push(None);
             continue;
         }
@@ -174,17 +180,12 @@ pub(crate) fn texture_files(scene: &Scene) -> Vec<Option<String>> {
 /// A textured material's image as written: its texels times the material's colour (both
 /// formats then read the colour from the image alone), linear.
 fn texture_image(m: &Material) -> Option<Image> {
-    let t = m.texture.as_ref()?;
-    let colour = match m.kind {
-        MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => albedo,
-        MaterialKind::Mirror { reflectance } | MaterialKind::Conductor { reflectance, .. } => {
-            reflectance
-        }
-        MaterialKind::Glass { .. } => Vec3::ONE,
+    let (Some(t), MaterialKind::Diffuse { albedo: colour }) = (&m.texture, &m.kind) else {
+        return None;
     };
     let mut image = Image::new(t.width, t.height);
     for (p, texel) in image.pixels.iter_mut().zip(&t.texels) {
-        *p = (unpack_texel(*texel) * colour).to_array();
+        *p = (unpack_texel(*texel) * *colour).to_array();
     }
     Some(image)
 }
@@ -238,12 +239,20 @@ pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions) -> Vec<String
     }
     for (i, m) in scene.materials.iter().enumerate() {
         if let Some(t) = &m.texture {
-            notes.push(format!(
-                "material '{}' is textured ({}, {}x{}): its image is written as a linear EXR \
-                 with the colour baked in; ours is read bilinear (or nearest) at its one \
-                 resolution, the other renderer may filter by the ray's footprint",
-                m.name, t.name, t.width, t.height
-            ));
+            notes.push(if texture_written(m) {
+                format!(
+                    "material '{}' is textured ({}, {}x{}): its image is written as a linear \
+                     EXR with the colour baked in; ours is read bilinear (or nearest) at its one \
+                     resolution, the other renderer may filter by the ray's footprint",
+                    m.name, t.name, t.width, t.height
+                )
+            } else {
+                format!(
+                    "material '{}' is textured ({}): only a diffuse reflectance's texture is \
+                     written, the other renderer sees this colour without it",
+                    m.name, t.name
+                )
+            });
         }
         let used = scene.objects.iter().any(|o| o.material == i);
         if !used && matches!(m.kind, MaterialKind::Light { .. }) {
