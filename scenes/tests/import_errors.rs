@@ -51,6 +51,21 @@ fn mitsuba_error(text: &str) -> String {
         .unwrap_or_else(|e| e.to_string())
 }
 
+/// `PBRT_OK` with the floor's material written as `floor` (any directives before it too),
+/// and the lamp given a plain diffuse material of its own (our lights are diffuse and
+/// untextured).
+fn pbrt_with_floor(floor: &str) -> String {
+    PBRT_OK
+        .replace(
+            "Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
+            floor,
+        )
+        .replace(
+            "AttributeBegin\n",
+            "AttributeBegin\n  Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]\n",
+        )
+}
+
 fn pbrt_error(text: &str) -> String {
     pbrt::parse_pbrt(text, "scenes/test.pbrt", Path::new("scenes"), "test")
         .map(|_| "no error".to_owned())
@@ -279,16 +294,8 @@ fn mitsuba_rough_conductors_read_with_their_index_and_ggx_roughness() {
 
 #[test]
 fn pbrt_conductors_read_with_pbrt_s_roughness_and_reflectance_rules() {
-    // The floor in the conductor, the light diffuse as our lights are.
     let conductor = |params: &str| {
-        let text = PBRT_OK.replace(
-            "Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
-            &format!("Material \"conductor\" {params}"),
-        );
-        let text = text.replace(
-            "AttributeBegin",
-            "AttributeBegin\n  Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
-        );
+        let text = pbrt_with_floor(&format!("Material \"conductor\" {params}"));
         pbrt::parse_pbrt(&text, "scenes/test.pbrt", Path::new("scenes"), "test")
     };
     // remaproughness (on by default) turns roughness 0.04 into alpha sqrt(0.04) = 0.2.
@@ -395,13 +402,9 @@ fn mitsuba_sppm_settings_become_the_render_defaults() {
 #[test]
 fn pbrt_textures_are_read_or_refused_by_line() {
     let textured = |texture: &str, use_it: &str| {
-        PBRT_OK
-            .replace(
-                "Material \"diffuse\" \"rgb reflectance\" [ 0.8 0.8 0.8 ]",
-                &format!("{texture}\nMaterial \"diffuse\" \"texture reflectance\" \"{use_it}\""),
-            )
-            // The lamp gets a plain material of its own: a textured light is refused.
-            .replace("AttributeBegin\n", "AttributeBegin\nMaterial \"diffuse\"\n")
+        pbrt_with_floor(&format!(
+            "{texture}\nMaterial \"diffuse\" \"texture reflectance\" \"{use_it}\""
+        ))
     };
     let checks = "Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" [ 4 ] \"rgb tex1\" [ 0.5 0.5 0.5 ]";
     let scene = pbrt::parse_pbrt(&textured(checks, "c"), "t.pbrt", Path::new("."), "t").unwrap();
