@@ -145,7 +145,9 @@ fn estimate_reflected(
                 let le = Vec3::from(scene.materials[light.material as usize].emission);
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
                 let pb = bsdf::visible_point_pdf(n, w);
-                sum += f * le * (cos_x / pl * power_heuristic(pl, pb));
+                // A coat lets through a share of the light (one on a bare surface).
+                let cos_through = cos_x * bsdf::arrival(material, cos_x);
+                sum += f * le * (cos_through / pl * power_heuristic(pl, pb));
             }
         }
         let scattered = bsdf::sample_visible(material, n, pair(PAIR_DIRECTION));

@@ -148,19 +148,20 @@ fn trace_eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if bsdf::holds_visible_points(material) {
+        let u = key.eye_bounce(depth);
+        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u.0) {
             out.position = position.into();
             out.normal = facing.into();
             out.material = tri.material;
-            // The texture's factor rides in the throughput (ppm_core::textures).
-            out.throughput = (throughput * texture).into();
+            // The texture's factor rides in the throughput (ppm_core::textures), and so
+            // does a coat's transmittance towards the eye (ppm_core::bsdf).
+            out.throughput = (throughput * texture * weight).into();
             out.flags |= hit_flags::VALID
                 | if front { hit_flags::FRONT } else { 0 }
                 | (tri.object << hit_flags::OBJECT_SHIFT);
             return u64::from(depth) + 1;
         }
         out.flags |= hit_flags::EYE_CHAINED;
-        let u = key.eye_bounce(depth);
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             // A glossy direction below the surface: the path ends without a visible point.

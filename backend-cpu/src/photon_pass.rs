@@ -168,10 +168,12 @@ fn trace_photon(
             && (stores_all || crossed)
             && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
         {
+            // What reaches the base of a coated surface (ppm_core::bsdf::arrival).
+            let arrived = bsdf::arrival(material, -dir.dot(facing));
             out.push(Photon {
                 position: position.into(),
                 path,
-                power: power.into(),
+                power: (power * arrived).into(),
                 normal_oct: oct_encode(facing),
             });
         }

@@ -104,7 +104,7 @@ pub fn read_back<T: Pod>(
 pub struct SceneBuffers {
     /// Camera uniform.
     pub camera: wgpu::Buffer,
-    /// Every scene record in one table (scene.wgsl): materials (four texels each), triangles
+    /// Every scene record in one table (scene.wgsl): materials (eight texels each), triangles
     /// in BVH leaf order (four), flattened BVH nodes (two), emitting triangles (four), the
     /// boxes of moving objects (two; none when nothing moves), and, in a textured scene, the
     /// triangles' texture coordinates (two) and the texture headers (two).

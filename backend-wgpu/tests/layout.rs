@@ -97,7 +97,12 @@ fn buffer_elements_match_their_wgsl_twins() {
         eta,
         alpha,
         k,
-        texture
+        texture,
+        coat_internal,
+        coat_nonlinear,
+        coat_specular_weight,
+        _pad,
+        coat_transmittance
     });
     same_layout!(GpuTexture {
         first,
@@ -328,6 +333,7 @@ fn shared_constants_agree() {
         ("MATERIAL_MIRROR", material_kind::MIRROR),
         ("MATERIAL_GLASS", material_kind::GLASS),
         ("MATERIAL_CONDUCTOR", material_kind::CONDUCTOR),
+        ("MATERIAL_COATED", material_kind::COATED),
         ("TRANSPORT_RADIANCE", Transport::Radiance as u32),
         ("EYE_GLASS_DIM", ppm_core::rng::EYE_GLASS_DIM),
         ("EYE_GLOSSY_DIM", ppm_core::rng::EYE_GLOSSY_DIM),

@@ -143,7 +143,7 @@ pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -
     }
     if !features.specular() {
         out.push(
-            "specular eye chains and caustic photon paths: no mirror, glass or conductor"
+            "specular eye chains and caustic photon paths: no mirror, glass, conductor or coat"
                 .to_owned(),
         );
     }

@@ -657,7 +657,7 @@ fn animate_follows_a_path_file() {
             "{left_out}"
         );
         assert!(
-            left_out.contains("no mirror, glass or conductor"),
+            left_out.contains("no mirror, glass, conductor or coat"),
             "{left_out}"
         );
     }

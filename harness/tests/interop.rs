@@ -1,6 +1,7 @@
 //! Round trips through the Mitsuba 3 and pbrt-v4 formats: every built-in scene, in each frame
 //! it has, written with `export_*` and read back with `harness::load_scene`, compiles to the
-//! same buffers bit for bit (triangles, BVH, materials, lights, camera, textures).
+//! same buffers bit for bit (triangles, BVH, materials, lights, camera, textures), but for
+//! what pbrt's format cannot say: its `coateddiffuse` is always `nonlinear`.
 
 use ppm_core::compile::compile_scene;
 use ppm_core::scene::{MaterialKind, Scene};
@@ -56,6 +57,18 @@ fn first_difference(a: &Scene, b: &Scene) -> Option<&'static str> {
         .map(|(x, _)| x.0)
 }
 
+/// `scene` as pbrt's format holds it: every coat `nonlinear` (pbrt's `coateddiffuse` meets
+/// the base's colour at every return; the export's notes name a coat that is not).
+fn as_pbrt_holds_it(scene: &Scene) -> Scene {
+    let mut scene = scene.clone();
+    for m in &mut scene.materials {
+        if let MaterialKind::Coated { nonlinear, .. } = &mut m.kind {
+            *nonlinear = true;
+        }
+    }
+    scene
+}
+
 fn round_trip(export: &Export, dir: &Path) -> Scene {
     let path = export.write(dir).unwrap();
     harness::load_scene(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"))
@@ -76,9 +89,17 @@ fn every_builtin_scene_round_trips_through_mitsuba_and_pbrt_exactly() {
                 samples_per_pixel: 64,
                 frame,
             };
-            for (format, export) in [
-                ("mitsuba", mitsuba::export_mitsuba(&posed, &options)),
-                ("pbrt", pbrt::export_pbrt(&posed, &options)),
+            for (format, export, posed) in [
+                (
+                    "mitsuba",
+                    mitsuba::export_mitsuba(&posed, &options),
+                    posed.clone(),
+                ),
+                (
+                    "pbrt",
+                    pbrt::export_pbrt(&posed, &options),
+                    as_pbrt_holds_it(&posed),
+                ),
             ] {
                 let dir = scratch(&format!("{}-{frame}-{format}", builtin.name));
                 let back = round_trip(&export, &dir);

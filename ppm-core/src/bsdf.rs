@@ -17,6 +17,13 @@
 //! the surface), `facing` the unit normal on its side, and every sampled direction leaves
 //! the surface.
 
+mod coat;
+
+pub use coat::{
+    NODES as COAT_NODES, arrival, coat_tables, dielectric_fresnel, specular_probability,
+    transmittance as coat_transmittance,
+};
+
 use crate::geometry::{fresnel_refract, orthonormal_basis, reflect, to_world};
 use crate::layout::{GpuMaterial, material_kind};
 use crate::sampling::cosine_hemisphere;
@@ -71,18 +78,45 @@ pub fn is_delta(material: &GpuMaterial) -> bool {
     }
 }
 
-/// Whether eye paths stop on the material (its visible points) and photons are stored there:
-/// the diffuse materials. Paths continue through every other one by [`sample`].
+/// Whether photons are stored on the material and eye paths may stop there (its visible
+/// points): diffuse and coated materials. Paths continue through every other one by
+/// [`sample`], and through a coat when they take its reflection.
 #[inline]
 pub fn holds_visible_points(material: &GpuMaterial) -> bool {
-    material.kind == material_kind::DIFFUSE
+    matches!(
+        material.kind,
+        material_kind::DIFFUSE | material_kind::COATED
+    )
 }
 
-/// The BSDF `f` at a visible point (or a photon's surface), for any pair of directions on the
-/// facing side: every material that holds visible points is diffuse, `albedo / pi`.
+/// Whether an eye path arriving from `wo` stops on the material, and the factor on its
+/// throughput there: always, with one, on a diffuse surface; on a coated one when `u_lobe`
+/// takes the base, with the coat's transmittance over that chance; never elsewhere.
+#[inline]
+pub fn visible_point_weight(
+    material: &GpuMaterial,
+    facing: Vec3,
+    wo: Vec3,
+    u_lobe: f32,
+) -> Option<f32> {
+    match material.kind {
+        material_kind::DIFFUSE => Some(1.0),
+        material_kind::COATED => coat::visible_point_weight(material, facing.dot(wo), u_lobe),
+        _ => None,
+    }
+}
+
+/// The part of the BSDF `f` at a visible point (or a photon's surface) that is the same for
+/// every pair of directions on the facing side: `albedo / pi` on a diffuse surface; on a
+/// coated one, the base's share, which [`arrival`] at each direction completes (the eye pass
+/// holds it for `wo`, the photon and direct-light passes apply it for `wi`).
 #[inline]
 pub fn visible_point_f(material: &GpuMaterial) -> Vec3 {
-    Vec3::from(material.albedo) * FRAC_1_PI
+    if material.kind == material_kind::COATED {
+        coat::base_f(material)
+    } else {
+        Vec3::from(material.albedo) * FRAC_1_PI
+    }
 }
 
 /// Solid-angle density with which [`sample_visible`] draws `wi` at a visible point with
@@ -102,16 +136,26 @@ pub fn eval_cos(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> Vec
     if cos_o <= 0.0 || cos_i <= 0.0 || is_delta(material) {
         return Vec3::ZERO;
     }
-    if material.kind != material_kind::CONDUCTOR {
-        return visible_point_f(material) * cos_i;
+    match material.kind {
+        material_kind::CONDUCTOR => {
+            let (lobe, h) = ggx_reflection_cos(material.alpha, facing, wo, wi);
+            Vec3::from(material.albedo) * conductor_fresnel(material, wo.dot(h)) * lobe
+        }
+        material_kind::COATED => coat::eval_cos(material, facing, wo, wi),
+        _ => visible_point_f(material) * cos_i,
     }
+}
+
+/// The GGX reflection lobe without its Fresnel term, `D G2 / (4 cos_o cos_i)` times
+/// `cos_i`, and the half vector, for `wo` and `wi` above the surface.
+fn ggx_reflection_cos(alpha: f32, facing: Vec3, wo: Vec3, wi: Vec3) -> (f32, Vec3) {
+    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
     let h = half_vector(wo, wi);
-    let alpha = material.alpha;
     let d = ggx_d(alpha, local_half(facing, wo, wi));
     // G2 / (4 cos_o cos_i) times cos_i, with cos_i cancelled.
     let (root_o, root_i) = (smith_root(alpha, cos_o), smith_root(alpha, cos_i));
     let visibility_cos = 0.5 * cos_i / (cos_i * root_o + cos_o * root_i);
-    Vec3::from(material.albedo) * conductor_fresnel(material, wo.dot(h)) * (d * visibility_cos)
+    (d * visibility_cos, h)
 }
 
 /// Solid-angle density with which [`sample`] draws `wi` given `wo` at a non-delta surface
@@ -121,11 +165,20 @@ pub fn pdf(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     if cos_o <= 0.0 || cos_i <= 0.0 || is_delta(material) {
         return 0.0;
     }
-    if material.kind != material_kind::CONDUCTOR {
-        return visible_point_pdf(facing, wi);
+    match material.kind {
+        material_kind::CONDUCTOR => ggx_pdf(material.alpha, facing, wo, wi),
+        material_kind::COATED => coat::pdf(material, facing, wo, wi),
+        _ => visible_point_pdf(facing, wi),
     }
-    let alpha = material.alpha;
-    ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, local_half(facing, wo, wi)))
+}
+
+/// The density of `wi` drawn by [`visible_normal`] from `wo`, both above the surface.
+fn ggx_pdf(alpha: f32, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    ggx_reflection_pdf(
+        alpha,
+        facing.dot(wo),
+        ggx_d(alpha, local_half(facing, wo, wi)),
+    )
 }
 
 /// The GGX distribution of normals `D(m)` of the microfacet normal `m` in the surface's local
@@ -205,15 +258,12 @@ fn complex_fresnel(cos_i: f32, eta: f32, k: f32) -> f32 {
     (0.5 * (rs + rp)).clamp(0.0, 1.0)
 }
 
-/// Draws a direction from a rough conductor's visible normals (Heitz 2018) for `wo` towards
-/// where the path came from; the weight is `albedo F G2 / G1(wo)`. A direction below the
-/// surface ends the path: the sample has weight zero.
-fn sample_conductor(material: &GpuMaterial, facing: Vec3, wo: Vec3, u: (f32, f32)) -> BsdfSample {
-    let alpha = material.alpha;
+/// A microfacet normal drawn from GGX's normals visible from `wo` (Heitz 2018), in the local
+/// frame of `facing` and in world space: the hemisphere of the stretched view direction, its
+/// projected disc warped to the visible part, then unstretched.
+fn visible_normal(alpha: f32, facing: Vec3, wo: Vec3, u: (f32, f32)) -> (Vec3, Vec3) {
     let (t, b) = orthonormal_basis(facing);
     let local_o = Vec3::new(t.dot(wo), b.dot(wo), facing.dot(wo));
-    // The hemisphere of the stretched view direction, its projected disc warped to the
-    // visible part, then unstretched.
     let v = Vec3::new(alpha * local_o.x, alpha * local_o.y, local_o.z).normalize();
     let len2 = v.x * v.x + v.y * v.y;
     let t1 = if len2 > 0.0 {
@@ -229,36 +279,80 @@ fn sample_conductor(material: &GpuMaterial, facing: Vec3, wo: Vec3, u: (f32, f32
     let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
     let nh = t1 * p1 + t2 * p2 + v * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
     let m = Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize();
-    let h = to_world(m, facing);
-    let dir = reflect(-wo, h);
-    let (cos_o, cos_i) = (local_o.z, facing.dot(dir));
-    if cos_o <= 0.0 || cos_i <= 0.0 {
-        return BsdfSample {
-            dir,
-            weight: Vec3::ZERO,
-            pdf: 0.0,
-            transmitted: false,
-        };
-    }
-    // f cos_i / pdf = F G2 / G1(wo) = F cos_i (cos_o + root_o) / (cos_i root_o + cos_o root_i).
+    (m, to_world(m, facing))
+}
+
+/// Smith's `G2 / G1(wo)` for GGX, in the form that cancels `cos_o`: the weight of a
+/// reflection drawn from the visible normals, less its Fresnel term.
+#[inline]
+fn ggx_g2_over_g1(alpha: f32, cos_o: f32, cos_i: f32) -> f32 {
     let (root_o, root_i) = (smith_root(alpha, cos_o), smith_root(alpha, cos_i));
-    let g2_over_g1 = cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i);
-    BsdfSample {
+    cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i)
+}
+
+/// A reflection off a GGX microfacet drawn by [`visible_normal`].
+struct GgxReflection {
+    /// The direction, above the surface.
+    dir: Vec3,
+    /// The microfacet normal, the Fresnel term's.
+    h: Vec3,
+    /// `f cos / pdf` less the Fresnel term: `G2 / G1(wo)`; zero for a direction below the
+    /// surface, which ends the path.
+    g2_over_g1: f32,
+    /// The direction's density; zero below the surface.
+    pdf: f32,
+}
+
+/// Draws a [`GgxReflection`] for `wo`.
+fn sample_ggx_reflection(alpha: f32, facing: Vec3, wo: Vec3, u: (f32, f32)) -> GgxReflection {
+    let (m, h) = visible_normal(alpha, facing, wo, u);
+    let dir = reflect(-wo, h);
+    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(dir));
+    let above = cos_o > 0.0 && cos_i > 0.0;
+    GgxReflection {
         dir,
-        weight: Vec3::from(material.albedo) * conductor_fresnel(material, wo.dot(h)) * g2_over_g1,
-        pdf: ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)),
+        h,
+        g2_over_g1: if above {
+            ggx_g2_over_g1(alpha, cos_o, cos_i)
+        } else {
+            0.0
+        },
+        pdf: if above {
+            ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m))
+        } else {
+            0.0
+        },
+    }
+}
+
+/// Draws a direction from a rough conductor's visible normals for `wo` towards where the
+/// path came from; the weight is `albedo F G2 / G1(wo)`, zero below the surface.
+fn sample_conductor(material: &GpuMaterial, facing: Vec3, wo: Vec3, u: (f32, f32)) -> BsdfSample {
+    let r = sample_ggx_reflection(material.alpha, facing, wo, u);
+    BsdfSample {
+        dir: r.dir,
+        weight: Vec3::from(material.albedo)
+            * conductor_fresnel(material, wo.dot(r.h))
+            * r.g2_over_g1,
+        pdf: r.pdf,
         transmitted: false,
     }
 }
 
-/// Draws a direction at a non-delta surface: the cosine lobe about `facing`, from the pair
-/// `u`; the weight is the albedo (`f cos / pdf`).
+/// Draws a direction at a visible point: the cosine lobe about `facing`, from the pair `u`;
+/// the weight is `f cos / pdf` of [`visible_point_f`] and the [`arrival`] of the direction
+/// (the albedo on a diffuse surface).
 #[inline]
 pub fn sample_visible(material: &GpuMaterial, facing: Vec3, u: (f32, f32)) -> BsdfSample {
     let local = cosine_hemisphere(u.0, u.1);
+    let weight = if material.kind == material_kind::COATED {
+        coat::base_f(material) * (PI * coat::transmittance(material, local.z))
+    } else {
+        Vec3::from(material.albedo)
+    };
     BsdfSample {
         dir: to_world(local, facing),
-        weight: Vec3::from(material.albedo),
+        weight,
         pdf: local.z * FRAC_1_PI,
         transmitted: false,
     }
@@ -313,7 +407,8 @@ pub fn sample_delta(
 
 /// Draws how a path continues at any surface: [`sample_delta`] with `u_lobe` at delta
 /// surfaces, the visible normals of a rough conductor or [`sample_visible`] with `u_dir`
-/// elsewhere.
+/// elsewhere; at a coated surface `u_lobe` picks the coat's reflection or the base, `u_dir`
+/// the direction.
 #[inline]
 pub fn sample(
     material: &GpuMaterial,
@@ -324,20 +419,21 @@ pub fn sample(
     transport: Transport,
 ) -> BsdfSample {
     if is_delta(material) {
-        sample_delta(material, incoming, facing, front, u_lobe, transport)
-    } else if material.kind == material_kind::CONDUCTOR {
-        sample_conductor(material, facing, -incoming, u_dir)
-    } else {
-        sample_visible(material, facing, u_dir)
+        return sample_delta(material, incoming, facing, front, u_lobe, transport);
+    }
+    match material.kind {
+        material_kind::CONDUCTOR => sample_conductor(material, facing, -incoming, u_dir),
+        material_kind::COATED => coat::sample(material, incoming, facing, u_lobe, u_dir),
+        _ => sample_visible(material, facing, u_dir),
     }
 }
 
 /// How a photon continues from a surface it reached (the contract's photon bounce,
-/// `ppm_core::rng`): `u.0` picks the lobe at a delta surface and plays Russian roulette where
-/// photons are stored, surviving below the largest channel of the sampled weight; `u.1`
-/// draws a diffuse or glossy direction. The sample's `weight` is the factor on the photon's
-/// power (divided by the survival where roulette played); `None` ends the path: absorbed, or
-/// a glossy direction below the surface.
+/// `ppm_core::rng`): `u.0` picks the lobe at a delta or coated surface and plays Russian
+/// roulette where the photon scatters diffusely, surviving below the largest channel of the
+/// sampled weight (at most one); `u.1` draws a diffuse or glossy direction. The sample's
+/// `weight` is the factor on the photon's power (divided by the survival where roulette
+/// played); `None` ends the path: absorbed, or a glossy direction below the surface.
 #[inline]
 pub fn photon_bounce(
     material: &GpuMaterial,
@@ -347,9 +443,14 @@ pub fn photon_bounce(
     u: (f32, (f32, f32)),
 ) -> Option<BsdfSample> {
     let mut scattered = sample(material, incoming, facing, front, u, Transport::Importance);
-    if holds_visible_points(material) {
-        let survive = scattered.weight.max_element();
-        if u.0 >= survive {
+    let roulette = match material.kind {
+        material_kind::DIFFUSE => Some(u.0),
+        material_kind::COATED => coat::roulette_number(material, -incoming.dot(facing), u.0),
+        _ => None,
+    };
+    if let Some(u_roulette) = roulette {
+        let survive = scattered.weight.max_element().min(1.0);
+        if u_roulette >= survive {
             return None;
         }
         scattered.weight /= survive;
@@ -441,10 +542,26 @@ pub fn conductor(eta: [f32; 3], k: [f32; 3], alpha: f32) -> GpuMaterial {
     }
 }
 
+/// A coated diffuse surface as the compiler makes it (its coat's tables included).
+pub fn coated(albedo: [f32; 3], ior: f32, alpha: f32, nonlinear: bool) -> GpuMaterial {
+    let (internal, transmittance) = coat_tables(ior, alpha);
+    GpuMaterial {
+        albedo,
+        kind: material_kind::COATED,
+        ior,
+        alpha,
+        coat_internal: internal,
+        coat_nonlinear: u32::from(nonlinear),
+        coat_specular_weight: 1.0 / (1.0 + albedo.iter().sum::<f32>() / 3.0),
+        coat_transmittance: transmittance,
+        ..Zeroable::zeroed()
+    }
+}
+
 /// Every material over incidences from normal to grazing, from both sides, with both
 /// transports and with numbers that reflect and refract at glass: the vectors a backend's
-/// twin must reproduce. Glass cases whose number lies within 1e-3 of the Fresnel term are
-/// left out, where a last-place difference could pick the other lobe.
+/// twin must reproduce. Glass and coat cases whose number lies within 1e-3 of the chance
+/// of reflecting are left out, where a last-place difference could pick the other lobe.
 pub fn test_cases() -> Vec<BsdfCase> {
     let materials = [
         GpuMaterial {
@@ -474,6 +591,10 @@ pub fn test_cases() -> Vec<BsdfCase> {
         // Either side of SMOOTH_ALPHA: a delta lobe, then the narrowest rough one.
         conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.5 * SMOOTH_ALPHA),
         conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 2.0 * SMOOTH_ALPHA),
+        coated([0.8, 0.5, 0.1], 1.5, 0.0, false),
+        coated([0.8, 0.5, 0.1], 1.5, 0.0, true),
+        coated([0.3, 0.9, 0.6], 1.6, 0.3, true),
+        coated([0.0; 3], 1.5, 0.05, false),
     ];
     let normals = [Vec3::Y, Vec3::new(0.3, -0.5, 0.8).normalize()];
     let mut cases = Vec::new();
@@ -504,8 +625,12 @@ pub fn test_cases() -> Vec<BsdfCase> {
                             } else {
                                 material.ior
                             };
-                            let near_threshold = material.kind == material_kind::GLASS
-                                && (fresnel_refract(incoming, facing, eta).0 - u_lobe).abs() < 1e-3;
+                            let chance = match material.kind {
+                                material_kind::GLASS => fresnel_refract(incoming, facing, eta).0,
+                                material_kind::COATED => specular_probability(&material, cos_i),
+                                _ => -1.0,
+                            };
+                            let near_threshold = (chance - u_lobe).abs() < 1e-3;
                             if !near_threshold {
                                 cases.push(case);
                             }
@@ -806,8 +931,22 @@ mod tests {
             material_kind::DIFFUSE,
             material_kind::MIRROR,
             material_kind::GLASS,
+            material_kind::CONDUCTOR,
+            material_kind::COATED,
         ] {
             assert!(outcomes.iter().any(|(c, _)| c.material.kind == kind));
+        }
+        // Both lobes of a smooth and of a rough coat: the reflection, and the base's.
+        for smooth in [true, false] {
+            let lobe = |reflected: bool| {
+                outcomes.iter().any(|(c, _)| {
+                    let cos = -Vec3::from(c.incoming).dot(Vec3::from(c.facing));
+                    c.material.kind == material_kind::COATED
+                        && (c.material.alpha == 0.0) == smooth
+                        && (c.u_lobe < specular_probability(&c.material, cos)) == reflected
+                })
+            };
+            assert!(lobe(true) && lobe(false), "smooth {smooth}");
         }
         let glass: Vec<_> = outcomes
             .iter()

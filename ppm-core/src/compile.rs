@@ -1,5 +1,6 @@
 //! Turns a [`Scene`] into the flat buffers every backend consumes, with the BVH built by obvhs.
 
+use crate::bsdf;
 use crate::layout::{
     BvhNode, GpuBounds, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
 };
@@ -21,6 +22,9 @@ pub struct SceneFeatures {
     /// Some surface is a conductor (smooth or rough).
     #[serde(default)]
     pub conductor: bool,
+    /// Some surface is coated diffuse: eye paths and photons may reflect off its coat.
+    #[serde(default)]
+    pub coated: bool,
     /// Some material's colour comes from an image texture.
     #[serde(default)]
     pub textured: bool,
@@ -29,9 +33,10 @@ pub struct SceneFeatures {
 }
 
 impl SceneFeatures {
-    /// Mirror, glass or conductor: photons can form caustics and eye paths can bounce.
+    /// Mirror, glass, conductor or a coat: photons can form caustics and eye paths can
+    /// bounce.
     pub fn specular(&self) -> bool {
-        self.mirror || self.glass || self.conductor
+        self.mirror || self.glass || self.conductor || self.coated
     }
 }
 
@@ -172,6 +177,10 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 .materials
                 .iter()
                 .any(|m| matches!(m.kind, MaterialKind::Conductor { .. })),
+            coated: scene
+                .materials
+                .iter()
+                .any(|m| matches!(m.kind, MaterialKind::Coated { .. })),
             textured: !textures.is_empty(),
             moving_objects: !scene.moves.is_empty(),
         },
@@ -290,6 +299,26 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
             k: k.into(),
             ..Default::default()
         },
+        MaterialKind::Coated {
+            albedo,
+            ior,
+            alpha,
+            nonlinear,
+        } => {
+            let (internal, transmittance) = bsdf::coat_tables(ior, alpha);
+            GpuMaterial {
+                albedo: albedo.into(),
+                kind: material_kind::COATED,
+                ior,
+                alpha,
+                coat_internal: internal,
+                coat_nonlinear: u32::from(nonlinear),
+                // Mitsuba 3's weight: the coat's reflectance (one) against the base's mean.
+                coat_specular_weight: 1.0 / (1.0 + albedo.element_sum() / 3.0),
+                coat_transmittance: transmittance,
+                ..Default::default()
+            }
+        }
         MaterialKind::Light { radiance, albedo } => GpuMaterial {
             albedo: albedo.into(),
             kind: material_kind::DIFFUSE,

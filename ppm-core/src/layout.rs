@@ -18,6 +18,10 @@ pub mod material_kind {
     /// Metal: Fresnel reflection of complex index `eta + i k`, scaled by `albedo`, on GGX
     /// microfacets of roughness `alpha` (smooth below [`crate::bsdf::SMOOTH_ALPHA`]).
     pub const CONDUCTOR: u32 = 3;
+    /// A diffuse base of reflectance `albedo` under a dielectric coat of index `ior` and GGX
+    /// roughness `alpha`; the `coat` fields of [`super::GpuMaterial`] describe what the coat
+    /// lets through.
+    pub const COATED: u32 = 4;
 }
 
 /// Bits of [`HitPoint::flags`].
@@ -185,7 +189,7 @@ pub struct BvhNode {
     pub count: u32,
 }
 
-/// A material. 64 bytes.
+/// A material. 128 bytes; the last 64 describe a coat and are zero for every other kind.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -207,6 +211,20 @@ pub struct GpuMaterial {
     /// One plus the index of the texture that scales `albedo` at each point
     /// ([`GpuTexture`]); 0 when `albedo` is uniform.
     pub texture: u32,
+    /// A coat's internal reflectance `F_int`: the share of light diffused by the base that
+    /// the coat sends back to it (the cosine-weighted mean of its reflectance from inside).
+    pub coat_internal: f32,
+    /// 1 when the base's colour is met at every return under the coat (`albedo / (1 -
+    /// albedo F_int)`), 0 when once (`albedo / (1 - F_int)`).
+    pub coat_nonlinear: u32,
+    /// The share of a rough coat's samples spent on its reflection where the two lobes are
+    /// equally likely to matter (Mitsuba 3's `specular_sampling_weight`).
+    pub coat_specular_weight: f32,
+    /// Padding.
+    pub _pad: u32,
+    /// A rough coat's transmittance `1 - R(mu)` (`R` its directional reflectance) at
+    /// `mu = (i / 11)^2`, `i = 0 ..= 11`: dense where it changes fast, at grazing angles.
+    pub coat_transmittance: [f32; 12],
 }
 
 /// An image texture's header (docs/materials.md, "Textures"); its texels, two words each
@@ -684,7 +702,7 @@ mod tests {
             ("Photon", size_of::<Photon>(), 32),
             ("GpuTriangle", size_of::<GpuTriangle>(), 64),
             ("BvhNode", size_of::<BvhNode>(), 32),
-            ("GpuMaterial", size_of::<GpuMaterial>(), 64),
+            ("GpuMaterial", size_of::<GpuMaterial>(), 128),
             ("GpuLight", size_of::<GpuLight>(), 64),
             ("GpuCamera", size_of::<GpuCamera>(), 64),
             ("EyePassParams", size_of::<EyePassParams>(), 32),

@@ -124,7 +124,9 @@ pub fn check_render_memory(
 ///
 /// A path deposits at most once per diffuse bounce, and survives each with probability at
 /// most the largest albedo `a` (Russian roulette), so it deposits `1 / (1 - a)` times on
-/// average at most (no more than its depth limit): the pass's expected deposits.
+/// average at most (no more than its depth limit): the pass's expected deposits. A coated
+/// surface counts as albedo one: a photon that takes its coat's reflection plays no
+/// roulette, so only the depth limit bounds its deposits.
 pub fn check_deposits(
     photons: u32,
     field: &str,
@@ -140,6 +142,7 @@ pub fn check_deposits(
             MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => {
                 Some(albedo.max_element())
             }
+            MaterialKind::Coated { .. } => Some(1.0),
             _ => None,
         })
         .fold(0.0f32, f32::max);

@@ -19,7 +19,9 @@
 //!   centre instead when `p.spp == 1` without `JITTER`. The bounce at depth `d` draws from
 //!   `StreamKey { seed: p.seed, kind: Eye, pass_index: p.iteration, path: slot }`
 //!   ([`StreamKey::eye_bounce`]): at glass it reflects when dimension `2 + d` is below the
-//!   Fresnel reflectance; at a rough conductor dimensions `EYE_GLOSSY_DIM + 2 d` and the next
+//!   Fresnel reflectance, at a coated surface it takes the coat's reflection when that
+//!   dimension is below its chance (`ppm_core::bsdf::specular_probability`) and stops at the
+//!   base otherwise; at a rough conductor or coat dimensions `EYE_GLOSSY_DIM + 2 d` and the next
 //!   draw the direction.
 //! - **Direct light** ([`PassKind::DirectLight`]). Sample `s` of the pass is point `start *
 //!   p.samples + s` of the stream `StratifiedStream::new(p.seed, DirectLight, slot)`, with
@@ -32,7 +34,8 @@
 //!   p.pass_index, path }`: dimensions `0..EMISSION_DIMS` for its emission
 //!   ([`crate::emission`]), then three per bounce `b` from `EMISSION_DIMS + 3 b`: the first
 //!   decides Russian roulette at a diffuse surface (survive below the largest albedo
-//!   channel) or reflection at glass, the next two the cosine-weighted or glossy direction. A
+//!   channel) or reflection at glass; at a coated surface it picks the coat's reflection
+//!   below its chance and otherwise, rescaled to `[0, 1)`, decides the roulette; the next two the cosine-weighted or glossy direction. A
 //!   negative pass and its positive twin use the same indices, so their unchanged paths
 //!   cancel; difference passes start at [`DIFFERENCE_PASS_BASE`].
 

@@ -7,7 +7,8 @@
 //! and size while the gather and the direct-light pass, which read `f` from the material,
 //! still weigh by the textured colour: a diffuse `f` is the colour over pi, linear in it.
 
-use crate::layout::{GpuMaterial, GpuTexture, GpuTriangle, GpuTriangleUv};
+use crate::bsdf::visible_point_f;
+use crate::layout::{GpuMaterial, GpuTexture, GpuTriangle, GpuTriangleUv, material_kind};
 use crate::scene::{Scene, Texture, sample};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
@@ -51,7 +52,10 @@ impl SurfaceTextures {
         )
     }
 
-    /// `material` with its colour scaled by its texture at the point, and the factor.
+    /// `material` with its colour scaled by its texture at the point, and the factor that
+    /// takes the untextured material's [`visible_point_f`] to the textured one's: the
+    /// texture's factor itself, but where a coat returns light to its base several times
+    /// (`coat_nonlinear`), where `f` is not linear in the colour.
     #[inline]
     pub fn shaded(
         &self,
@@ -61,14 +65,16 @@ impl SurfaceTextures {
         position: Vec3,
     ) -> (GpuMaterial, Vec3) {
         let factor = self.factor(material, index, tri, position);
-        let albedo = Vec3::from(material.albedo) * factor;
-        (
-            GpuMaterial {
-                albedo: albedo.into(),
-                ..*material
-            },
-            factor,
-        )
+        let shaded = GpuMaterial {
+            albedo: (Vec3::from(material.albedo) * factor).into(),
+            ..*material
+        };
+        if material.kind != material_kind::COATED || material.coat_nonlinear == 0 {
+            return (shaded, factor);
+        }
+        let (f, base) = (visible_point_f(&shaded), visible_point_f(material));
+        let ratio = Vec3::select(base.cmpgt(Vec3::ZERO), f / base, Vec3::ZERO);
+        (shaded, ratio)
     }
 }
 

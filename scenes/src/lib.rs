@@ -66,6 +66,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         build: material_scenes::cornell_metal,
     },
     BuiltinScene {
+        name: "cornell-coated",
+        description: "cornell-box with blocks of plastic: red under a rough coat (GGX alpha 0.2), blue under a smooth one",
+        build: material_scenes::cornell_coated,
+    },
+    BuiltinScene {
         name: "cornell-textured",
         description: "cornell-box with a checkered floor and a back wall painted with coloured rings (image textures)",
         build: material_scenes::cornell_textured,

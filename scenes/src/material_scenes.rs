@@ -46,6 +46,45 @@ pub fn cornell_metal() -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// `cornell-coated`: cornell-box with a tall block of red plastic under a rough coat (GGX
+/// alpha 0.2, light meeting the base at each return under it) and a short block of blue
+/// plastic under a smooth one; both coats of index 1.5.
+pub fn cornell_coated() -> Result<Scene, SceneError> {
+    let mut scene = crate::cornell_box_file()?;
+    scene.name = "cornell-coated".into();
+    for (block, name, albedo, alpha, nonlinear) in [
+        (
+            "tall-block",
+            "rough-red-plastic",
+            Vec3::new(0.7, 0.12, 0.08),
+            0.2,
+            true,
+        ),
+        (
+            "short-block",
+            "blue-plastic",
+            Vec3::new(0.1, 0.25, 0.6),
+            0.0,
+            false,
+        ),
+    ] {
+        let object = scene
+            .object_index(block)
+            .expect("cornell-box has both blocks");
+        scene.materials.push(Material::new(
+            name,
+            MaterialKind::Coated {
+                albedo,
+                ior: 1.5,
+                alpha,
+                nonlinear,
+            },
+        ));
+        scene.objects[object].material = scene.materials.len() - 1;
+    }
+    Ok(scene)
+}
+
 /// `cornell-textured`: cornell-box with a checkered floor (nearest texel, hard edges) and a
 /// back wall painted with soft coloured rings (a 64x64 image, bilinear); textures generated
 /// here, so the scene needs no file. The rest, the light and the move as cornell-box.

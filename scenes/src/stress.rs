@@ -251,6 +251,16 @@ pub const STRESS: &[StressCase] = &[
         build: || conductor_case(1.0),
     },
     StressCase {
+        name: "coat-alpha-0",
+        stresses: "a white base under a smooth coat for the furnace's mirror: every pixel stays 2, light returning under the coat included",
+        build: || coated_case(0.0),
+    },
+    StressCase {
+        name: "coat-alpha-1",
+        stresses: "the roughest coat: half its reflection leaves below the surface, and its transmittance table spans all of it",
+        build: || coated_case(1.0),
+    },
+    StressCase {
         name: "texture-1x1",
         stresses: "a mirror's reflectance read from a one-texel image: every lookup wraps onto it",
         build: || textured_mirror_case(1),
@@ -621,6 +631,30 @@ fn conductor_case(alpha: f32) -> StressSetup {
                 k: Vec3::ONE,
                 reflectance: Vec3::ONE,
                 alpha,
+            };
+        }
+    }
+    let mut setup = radiance_two(scene, None);
+    if alpha > 0.0 {
+        setup.expected = Expected::Finite;
+    }
+    setup
+}
+
+/// The specular furnace with a white base under a coat of roughness `alpha` for its mirror,
+/// light meeting the base at every return: a smooth coat loses nothing (the coat's
+/// reflection and what the base sends back out add to one), so every pixel is 2; a rough
+/// one loses what single scattering on its microfacets cannot return, so only finiteness is
+/// asked.
+fn coated_case(alpha: f32) -> StressSetup {
+    let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
+    for m in &mut scene.materials {
+        if let MaterialKind::Mirror { .. } = m.kind {
+            m.kind = MaterialKind::Coated {
+                albedo: Vec3::ONE,
+                ior: 1.5,
+                alpha,
+                nonlinear: true,
             };
         }
     }

@@ -130,3 +130,61 @@ triangles = [[[0.0, 2.0, -1.0], [1.0, 2.0, -1.0], [0.0, 2.0, 0.0]]]
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A coated material takes a texture on its base as a diffuse one does: the albedo is then 1
+/// unless given (a factor on the image), and an image that is not there names the field.
+#[test]
+fn a_textured_coated_material_reads_its_image_as_a_diffuse_one() {
+    use ppm_core::scene::MaterialKind;
+    let dir = std::env::temp_dir().join(format!("ppm-textured-coat-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    scenes::file::image::write_png_rgb(&dir.join("grey.png"), &[128; 12], 2, 2).unwrap();
+    let scene = |paint: &str| {
+        format!(
+            r#"
+name = "textured-coat"
+[camera]
+eye = [0.5, 0.5, -2.0]
+look_at = [0.5, 0.5, 0.0]
+fov = 45.0
+width = 4
+height = 4
+[materials]
+paint = {{ type = "coated", {paint} }}
+lamp = {{ type = "light", radiance = [1.0, 1.0, 1.0] }}
+[[objects]]
+name = "quad"
+material = "paint"
+quads = [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]]
+[[objects]]
+name = "lamp"
+material = "lamp"
+triangles = [[[0.0, 2.0, -1.0], [1.0, 2.0, -1.0], [0.0, 2.0, 0.0]]]
+"#
+        )
+    };
+    let load = |paint: &str| scenes::file::parse_scene(&scene(paint), "coat.toml", &dir);
+    let textured = load("texture = \"grey.png\", alpha = 0.2").unwrap();
+    let paint = &textured.materials[textured.objects[0].material];
+    assert_eq!(paint.texture.as_ref().unwrap().width, 2);
+    assert_eq!(
+        paint.kind,
+        MaterialKind::Coated {
+            albedo: Vec3::ONE,
+            ior: 1.5,
+            alpha: 0.2,
+            nonlinear: false,
+        }
+    );
+    let scaled = load("texture = \"grey.png\", albedo = [0.5, 0.5, 0.5]").unwrap();
+    assert!(matches!(
+        scaled.materials[scaled.objects[0].material].kind,
+        MaterialKind::Coated { albedo, .. } if albedo == Vec3::splat(0.5)
+    ));
+    let err = load("texture = \"gone.png\"").unwrap_err().to_string();
+    assert!(
+        err.contains("materials.paint.texture") && err.contains("gone.png"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -220,3 +220,108 @@ fn a_conductor_loads_with_its_defaults() {
         }
     );
 }
+
+#[test]
+fn coated_with_ior_of_one() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "paint = { type = \"coated\", albedo = [0.5, 0.5, 0.5], ior = 1.0 }\nlamp = { type"
+    ));
+}
+
+#[test]
+fn coated_rougher_than_one() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "paint = { type = \"coated\", albedo = [0.5, 0.5, 0.5], alpha = 1.5 }\nlamp = { type"
+    ));
+}
+
+#[test]
+fn coated_albedo_above_one() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "paint = { type = \"coated\", albedo = [0.5, 1.2, 0.5] }\nlamp = { type"
+    ));
+}
+
+/// A coat's index, roughness and base colour are checked as every other material's: NaN,
+/// infinity and an index below one are refused by field and value, and a coated material
+/// needs a colour or a texture, as a diffuse one does.
+#[test]
+fn coated_values_that_cannot_be_are_refused_by_field() {
+    for (coated, says) in [
+        (
+            "albedo = [0.5, 0.5, 0.5], ior = 0.9",
+            "materials.paint.ior = 0.9: must be a number above 1",
+        ),
+        (
+            "albedo = [0.5, 0.5, 0.5], ior = nan",
+            "materials.paint.ior = NaN",
+        ),
+        (
+            "albedo = [0.5, 0.5, 0.5], ior = inf",
+            "materials.paint.ior = inf",
+        ),
+        (
+            "albedo = [0.5, 0.5, 0.5], alpha = nan",
+            "materials.paint.alpha = NaN",
+        ),
+        (
+            "albedo = [0.5, 0.5, 0.5], alpha = -0.1",
+            "materials.paint.alpha = -0.1: must be in [0, 1]",
+        ),
+        (
+            "albedo = [0.5, -0.5, 0.5]",
+            "materials.paint.albedo[1] = -0.5: negative",
+        ),
+        (
+            "ior = 1.5",
+            "materials.paint.albedo = missing: a coated material needs an albedo or a texture",
+        ),
+    ] {
+        let e = error_for(
+            "lamp = { type",
+            &format!("paint = {{ type = \"coated\", {coated} }}\nlamp = {{ type"),
+        );
+        assert!(
+            e.starts_with("probe.toml: ") && e.contains(says),
+            "{coated}: {e}"
+        );
+    }
+}
+
+/// A coated material's index defaults to 1.5, its roughness to zero (smooth) and
+/// `nonlinear` to false (Mitsuba's default); each is read when given.
+#[test]
+fn a_coated_material_loads_with_its_defaults() {
+    let coated = |fields: &str| {
+        let text = VALID.replacen(
+            "lamp = { type",
+            &format!("paint = {{ type = \"coated\", {fields} }}\nlamp = {{ type"),
+            1,
+        );
+        let scene = parse_scene(&text, "probe.toml", Path::new("scenes")).unwrap();
+        let paint = scene.materials.iter().find(|m| m.name == "paint").unwrap();
+        assert!(paint.texture.is_none());
+        paint.kind.clone()
+    };
+    assert_eq!(
+        coated("albedo = [0.7, 0.1, 0.1]"),
+        ppm_core::scene::MaterialKind::Coated {
+            albedo: glam::Vec3::new(0.7, 0.1, 0.1),
+            ior: 1.5,
+            alpha: 0.0,
+            nonlinear: false,
+        }
+    );
+    assert_eq!(
+        coated("albedo = [0.2, 0.3, 0.4], ior = 1.33, alpha = 0.25, nonlinear = true"),
+        ppm_core::scene::MaterialKind::Coated {
+            albedo: glam::Vec3::new(0.2, 0.3, 0.4),
+            ior: 1.33,
+            alpha: 0.25,
+            nonlinear: true,
+        }
+    );
+}

@@ -81,23 +81,44 @@ fn specular_furnace_keeps_its_radiance_through_mirror_and_glass() {
     converges(&specular_furnace(albedo, 1.0), albedo, DirectMode::Explicit);
 }
 
-/// A smooth lossless conductor (`eta = 0`, `k = 1`: Fresnel factor one at every angle) in
-/// place of the mirror keeps the radiance too: this fails if the conductor's delta lobe or
-/// its Fresnel term lose or gain energy.
-#[test]
-fn a_lossless_smooth_conductor_keeps_the_furnace_radiance() {
-    let albedo = Vec3::splat(0.5);
-    let mut scene = specular_furnace(albedo, 1.0);
+/// The specular furnace with `kind` in place of its mirror.
+fn with_mirror_as(kind: MaterialKind) -> ppm_core::scene::Scene {
+    let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
     let mirror = scene
         .materials
         .iter_mut()
         .find(|m| matches!(m.kind, MaterialKind::Mirror { .. }))
         .expect("the specular furnace has a mirror");
-    mirror.kind = MaterialKind::Conductor {
+    mirror.kind = kind;
+    scene
+}
+
+/// A smooth lossless conductor (`eta = 0`, `k = 1`: Fresnel factor one at every angle) in
+/// place of the mirror keeps the radiance too: this fails if the conductor's delta lobe or
+/// its Fresnel term lose or gain energy.
+#[test]
+fn a_lossless_smooth_conductor_keeps_the_furnace_radiance() {
+    let scene = with_mirror_as(MaterialKind::Conductor {
         eta: Vec3::ZERO,
         k: Vec3::ONE,
         reflectance: Vec3::ONE,
         alpha: 0.0,
-    };
-    converges(&scene, albedo, DirectMode::Explicit);
+    });
+    converges(&scene, Vec3::splat(0.5), DirectMode::Explicit);
+}
+
+/// A white base under a smooth coat, its light meeting the base at every return, in place of
+/// the mirror: the coat's reflection and what the base sends back out add to one, so the
+/// furnace keeps its radiance. This fails if the coat's transmittance is left out of the
+/// eye paths that stop at the base, of the photons stored there or of the direct light, or
+/// if the returns under the coat are miscounted.
+#[test]
+fn a_white_base_under_a_smooth_coat_keeps_the_furnace_radiance() {
+    let scene = with_mirror_as(MaterialKind::Coated {
+        albedo: Vec3::ONE,
+        ior: 1.5,
+        alpha: 0.0,
+        nonlinear: true,
+    });
+    converges(&scene, Vec3::splat(0.5), DirectMode::Explicit);
 }

@@ -1,6 +1,7 @@
 //! Materials beyond diffuse, mirror and glass through every pass of every backend: photon
-//! mapping's images of cornell-metal (rough gold and nearly polished copper blocks) and
-//! cornell-textured (image textures) agree with the reference path tracer's, which samples
+//! mapping's images of cornell-metal (rough gold and nearly polished copper blocks),
+//! cornell-coated (plastic under rough and smooth coats) and cornell-textured (image
+//! textures) agree with the reference path tracer's, which samples
 //! the lights at the rough surfaces where the passes only continue the eye path: two
 //! estimators of one integral.
 
@@ -97,5 +98,22 @@ fn cornell_textured_agrees_with_the_path_tracer_on_every_backend() {
         &["floor", "back-wall"],
         4,
         0.05,
+    );
+}
+
+/// Plastic blocks: a rough coat over red (its light meeting the base at each return) and a
+/// smooth coat over blue. Photon mapping sees the coats' reflections by continuing eye
+/// paths and the bases through slots whose throughput holds the coat's transmittance
+/// towards the eye and whose photons hold it towards the light; the path tracer evaluates
+/// the whole BSDF at each vertex. A coat's transmittance left out on either side, or the
+/// returns under it, fails.
+#[test]
+fn cornell_coated_agrees_with_the_path_tracer_on_every_backend() {
+    agrees_with_the_path_tracer(
+        "cornell_coated_agrees_with_the_path_tracer_on_every_backend",
+        "cornell-coated",
+        &["tall-block", "short-block"],
+        8,
+        0.03,
     );
 }

@@ -44,7 +44,9 @@ fn estimate_reflected(material: GpuMaterial, hp: HitPoint, slot: u32) -> vec3<f3
                 let le = scene_material(light.material).emission;
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
                 let pb = visible_point_pdf(hp.normal, w);
-                sum += f * le * (cos_x / pl * power_heuristic(pl, pb));
+                // A coat lets through a share of the light (one on a bare surface).
+                let cos_through = cos_x * bsdf_arrival(material, cos_x);
+                sum += f * le * (cos_through / pl * power_heuristic(pl, pb));
             }
         }
         let v = stratified_pair(params.seed, PASS_DIRECT_LIGHT, slot, PAIR_DIRECTION, index);

@@ -81,25 +81,30 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         let tri = scene_triangle(hit.triangle);
         out.eye_met |= tri.group;
         let position = origin + dir * hit.t;
-        var material = scene_material(tri.material);
-        let texture = texture_factor(material, hit.triangle, tri, position);
+        let base = scene_material(tri.material);
+        let texture = texture_factor(base, hit.triangle, tri, position);
+        var material = base;
         material.albedo *= texture;
         lo = min(lo, position);
         hi = max(hi, position);
         let front = dot(dir, tri.normal) < 0.0;
         let facing = select(-tri.normal, tri.normal, front);
-        if !SPECULAR || bsdf_holds_visible_points(material) {
+        let u = stream_uniform(key, EYE_GLASS_DIM + depth);
+        // Negative where the path continues; always one on a diffuse surface, the only kind
+        // without SPECULAR.
+        let stop = bsdf_visible_point_weight(material, facing, -dir, u);
+        if stop >= 0.0 {
             out.position = position;
             out.normal = facing;
             out.material = tri.material;
-            // The texture's factor rides in the throughput (ppm_core::textures).
-            out.throughput = throughput * texture;
+            // The texture's factor rides in the throughput (ppm_core::textures), and so does
+            // a coat's transmittance towards the eye (ppm_core::bsdf).
+            out.throughput = throughput * visible_point_scale(base, material, texture) * stop;
             out.flags |= HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
             rays = depth + 1u;
             break;
         }
         out.flags |= HIT_EYE_CHAINED;
-        let u = stream_uniform(key, EYE_GLASS_DIM + depth);
         let glossy = EYE_GLOSSY_DIM + 2u * depth;
         let u_dir = vec2<f32>(stream_uniform(key, glossy), stream_uniform(key, glossy + 1u));
         let bounce = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_RADIANCE);

@@ -134,7 +134,9 @@ fn trace_photon(path: u32) -> Traced {
         if stores && (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
             let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
             if slot < arrayLength(&photons) {
-                photons[slot] = Photon(position, path, power, oct_encode(facing));
+                // What reaches the base of a coated surface (ppm_core::bsdf::arrival).
+                let arrived = bsdf_arrival(material, -dot(dir, facing));
+                photons[slot] = Photon(position, path, power * arrived, oct_encode(facing));
                 ranks[slot] = rank_base + bounce;
                 if EMISSION == EMISSION_REGION {
                     weights[slot] = emission.weight;
@@ -146,7 +148,7 @@ fn trace_photon(path: u32) -> Traced {
         let u = stream_uniform(key, d);
         let u_dir = vec2<f32>(stream_uniform(key, d + 1u), stream_uniform(key, d + 2u));
         var scattered: BsdfSample;
-        if stores {
+        if !SPECULAR {
             scattered = bsdf_sample_visible(material, facing, u_dir);
             let survive = max(scattered.weight.x, max(scattered.weight.y, scattered.weight.z));
             if u >= survive {
@@ -154,7 +156,7 @@ fn trace_photon(path: u32) -> Traced {
             }
             power *= scattered.weight / survive;
         } else {
-            scattered = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_IMPORTANCE);
+            scattered = bsdf_photon_bounce(material, dir, facing, front, u, u_dir);
             if all(scattered.weight == vec3<f32>(0.0)) {
                 break;
             }

@@ -1,7 +1,8 @@
 // What each material does with light: the twin of ppm_core::bsdf, pinned to it by
-// bsdf_vectors.wgsl (geometry and sampling imported). Diffuse materials hold visible points
-// and photons; paths continue through every other one: delta lobes (mirror, glass, a smooth
-// conductor) and a rough conductor's GGX microfacets.
+// bsdf_vectors.wgsl (geometry and sampling imported). Diffuse and coated materials hold
+// visible points and photons; paths continue through every other one: delta lobes (mirror,
+// glass, a smooth conductor) and a rough conductor's GGX microfacets, and through a coat's
+// reflection (ppm_core::bsdf::coat).
 
 // ppm_core::bsdf::SMOOTH_ALPHA.
 const SMOOTH_ALPHA: f32 = 1e-3;
@@ -30,12 +31,107 @@ fn bsdf_is_delta(material: GpuMaterial) -> bool {
 }
 
 fn bsdf_holds_visible_points(material: GpuMaterial) -> bool {
-    return material.kind == MATERIAL_DIFFUSE;
+    return material.kind == MATERIAL_DIFFUSE || material.kind == MATERIAL_COATED;
 }
 
-// f at a visible point, the same for every pair of directions on its side.
+// The part of f at a visible point that is the same for every pair of directions; a coat's
+// arrival at each direction completes it (ppm_core::bsdf::visible_point_f).
 fn visible_point_f(material: GpuMaterial) -> vec3<f32> {
+    if material.kind == MATERIAL_COATED {
+        return coat_base_f(material);
+    }
     return material.albedo * (1.0 / PI);
+}
+
+// Smooth-boundary Fresnel reflectance, eta = eta_i / eta_t (ppm_core::bsdf::dielectric_fresnel).
+fn dielectric_fresnel(cos_in: f32, eta: f32) -> f32 {
+    let cos_i = clamp(cos_in, 0.0, 1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return clamp(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
+}
+
+fn coat_is_smooth(material: GpuMaterial) -> bool {
+    return material.alpha < SMOOTH_ALPHA;
+}
+
+// The coat's transmittance t(mu): 1 - F when smooth, else the table's nodes at (i / 11)^2
+// (ppm_core::bsdf::coat_transmittance).
+fn coat_transmittance(material: GpuMaterial, mu_in: f32) -> f32 {
+    let mu = clamp(mu_in, 0.0, 1.0);
+    if coat_is_smooth(material) {
+        return 1.0 - dielectric_fresnel(mu, 1.0 / material.ior);
+    }
+    let last = 11.0;
+    let i = min(u32(sqrt(mu) * last), 10u);
+    let a = sq(f32(i) / last);
+    let b = sq(f32(i + 1u) / last);
+    let w = clamp((mu - a) / (b - a), 0.0, 1.0);
+    var table = material.coat_transmittance;
+    let t0 = table[i / 4u][i % 4u];
+    let t1 = table[(i + 1u) / 4u][(i + 1u) % 4u];
+    return t0 + (t1 - t0) * w;
+}
+
+// What of the light arriving at cosine mu reaches a visible point's f (ppm_core::bsdf::arrival).
+fn bsdf_arrival(material: GpuMaterial, mu: f32) -> f32 {
+    if material.kind == MATERIAL_COATED {
+        return coat_transmittance(material, mu);
+    }
+    return 1.0;
+}
+
+fn coat_base_f(material: GpuMaterial) -> vec3<f32> {
+    var returns = vec3<f32>(1.0);
+    if material.coat_nonlinear != 0u {
+        returns = material.albedo;
+    }
+    let denominator = (vec3<f32>(1.0) - returns * material.coat_internal) * sq(material.ior);
+    return material.albedo * (1.0 / PI) / denominator;
+}
+
+// ppm_core::bsdf::specular_probability.
+fn coat_specular_probability(material: GpuMaterial, cos_o: f32) -> f32 {
+    let t = coat_transmittance(material, cos_o);
+    let w = material.coat_specular_weight;
+    let specular = (1.0 - t) * w;
+    let diffuse = t * (1.0 - w);
+    if specular + diffuse > 0.0 {
+        return specular / (specular + diffuse);
+    }
+    return 0.0;
+}
+
+// Whether an eye path stops here, and the factor on its throughput; negative when it
+// continues (ppm_core::bsdf::visible_point_weight).
+fn bsdf_visible_point_weight(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, u_lobe: f32) -> f32 {
+    if material.kind == MATERIAL_DIFFUSE {
+        return 1.0;
+    }
+    if material.kind == MATERIAL_COATED {
+        let cos_o = dot(facing, wo);
+        let p = coat_specular_probability(material, cos_o);
+        if u_lobe >= p {
+            return coat_transmittance(material, cos_o) / (1.0 - p);
+        }
+    }
+    return -1.0;
+}
+
+// The factor that takes an untextured material's visible_point_f to the textured one's
+// (ppm_core::textures::SurfaceTextures::shaded).
+fn visible_point_scale(base: GpuMaterial, shaded: GpuMaterial, texture: vec3<f32>) -> vec3<f32> {
+    if base.kind != MATERIAL_COATED || base.coat_nonlinear == 0u {
+        return texture;
+    }
+    let f = visible_point_f(shaded);
+    let f0 = visible_point_f(base);
+    return select(vec3<f32>(0.0), f / f0, f0 > vec3<f32>(0.0));
 }
 
 fn visible_point_pdf(facing: vec3<f32>, wi: vec3<f32>) -> f32 {
@@ -100,6 +196,44 @@ fn conductor_fresnel(material: GpuMaterial, cos_i: f32) -> vec3<f32> {
     );
 }
 
+// The GGX reflection lobe without its Fresnel term, D G2 / (4 cos_o cos_i) times cos_i
+// (ppm_core::bsdf::ggx_reflection_cos).
+fn ggx_reflection_cos(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let cos_o = dot(facing, wo);
+    let cos_i = dot(facing, wi);
+    let d = ggx_d(alpha, local_half(facing, wo, wi));
+    let root_o = smith_root(alpha, cos_o);
+    let root_i = smith_root(alpha, cos_i);
+    return d * (0.5 * cos_i / (cos_i * root_o + cos_o * root_i));
+}
+
+fn ggx_pdf(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    return ggx_reflection_pdf(alpha, dot(facing, wo), ggx_d(alpha, local_half(facing, wo, wi)));
+}
+
+// Both lobes of a coated surface (ppm_core::bsdf::coat::eval_cos).
+fn coat_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let cos_o = dot(facing, wo);
+    let cos_i = dot(facing, wi);
+    let diffuse = coat_base_f(material)
+        * (coat_transmittance(material, cos_o) * coat_transmittance(material, cos_i) * cos_i);
+    if coat_is_smooth(material) {
+        return diffuse;
+    }
+    let h = half_vector(wo, wi);
+    let lobe = ggx_reflection_cos(material.alpha, facing, wo, wi);
+    return diffuse + vec3<f32>(dielectric_fresnel(dot(wo, h), 1.0 / material.ior) * lobe);
+}
+
+fn coat_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let p = coat_specular_probability(material, dot(facing, wo));
+    let diffuse = (1.0 - p) * dot(facing, wi) * (1.0 / PI);
+    if coat_is_smooth(material) {
+        return diffuse;
+    }
+    return diffuse + p * ggx_pdf(material.alpha, facing, wo, wi);
+}
+
 // f(wo, wi) cos_i of a non-delta surface (ppm_core::bsdf::eval_cos).
 fn bsdf_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let cos_o = dot(facing, wo);
@@ -107,16 +241,15 @@ fn bsdf_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: ve
     if cos_o <= 0.0 || cos_i <= 0.0 || bsdf_is_delta(material) {
         return vec3<f32>(0.0);
     }
-    if material.kind != MATERIAL_CONDUCTOR {
-        return visible_point_f(material) * cos_i;
+    if material.kind == MATERIAL_CONDUCTOR {
+        let h = half_vector(wo, wi);
+        let lobe = ggx_reflection_cos(material.alpha, facing, wo, wi);
+        return material.albedo * conductor_fresnel(material, dot(wo, h)) * lobe;
     }
-    let h = half_vector(wo, wi);
-    let alpha = material.alpha;
-    let d = ggx_d(alpha, local_half(facing, wo, wi));
-    let root_o = smith_root(alpha, cos_o);
-    let root_i = smith_root(alpha, cos_i);
-    let visibility_cos = 0.5 * cos_i / (cos_i * root_o + cos_o * root_i);
-    return material.albedo * conductor_fresnel(material, dot(wo, h)) * (d * visibility_cos);
+    if material.kind == MATERIAL_COATED {
+        return coat_eval_cos(material, facing, wo, wi);
+    }
+    return visible_point_f(material) * cos_i;
 }
 
 // Density of wi given wo (ppm_core::bsdf::pdf).
@@ -126,16 +259,25 @@ fn bsdf_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
     if cos_o <= 0.0 || cos_i <= 0.0 || bsdf_is_delta(material) {
         return 0.0;
     }
-    if material.kind != MATERIAL_CONDUCTOR {
-        return visible_point_pdf(facing, wi);
+    if material.kind == MATERIAL_CONDUCTOR {
+        return ggx_pdf(material.alpha, facing, wo, wi);
     }
-    let alpha = material.alpha;
-    return ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, local_half(facing, wo, wi)));
+    if material.kind == MATERIAL_COATED {
+        return coat_pdf(material, facing, wo, wi);
+    }
+    return visible_point_pdf(facing, wi);
 }
 
-// A rough conductor's visible normals (Heitz 2018; ppm_core::bsdf::sample_conductor).
-fn bsdf_sample_conductor(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
-    let alpha = material.alpha;
+// A reflection off a GGX microfacet drawn from the normals visible from wo (Heitz 2018;
+// ppm_core::bsdf::sample_ggx_reflection): g2_over_g1 and pdf zero below the surface.
+struct GgxReflection {
+    dir: vec3<f32>,
+    h: vec3<f32>,
+    g2_over_g1: f32,
+    pdf: f32,
+}
+
+fn sample_ggx_reflection(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> GgxReflection {
     let basis = orthonormal_basis(facing);
     let local_o = vec3<f32>(dot(basis.tangent, wo), dot(basis.bitangent, wo), dot(facing, wo));
     let v = normalize(vec3<f32>(alpha * local_o.x, alpha * local_o.y, local_o.z));
@@ -154,22 +296,59 @@ fn bsdf_sample_conductor(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>
     let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
     let h = to_world(m, facing);
     let dir = reflect(-wo, h);
-    let cos_o = local_o.z;
+    let cos_o = dot(facing, wo);
     let cos_i = dot(facing, dir);
     if cos_o <= 0.0 || cos_i <= 0.0 {
-        return BsdfSample(dir, vec3<f32>(0.0), 0.0, false);
+        return GgxReflection(dir, h, 0.0, 0.0);
     }
-    // F G2 / G1(wo) in the form that cancels cos_o (ppm_core::bsdf::sample_conductor).
+    // G2 / G1(wo) in the form that cancels cos_o (ppm_core::bsdf::ggx_g2_over_g1).
     let root_o = smith_root(alpha, cos_o);
     let root_i = smith_root(alpha, cos_i);
     let g2_over_g1 = cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i);
-    let weight = material.albedo * conductor_fresnel(material, dot(wo, h)) * g2_over_g1;
-    return BsdfSample(dir, weight, ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)), false);
+    return GgxReflection(dir, h, g2_over_g1, ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)));
 }
 
+// A rough conductor's visible normals (ppm_core::bsdf::sample_conductor).
+fn bsdf_sample_conductor(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    let r = sample_ggx_reflection(material.alpha, facing, wo, u);
+    let weight = material.albedo * conductor_fresnel(material, dot(wo, r.h)) * r.g2_over_g1;
+    return BsdfSample(r.dir, weight, r.pdf, false);
+}
+
+// The cosine lobe at a visible point; the weight is f cos / pdf with the coat's arrival
+// (ppm_core::bsdf::sample_visible).
 fn bsdf_sample_visible(material: GpuMaterial, facing: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     let local = cosine_hemisphere(u.x, u.y);
-    return BsdfSample(to_world(local, facing), material.albedo, local.z * (1.0 / PI), false);
+    var weight = material.albedo;
+    if material.kind == MATERIAL_COATED {
+        weight = coat_base_f(material) * (PI * coat_transmittance(material, local.z));
+    }
+    return BsdfSample(to_world(local, facing), weight, local.z * (1.0 / PI), false);
+}
+
+// One lobe of a coated surface, picked by u_lobe, its weight over its chance
+// (ppm_core::bsdf::coat::sample).
+fn coat_sample(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, u_lobe: f32, u_dir: vec2<f32>) -> BsdfSample {
+    let wo = -incoming;
+    let cos_o = dot(facing, wo);
+    let p = coat_specular_probability(material, cos_o);
+    let eta = 1.0 / material.ior;
+    if u_lobe < p {
+        if coat_is_smooth(material) {
+            return BsdfSample(reflect(incoming, facing), vec3<f32>(dielectric_fresnel(cos_o, eta) / p), 0.0, false);
+        }
+        let r = sample_ggx_reflection(material.alpha, facing, wo, u_dir);
+        let weight = dielectric_fresnel(dot(wo, r.h), eta) * r.g2_over_g1 / p;
+        var density = 0.0;
+        if weight > 0.0 {
+            density = coat_pdf(material, facing, wo, r.dir);
+        }
+        return BsdfSample(r.dir, vec3<f32>(weight), density, false);
+    }
+    let drawn = bsdf_sample_visible(material, facing, u_dir);
+    let through = coat_transmittance(material, cos_o) * coat_transmittance(material, dot(facing, drawn.dir));
+    let weight = coat_base_f(material) * (PI * through / (1.0 - p));
+    return BsdfSample(drawn.dir, weight, coat_pdf(material, facing, wo, drawn.dir), false);
 }
 
 fn bsdf_sample_delta(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, transport: u32) -> BsdfSample {
@@ -197,5 +376,33 @@ fn bsdf_sample(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, fr
     if material.kind == MATERIAL_CONDUCTOR {
         return bsdf_sample_conductor(material, facing, -incoming, u_dir);
     }
+    if material.kind == MATERIAL_COATED {
+        return coat_sample(material, incoming, facing, u_lobe, u_dir);
+    }
     return bsdf_sample_visible(material, facing, u_dir);
+}
+
+// How a photon continues (ppm_core::bsdf::photon_bounce): u_lobe picks the lobe at a delta
+// or coated surface and plays roulette where the photon scatters diffusely (rescaled past
+// a coat's reflection); the weight is zero where the path ends.
+fn bsdf_photon_bounce(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, u_dir: vec2<f32>) -> BsdfSample {
+    var scattered = bsdf_sample(material, incoming, facing, front, u_lobe, u_dir, TRANSPORT_IMPORTANCE);
+    var u_roulette = -1.0;
+    if material.kind == MATERIAL_DIFFUSE {
+        u_roulette = u_lobe;
+    } else if material.kind == MATERIAL_COATED {
+        let p = coat_specular_probability(material, -dot(incoming, facing));
+        if u_lobe >= p {
+            u_roulette = min((u_lobe - p) / (1.0 - p), 0.99999994);
+        }
+    }
+    if u_roulette >= 0.0 {
+        let survive = min(max(scattered.weight.x, max(scattered.weight.y, scattered.weight.z)), 1.0);
+        if u_roulette >= survive {
+            scattered.weight = vec3<f32>(0.0);
+        } else {
+            scattered.weight /= survive;
+        }
+    }
+    return scattered;
 }

@@ -5,6 +5,7 @@ const MATERIAL_DIFFUSE: u32 = 0u;
 const MATERIAL_MIRROR: u32 = 1u;
 const MATERIAL_GLASS: u32 = 2u;
 const MATERIAL_CONDUCTOR: u32 = 3u;
+const MATERIAL_COATED: u32 = 4u;
 
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
@@ -77,6 +78,11 @@ struct GpuMaterial {
     alpha: f32,
     k: vec3<f32>,
     texture: u32,
+    coat_internal: f32,
+    coat_nonlinear: u32,
+    coat_specular_weight: f32,
+    _pad: u32,
+    coat_transmittance: array<vec4<f32>, 3>,
 }
 
 struct GpuTexture {

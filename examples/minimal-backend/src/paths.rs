@@ -138,19 +138,21 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if bsdf::holds_visible_points(material) {
+        // A diffuse surface holds the visible point; a coated one when the path takes its
+        // base, whose transmittance then rides in the throughput too (ppm_core::bsdf).
+        let u = key.eye_bounce(depth);
+        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u.0) {
             hp.position = position.into();
             hp.normal = facing.into();
             hp.material = tri.material;
-            hp.throughput = (throughput * texture).into();
+            hp.throughput = (throughput * texture * weight).into();
             hp.flags |= hit_flags::VALID
                 | if front { hit_flags::FRONT } else { 0 }
                 | (tri.object << hit_flags::OBJECT_SHIFT);
             return u64::from(depth) + 1;
         }
-        // Mirror, glass or conductor: follow the bounce.
+        // Mirror, glass, conductor or a coat's reflection: follow the bounce.
         hp.flags |= hit_flags::EYE_CHAINED;
-        let u = key.eye_bounce(depth);
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             return u64::from(depth) + 1;
@@ -230,7 +232,9 @@ fn reflected(
             {
                 let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
                 let pb = bsdf::visible_point_pdf(n, w);
-                sum += f * emission(light.material) * (cos_x / pl * power_heuristic(pl, pb));
+                // A coat lets through a share of the light (one on a bare surface).
+                let cos_through = cos_x * bsdf::arrival(material, cos_x);
+                sum += f * emission(light.material) * (cos_through / pl * power_heuristic(pl, pb));
             }
         }
         // BSDF sampling: light only where the ray meets an emitter's front first.
@@ -284,10 +288,12 @@ pub fn photon_path(
         if bsdf::holds_visible_points(material)
             && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
         {
+            // What reaches the base of a coated surface.
+            let arrived = bsdf::arrival(material, -dir.dot(facing));
             out.push(Photon {
                 position: position.into(),
                 path: key.path,
-                power: power.into(),
+                power: (power * arrived).into(),
                 normal_oct: oct_encode(facing),
             });
         }

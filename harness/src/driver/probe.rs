@@ -147,20 +147,6 @@ pub(super) fn eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        if bsdf::holds_visible_points(material) {
-            let front = if front { hit_flags::FRONT } else { 0 };
-            return EyePath {
-                met: false,
-                visible: Some(HitPoint {
-                    position: position.into(),
-                    normal: facing.into(),
-                    material: tri.material,
-                    throughput: (throughput * texture).into(),
-                    flags: hit_flags::VALID | front,
-                    ..HitPoint::empty(pixel)
-                }),
-            };
-        }
         let u = (
             key.uniform(depth),
             (
@@ -168,6 +154,20 @@ pub(super) fn eye_path(
                 key.uniform(DIM_GLOSSY + 2 * depth + 1),
             ),
         );
+        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u.0) {
+            let front = if front { hit_flags::FRONT } else { 0 };
+            return EyePath {
+                met: false,
+                visible: Some(HitPoint {
+                    position: position.into(),
+                    normal: facing.into(),
+                    material: tri.material,
+                    throughput: (throughput * texture * weight).into(),
+                    flags: hit_flags::VALID | front,
+                    ..HitPoint::empty(pixel)
+                }),
+            };
+        }
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             return nothing;

@@ -16,7 +16,7 @@ use thiserror::Error;
 
 /// Changes whenever the path tracer's output for the same inputs changes, so that stale
 /// cached references are not reused.
-pub const PATH_TRACER_VERSION: u32 = 1;
+pub const PATH_TRACER_VERSION: u32 = 2;
 
 /// Why a cached reference could not be had.
 #[derive(Debug, Error)]
@@ -96,6 +96,17 @@ pub fn reference_key(scene: &Scene, request: &ReferenceRequest) -> u64 {
                 h.u32(4);
                 h.floats(&[eta.to_array(), k.to_array(), reflectance.to_array()].concat());
                 h.floats(&[alpha]);
+            }
+            MaterialKind::Coated {
+                albedo,
+                ior,
+                alpha,
+                nonlinear,
+            } => {
+                h.u32(5);
+                h.floats(&albedo.to_array());
+                h.floats(&[ior, alpha]);
+                h.u32(u32::from(nonlinear));
             }
             MaterialKind::Light { radiance, albedo } => {
                 h.u32(3);

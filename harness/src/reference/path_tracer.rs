@@ -16,7 +16,7 @@ use backend_cpu::trace::SceneData;
 use glam::Vec3;
 use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::camera_ray;
-use ppm_core::layout::{GpuCamera, GpuLight, GpuMaterial, NO_MATERIAL};
+use ppm_core::layout::{GpuCamera, GpuLight, GpuMaterial, NO_MATERIAL, material_kind};
 use ppm_core::sampling::{sample_cdf, uniform_triangle};
 
 /// Bounces after which a path stops. Russian roulette ends paths long before in any scene
@@ -27,8 +27,8 @@ pub const MAX_BOUNCES: u32 = 1024;
 const ROULETTE_AFTER: u32 = 3;
 
 /// Dimension pairs of the sampler: the point in the pixel, then per bounce three pairs: the
-/// point on a light; the bounce direction (its first number picks at glass); the light and
-/// the roulette.
+/// point on a light; the bounce direction; the light (its number also picks the lobe at
+/// glass and coats) and the roulette.
 const PAIRS_PER_BOUNCE: u32 = 3;
 
 /// The random numbers of one bounce.
@@ -103,7 +103,8 @@ impl PathTracer<'_> {
             }
             let u = Bounce::new(sampler, bounce);
             let delta = bsdf::is_delta(material);
-            if bsdf::holds_visible_points(material)
+            // A black diffuse surface ends the path (a coated one still reflects).
+            if material.kind == material_kind::DIFFUSE
                 && bsdf::visible_point_f(material).max_element() <= 0.0
             {
                 break;
@@ -112,12 +113,15 @@ impl PathTracer<'_> {
                 let x = position + facing * self.ray_epsilon;
                 radiance += throughput * self.light_sample(x, material, facing, -dir, &u);
             }
+            // The lobe is picked by the light choice's number: a coated surface draws its
+            // base's direction from both numbers of `direction`, which must not also pick
+            // the lobe; light sampling and the bounce stay unbiased, only correlated.
             let scattered = bsdf::sample(
                 material,
                 dir,
                 facing,
                 front,
-                (u.direction.0, u.direction),
+                (u.light, u.direction),
                 Transport::Radiance,
             );
             let side = if scattered.transmitted {
@@ -131,7 +135,8 @@ impl PathTracer<'_> {
                 break;
             }
             throughput *= scattered.weight;
-            bsdf_pdf = (!delta).then_some(scattered.pdf);
+            // A delta lobe (a coat's smooth reflection too) reports no density.
+            bsdf_pdf = (scattered.pdf > 0.0).then_some(scattered.pdf);
             if bounce >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(0.95);
                 if u.roulette >= survive {

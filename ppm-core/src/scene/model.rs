@@ -92,6 +92,23 @@ pub enum MaterialKind {
         /// GGX roughness, in [0, 1]: the microfacet slopes' spread.
         alpha: f32,
     },
+    /// A diffuse base under a clear dielectric coat (Mitsuba 3's `plastic` and `roughplastic`,
+    /// pbrt-v4's `coateddiffuse` without a medium in the layer): the coat reflects as a
+    /// smooth or GGX-rough dielectric of index `ior`, and light it lets through reaches the
+    /// base, reflecting between base and coat before it leaves (docs/materials.md, "Coated
+    /// diffuse").
+    Coated {
+        /// The base's reflectance per channel, in [0, 1].
+        albedo: Vec3,
+        /// The coat's index of refraction over the outside's, above 1.
+        ior: f32,
+        /// GGX roughness of the coat, in [0, 1] (0: smooth).
+        alpha: f32,
+        /// Whether light reflected inside the coat meets the base's colour at each return
+        /// (`albedo / (1 - albedo F_int)`, Mitsuba 3's `nonlinear`, what pbrt-v4's random
+        /// walk in the layer computes) rather than once (`albedo / (1 - F_int)`).
+        nonlinear: bool,
+    },
     /// One-sided Lambertian area light, emitting along the triangle normal (`(v1-v0) x (v2-v0)`).
     Light {
         /// Emitted radiance `Le`, non-negative.
@@ -102,8 +119,29 @@ pub enum MaterialKind {
 }
 
 impl MaterialKind {
-    /// Whether eye and photon paths continue through the surface (mirror, glass, conductor)
-    /// rather than stop at it.
+    /// The kind with its colour set to one where a texture gives it (a diffuse albedo, a
+    /// coated base's), as the importers read a textured reflectance; any other kind as is.
+    pub fn white_under_texture(self) -> Self {
+        match self {
+            Self::Diffuse { .. } => Self::Diffuse { albedo: Vec3::ONE },
+            Self::Coated {
+                ior,
+                alpha,
+                nonlinear,
+                ..
+            } => Self::Coated {
+                albedo: Vec3::ONE,
+                ior,
+                alpha,
+                nonlinear,
+            },
+            kind => kind,
+        }
+    }
+
+    /// Whether eye and photon paths always continue through the surface (mirror, glass,
+    /// conductor) rather than stop at it (a coated surface holds visible points under its
+    /// coat).
     pub fn is_specular(&self) -> bool {
         matches!(
             self,

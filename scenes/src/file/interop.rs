@@ -151,9 +151,19 @@ pub(crate) fn mesh_names(scene: &Scene) -> Vec<String> {
 }
 
 /// Whether an export writes `m`'s texture: both formats take an image as a diffuse
-/// reflectance; a texture on another colour is left out (the notes say so).
+/// reflectance (a diffuse surface's, or a coated one's base); a texture on another colour is
+/// left out (the notes say so).
 fn texture_written(m: &Material) -> bool {
-    m.texture.is_some() && matches!(m.kind, MaterialKind::Diffuse { .. })
+    m.texture.is_some() && diffuse_reflectance(&m.kind).is_some()
+}
+
+/// The diffuse reflectance a texture on `kind` scales, for the kinds whose texture the
+/// formats take: a diffuse surface's albedo and a coated one's base.
+fn diffuse_reflectance(kind: &MaterialKind) -> Option<Vec3> {
+    match kind {
+        MaterialKind::Diffuse { albedo } | MaterialKind::Coated { albedo, .. } => Some(*albedo),
+        _ => None,
+    }
 }
 
 /// Per material, the file its texture is written to (`wood-texture.exr`), unique and safe
@@ -180,12 +190,12 @@ pub(crate) fn texture_files(scene: &Scene) -> Vec<Option<String>> {
 /// A textured material's image as written: its texels times the material's colour (both
 /// formats then read the colour from the image alone), linear.
 fn texture_image(m: &Material) -> Option<Image> {
-    let (Some(t), MaterialKind::Diffuse { albedo: colour }) = (&m.texture, &m.kind) else {
+    let (Some(t), Some(colour)) = (&m.texture, diffuse_reflectance(&m.kind)) else {
         return None;
     };
     let mut image = Image::new(t.width, t.height);
     for (p, texel) in image.pixels.iter_mut().zip(&t.texels) {
-        *p = (unpack_texel(*texel) * *colour).to_array();
+        *p = (unpack_texel(*texel) * colour).to_array();
     }
     Some(image)
 }

@@ -10,7 +10,7 @@ use glam::{DVec3, EulerRot, Quat, Vec2, Vec3};
 use ppm_core::params::Estimator;
 use ppm_core::scene::{
     Camera, MAX_COORDINATE, Material, MaterialKind, Move, Object, RenderDefaults, Scene,
-    SceneError, check_magnitudes, number, quad_triangles,
+    SceneError, Texture, check_magnitudes, number, quad_triangles,
 };
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -62,6 +62,11 @@ fn white() -> [f32; 3] {
     [1.0; 3]
 }
 
+/// A coat's default index of refraction (pbrt-v4's `coateddiffuse` default).
+fn coat_ior() -> f32 {
+    1.5
+}
+
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 enum MaterialFile {
@@ -84,6 +89,19 @@ enum MaterialFile {
         reflectance: [f32; 3],
         #[serde(default)]
         alpha: f32,
+    },
+    Coated {
+        /// Required unless `texture` is given (then 1 by default, a factor on it), as for
+        /// diffuse.
+        albedo: Option<[f32; 3]>,
+        /// An image file, relative to the scene file, whose colour scales the albedo.
+        texture: Option<String>,
+        #[serde(default = "coat_ior")]
+        ior: f32,
+        #[serde(default)]
+        alpha: f32,
+        #[serde(default)]
+        nonlinear: bool,
     },
     Light {
         radiance: [f32; 3],
@@ -252,7 +270,6 @@ impl Converter<'_> {
         Ok(Vec3::from(v))
     }
 
-    /// A colour whose channels lie in [0, max].
     /// A GGX roughness: finite, in [0, 1].
     fn roughness(&self, field: &str, alpha: f32) -> Result<f32, SceneError> {
         if !(0.0..=1.0).contains(&alpha) {
@@ -265,6 +282,7 @@ impl Converter<'_> {
         Ok(alpha)
     }
 
+    /// A colour whose channels lie in [0, max].
     fn colour(&self, field: &str, v: [f32; 3], max: Option<f32>) -> Result<Vec3, SceneError> {
         let c = self.vec3(field, v)?;
         for (i, x) in v.iter().enumerate() {
@@ -280,6 +298,37 @@ impl Converter<'_> {
             }
         }
         Ok(c)
+    }
+
+    /// A diffuse reflectance (of a diffuse material, or of a coated one's base): `albedo`
+    /// in [0, 1], and the image `texture` names, read relative to the scene file, that
+    /// scales it (the albedo is then 1 unless given). One of the two is needed.
+    fn textured_albedo(
+        &self,
+        name: &str,
+        what: &str,
+        albedo: Option<[f32; 3]>,
+        texture: &Option<String>,
+    ) -> Result<(Vec3, Option<Arc<Texture>>), SceneError> {
+        let field = |f: &str| format!("materials.{name}.{f}");
+        let albedo = match (albedo, texture) {
+            (Some(a), _) => self.colour(&field("albedo"), a, Some(1.0))?,
+            (None, Some(_)) => Vec3::ONE,
+            (None, None) => {
+                return Err(self.err(
+                    field("albedo"),
+                    "missing",
+                    &format!("a {what} material needs an albedo or a texture"),
+                ));
+            }
+        };
+        let Some(file) = texture else {
+            return Ok((albedo, None));
+        };
+        let path = self.base.join(file);
+        let texture = read_texture(&path, ImageOptions::default())
+            .map_err(|e| self.err(field("texture"), format!("\"{file}\""), &e))?;
+        Ok((albedo, Some(Arc::new(texture))))
     }
 
     /// The camera, its directions judged in `f64` (in `f32`, lengths at 1e20 square to
@@ -375,27 +424,11 @@ impl Converter<'_> {
         let field = |f: &str| format!("materials.{name}.{f}");
         let kind = match m {
             MaterialFile::Diffuse { albedo, texture } => {
-                let albedo = match (albedo, texture) {
-                    (Some(a), _) => self.colour(&field("albedo"), *a, Some(1.0))?,
-                    (None, Some(_)) => Vec3::ONE,
-                    (None, None) => {
-                        return Err(self.err(
-                            field("albedo"),
-                            "missing",
-                            "a diffuse material needs an albedo or a texture",
-                        ));
-                    }
-                };
-                if let Some(file) = texture {
-                    let path = self.base.join(file);
-                    let texture = read_texture(&path, ImageOptions::default())
-                        .map_err(|e| self.err(field("texture"), format!("\"{file}\""), &e))?;
-                    return Ok(Material {
-                        texture: Some(Arc::new(texture)),
-                        ..Material::new(name, MaterialKind::Diffuse { albedo })
-                    });
-                }
-                MaterialKind::Diffuse { albedo }
+                let (albedo, texture) = self.textured_albedo(name, "diffuse", *albedo, texture)?;
+                return Ok(Material {
+                    texture,
+                    ..Material::new(name, MaterialKind::Diffuse { albedo })
+                });
             }
             MaterialFile::Mirror { reflectance } => MaterialKind::Mirror {
                 reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
@@ -417,6 +450,32 @@ impl Converter<'_> {
                 reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
                 alpha: self.roughness(&field("alpha"), *alpha)?,
             },
+            MaterialFile::Coated {
+                albedo,
+                texture,
+                ior,
+                alpha,
+                nonlinear,
+            } => {
+                let (albedo, texture) = self.textured_albedo(name, "coated", *albedo, texture)?;
+                if !(ior.is_finite() && *ior > 1.0) {
+                    return Err(self.err(
+                        field("ior"),
+                        ior,
+                        "must be a number above 1 (the coat's index over the outside's)",
+                    ));
+                }
+                let kind = MaterialKind::Coated {
+                    albedo,
+                    ior: *ior,
+                    alpha: self.roughness(&field("alpha"), *alpha)?,
+                    nonlinear: *nonlinear,
+                };
+                return Ok(Material {
+                    texture,
+                    ..Material::new(name, kind)
+                });
+            }
             MaterialFile::Light { radiance, albedo } => MaterialKind::Light {
                 radiance: self.colour(&field("radiance"), *radiance, None)?,
                 albedo: self.colour(&field("albedo"), *albedo, Some(1.0))?,

@@ -112,6 +112,17 @@ struct Reader<'a, 'input> {
     sppm: SppmSettings,
 }
 
+/// A rough BSDF's microfacet parameters as read so far ([`Reader::microfacet`]).
+#[derive(Default)]
+struct Microfacet {
+    /// `alpha`, `alpha_u` or `alpha_v`, the last given.
+    alpha: Option<f32>,
+    /// Whether `distribution="ggx"` was given.
+    ggx: bool,
+    /// `alpha_u` or `alpha_v`, which must agree (isotropic).
+    alpha_uv: Option<f32>,
+}
+
 type Result<T> = std::result::Result<T, SceneError>;
 
 const SUBSET: &str = "outside the subset ppm renders";
@@ -513,8 +524,9 @@ impl<'input> Reader<'_, 'input> {
         Ok(())
     }
 
-    /// A BSDF, and the texture on its colour: a diffuse reflectance given by a `bitmap`
-    /// (its albedo then 1).
+    /// A BSDF, and the texture on its colour: a diffuse reflectance given by a `bitmap` (a
+    /// `diffuse`'s `reflectance`, a `plastic`'s or `roughplastic`'s `diffuse_reflectance`;
+    /// its albedo then 1).
     fn bsdf(&self, node: Node) -> Result<(MaterialKind, Option<Arc<Texture>>)> {
         let ty = self.required(node, "type")?;
         let elements: Vec<Node> = node.children().filter(Node::is_element).collect();
@@ -523,23 +535,27 @@ impl<'input> Reader<'_, 'input> {
         {
             return self.bsdf(*inner);
         }
-        if ty == "diffuse" {
-            let bitmap = node.children().find(|p| {
-                p.tag_name().name() == "texture" && p.attribute("name") == Some("reflectance")
-            });
-            if let Some(bitmap) = bitmap {
-                if let Some(other) = node
-                    .children()
-                    .filter(Node::is_element)
-                    .find(|p| *p != bitmap)
-                {
-                    return Err(self.err(other, "unknown parameter of a diffuse BSDF"));
-                }
-                let texture = self.bitmap(bitmap)?;
-                return Ok((MaterialKind::Diffuse { albedo: Vec3::ONE }, Some(texture)));
-            }
+        let reflectance = match ty.as_str() {
+            "diffuse" => "reflectance",
+            "plastic" | "roughplastic" => "diffuse_reflectance",
+            _ => return Ok((self.bsdf_kind(node, None)?, None)),
+        };
+        let named = |p: &Node| p.attribute("name") == Some(reflectance);
+        let Some(bitmap) = elements
+            .iter()
+            .copied()
+            .find(|p| p.tag_name().name() == "texture" && named(p))
+        else {
+            return Ok((self.bsdf_kind(node, None)?, None));
+        };
+        if let Some(other) = elements.iter().find(|p| **p != bitmap && named(p)) {
+            return Err(self.err(
+                *other,
+                format!("a second {reflectance}: the bitmap gives it"),
+            ));
         }
-        Ok((self.bsdf_kind(node)?, None))
+        let kind = self.bsdf_kind(node, Some(bitmap))?.white_under_texture();
+        Ok((kind, Some(self.bitmap(bitmap)?)))
     }
 
     /// Mitsuba 3's `bitmap` texture: `filename`, `filter_type`, `wrap_mode` (repeat), `raw`,
@@ -590,9 +606,14 @@ impl<'input> Reader<'_, 'input> {
         Ok(Arc::new(texture))
     }
 
-    fn bsdf_kind(&self, node: Node) -> Result<MaterialKind> {
+    /// A BSDF's kind from its parameters, leaving out `texture` (a bitmap [`Self::bsdf`]
+    /// reads).
+    fn bsdf_kind(&self, node: Node, texture: Option<Node>) -> Result<MaterialKind> {
         let ty = self.required(node, "type")?;
-        let params: Vec<Node> = node.children().filter(Node::is_element).collect();
+        let params: Vec<Node> = node
+            .children()
+            .filter(|n| n.is_element() && Some(*n) != texture)
+            .collect();
         let named = |n: &Node, name: &str| n.attribute("name") == Some(name);
         match ty.as_str() {
             "twosided" => {
@@ -610,7 +631,7 @@ impl<'input> Reader<'_, 'input> {
                         format!("different BSDFs on the two sides are {SUBSET}"),
                     ));
                 }
-                self.bsdf_kind(inner[0])
+                self.bsdf_kind(inner[0], None)
             }
             "diffuse" => {
                 let mut albedo = Vec3::splat(0.5);
@@ -627,10 +648,7 @@ impl<'input> Reader<'_, 'input> {
                 let rough = ty == "roughconductor";
                 let mut reflectance = Vec3::ONE;
                 let (mut eta, mut k) = (None, None);
-                let mut alpha = if rough { 0.1 } else { 0.0 };
-                let mut ggx = false;
-                // alpha_u or alpha_v, which must agree (isotropic).
-                let mut alpha_uv = None;
+                let mut microfacet = Microfacet::default();
                 for p in &params {
                     if named(p, "specular_reflectance") {
                         reflectance = self.colour(*p, Some(1.0))?;
@@ -645,41 +663,15 @@ impl<'input> Reader<'_, 'input> {
                         eta = Some(self.colour(*p, None)?);
                     } else if named(p, "k") {
                         k = Some(self.colour(*p, None)?);
-                    } else if rough && named(p, "distribution") {
-                        let d = self.required(*p, "value")?;
-                        if d != "ggx" {
-                            return Err(self.err(
-                                *p,
-                                format!(
-                                    "the {d} distribution is {SUBSET}: give distribution=\"ggx\""
-                                ),
-                            ));
-                        }
-                        ggx = true;
-                    } else if rough
-                        && (named(p, "alpha") || named(p, "alpha_u") || named(p, "alpha_v"))
-                    {
-                        let a = self.number(*p, "value")?;
-                        if !(0.0..=1.0).contains(&a) {
-                            return Err(
-                                self.err(*p, format!("{a}: must be in [0, 1] (GGX roughness)"))
-                            );
-                        }
-                        if !named(p, "alpha") && alpha_uv.replace(a).is_some_and(|b| b != a) {
-                            return Err(self.err(*p, format!("anisotropic roughness is {SUBSET}")));
-                        }
-                        alpha = a;
-                    } else if rough && named(p, "sample_visible") {
-                        // A sampling strategy: the image is the same either way.
-                    } else {
+                    } else if !(rough && self.microfacet(*p, &mut microfacet)?) {
                         return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                if rough && !ggx {
-                    return Err(self.err(node, format!(
-                        "a roughconductor without distribution=\"ggx\" is Beckmann's (Mitsuba's default), {SUBSET}"
-                    )));
-                }
+                let alpha = if rough {
+                    self.ggx_alpha(node, &ty, &microfacet)?
+                } else {
+                    0.0
+                };
                 match (eta, k) {
                     (None, None) if !rough => Ok(MaterialKind::Mirror { reflectance }),
                     // Mitsuba's material "none": a lossless metal, Fresnel factor one.
@@ -697,6 +689,62 @@ impl<'input> Reader<'_, 'input> {
                     }),
                     _ => Err(self.err(node, "a conductor needs both eta and k, or neither")),
                 }
+            }
+            // Mitsuba 3's plastic: a diffuse base under a smooth (or GGX-rough) dielectric
+            // coat of index int_ior / ext_ior, polypropylene in air by default.
+            "plastic" | "roughplastic" => {
+                let rough = ty == "roughplastic";
+                let mut albedo = Vec3::splat(0.5);
+                let (mut int_ior, mut ext_ior) = (1.49f32, 1.000277f32);
+                let mut nonlinear = false;
+                let mut microfacet = Microfacet::default();
+                for p in &params {
+                    if named(p, "diffuse_reflectance") {
+                        albedo = self.colour(*p, Some(1.0))?;
+                    } else if named(p, "specular_reflectance") {
+                        if self.colour(*p, None)? != Vec3::ONE {
+                            return Err(self.err(
+                                *p,
+                                format!("a specular_reflectance other than 1 (a tinted coat) is {SUBSET}"),
+                            ));
+                        }
+                    } else if named(p, "int_ior") || named(p, "ext_ior") {
+                        let v = self.ior(*p)?;
+                        if named(p, "int_ior") {
+                            int_ior = v
+                        } else {
+                            ext_ior = v
+                        }
+                    } else if named(p, "nonlinear") {
+                        nonlinear = self.boolean(*p)?;
+                    } else if !(rough && self.microfacet(*p, &mut microfacet)?) {
+                        return Err(self.err(*p, format!("unknown parameter of a {ty}")));
+                    }
+                }
+                let alpha = if rough {
+                    self.ggx_alpha(node, &ty, &microfacet)?
+                } else {
+                    0.0
+                };
+                let ior = if ext_ior == 1.0 {
+                    int_ior
+                } else {
+                    int_ior / ext_ior
+                };
+                if ior <= 1.0 || !ior.is_finite() {
+                    return Err(self.err(
+                        node,
+                        format!(
+                            "int_ior / ext_ior = {int_ior} / {ext_ior} = {ior}: a coat's index must exceed the outside's"
+                        ),
+                    ));
+                }
+                Ok(MaterialKind::Coated {
+                    albedo,
+                    ior,
+                    alpha,
+                    nonlinear,
+                })
             }
             "dielectric" => {
                 let (mut int_ior, mut ext_ior) = (1.5046f32, 1.000277f32);
@@ -726,9 +774,55 @@ impl<'input> Reader<'_, 'input> {
             }
             _ => Err(self.err(
                 node,
-                format!("{SUBSET} (diffuse, conductor, roughconductor, dielectric, twosided)"),
+                format!(
+                    "{SUBSET} (diffuse, conductor, roughconductor, plastic, roughplastic, dielectric, twosided)"
+                ),
             )),
         }
+    }
+
+    /// Reads `p` into `m` if it is a microfacet parameter of a rough BSDF (`distribution`,
+    /// `alpha`, `alpha_u`, `alpha_v`, `sample_visible`); false if it is none of them.
+    fn microfacet(&self, p: Node, m: &mut Microfacet) -> Result<bool> {
+        let named = |name: &str| p.attribute("name") == Some(name);
+        if named("distribution") {
+            let d = self.required(p, "value")?;
+            if d != "ggx" {
+                return Err(self.err(
+                    p,
+                    format!("the {d} distribution is {SUBSET}: give distribution=\"ggx\""),
+                ));
+            }
+            m.ggx = true;
+        } else if named("alpha") || named("alpha_u") || named("alpha_v") {
+            let a = self.number(p, "value")?;
+            if !(0.0..=1.0).contains(&a) {
+                return Err(self.err(p, format!("{a}: must be in [0, 1] (GGX roughness)")));
+            }
+            if !named("alpha") && m.alpha_uv.replace(a).is_some_and(|b| b != a) {
+                return Err(self.err(p, format!("anisotropic roughness is {SUBSET}")));
+            }
+            m.alpha = Some(a);
+        } else if !named("sample_visible") {
+            // sample_visible is a sampling strategy: the image is the same either way.
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
+    /// The GGX roughness of the rough BSDF `node` (of type `ty`) whose microfacet parameters
+    /// were read into `m`: Mitsuba's default 0.1 where none is given. Without
+    /// `distribution="ggx"` the distribution is Beckmann's (Mitsuba's default), refused.
+    fn ggx_alpha(&self, node: Node, ty: &str, m: &Microfacet) -> Result<f32> {
+        if !m.ggx {
+            return Err(self.err(
+                node,
+                format!(
+                    "a {ty} without distribution=\"ggx\" is Beckmann's (Mitsuba's default), {SUBSET}"
+                ),
+            ));
+        }
+        Ok(m.alpha.unwrap_or(0.1))
     }
 
     /// An index of refraction, a number or one of Mitsuba's named materials.

@@ -13,9 +13,12 @@ use std::fmt::Write;
 /// with `material = "none"` (Fresnel factor 1) scaled by our reflectance, which is exact; a
 /// conductor is a `conductor`, or a `roughconductor` with the GGX distribution, of the same
 /// `eta`, `k` and reflectance factor (exact but for Mitsuba's masking term, listed in the
-/// notes); a light is
-/// a `twosided` diffuse surface carrying an `area` emitter, which emits on the side of the
-/// face normal as ours does (`face_normals` keeps Mitsuba from smoothing the normals).
+/// notes); a coated surface is a `twosided` `plastic`, or a `roughplastic` with the GGX
+/// distribution, of `int_ior` our index and `ext_ior` 1, with our `nonlinear` (its diffuse
+/// reflectance a `bitmap` where textured; a rough one's masking term listed as a
+/// conductor's); a light is a `twosided` diffuse surface carrying an `area` emitter, which
+/// emits on the side of the face normal as ours does (`face_normals` keeps Mitsuba from
+/// smoothing the normals).
 pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
@@ -34,6 +37,18 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
              G1(wo) G1(wi), ours (as pbrt-v4's) with the height-correlated one, which is larger: \
              a rough conductor comes out a little darker there (0.4-0.6% for GGX alpha 0.3, \
              docs/materials.md)"
+                .into(),
+        );
+    }
+    if scene
+        .materials
+        .iter()
+        .any(|m| matches!(m.kind, MaterialKind::Coated { alpha, .. } if alpha > 0.0))
+    {
+        notes.push(
+            "Mitsuba's roughplastic masks and shadows its coat's reflection with the separable \
+             Smith term G1(wo) G1(wi), ours with the height-correlated one, which is larger: a \
+             rough coat's reflection comes out a little darker there"
                 .into(),
         );
     }
@@ -103,7 +118,7 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
                 let _ = writeln!(w, "        <bsdf type=\"diffuse\">");
                 match (&m.texture, file) {
-                    (Some(t), Some(file)) => write_bitmap(w, t, &file),
+                    (Some(t), Some(file)) => write_bitmap(w, t, &file, "reflectance"),
                     _ => {
                         let _ = writeln!(
                             w,
@@ -158,6 +173,42 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }
+            MaterialKind::Coated {
+                albedo,
+                ior,
+                alpha,
+                nonlinear,
+            } => {
+                let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
+                if *alpha > 0.0 {
+                    let _ = writeln!(w, "        <bsdf type=\"roughplastic\">");
+                    let _ = writeln!(
+                        w,
+                        "            <string name=\"distribution\" value=\"ggx\"/>"
+                    );
+                    let _ = writeln!(w, "            <float name=\"alpha\" value=\"{alpha}\"/>");
+                } else {
+                    let _ = writeln!(w, "        <bsdf type=\"plastic\">");
+                }
+                let _ = writeln!(w, "            <float name=\"int_ior\" value=\"{ior}\"/>");
+                let _ = writeln!(w, "            <float name=\"ext_ior\" value=\"1\"/>");
+                let _ = writeln!(
+                    w,
+                    "            <boolean name=\"nonlinear\" value=\"{nonlinear}\"/>"
+                );
+                match (&m.texture, file) {
+                    (Some(t), Some(file)) => write_bitmap(w, t, &file, "diffuse_reflectance"),
+                    _ => {
+                        let _ = writeln!(
+                            w,
+                            "            <rgb name=\"diffuse_reflectance\" value=\"{}\"/>",
+                            list3(*albedo, ", ")
+                        );
+                    }
+                }
+                let _ = writeln!(w, "        </bsdf>");
+                let _ = writeln!(w, "    </bsdf>");
+            }
             MaterialKind::Glass { ior } => {
                 let _ = writeln!(w, "    <bsdf type=\"dielectric\" id=\"{id}\">");
                 let _ = writeln!(w, "        <float name=\"int_ior\" value=\"{ior}\"/>");
@@ -196,18 +247,15 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     Export::of(scene, "xml", x, names, notes)
 }
 
-/// A diffuse reflectance read from `file` (the texture's image, colour baked in). Mitsuba's
-/// `v = 0` is the image's top row, ours the bottom: `to_uv` maps our `(s, t)` to
-/// `(s, 1 - t)`.
-fn write_bitmap(w: &mut String, t: &Texture, file: &str) {
+/// A diffuse reflectance, the parameter `name`, read from `file` (the texture's image,
+/// colour baked in). Mitsuba's `v = 0` is the image's top row, ours the bottom: `to_uv` maps
+/// our `(s, t)` to `(s, 1 - t)`.
+fn write_bitmap(w: &mut String, t: &Texture, file: &str, name: &str) {
     let filter = match t.filter {
         TextureFilter::Bilinear => "bilinear",
         TextureFilter::Nearest => "nearest",
     };
-    let _ = writeln!(
-        w,
-        "            <texture type=\"bitmap\" name=\"reflectance\">"
-    );
+    let _ = writeln!(w, "            <texture type=\"bitmap\" name=\"{name}\">");
     let _ = writeln!(
         w,
         "                <string name=\"filename\" value=\"{}\"/>",

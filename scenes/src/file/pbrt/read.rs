@@ -612,8 +612,8 @@ impl Reader<'_> {
         ))
     }
 
-    /// A material, and the texture on its colour: a diffuse `"texture reflectance"` (its
-    /// albedo then 1, the texture's values taken whole).
+    /// A material, and the texture on its colour: a diffuse's or a coated diffuse's
+    /// `"texture reflectance"` (its albedo then 1, the texture's values taken whole).
     fn material(
         &mut self,
         d: &Directive,
@@ -621,20 +621,23 @@ impl Reader<'_> {
         params: &[Param],
     ) -> Result<(MaterialKind, Option<Arc<Texture>>)> {
         let textured = |p: &&Param| p.name == "reflectance" && p.ty == "texture";
-        if let (Some(p), "diffuse") = (params.iter().find(textured), ty) {
+        if let (Some(p), "diffuse" | "coateddiffuse") = (params.iter().find(textured), ty) {
             let texture = self.texture_param(d, p)?;
             let rest: Vec<Param> = params.iter().filter(|p| !textured(p)).cloned().collect();
             return Ok((
-                match self.material_kind(d, ty, &rest)? {
-                    MaterialKind::Diffuse { .. } => MaterialKind::Diffuse { albedo: Vec3::ONE },
-                    kind => kind,
-                },
+                self.material_kind(d, ty, &rest)?.white_under_texture(),
                 Some(texture),
             ));
         }
         Ok((self.material_kind(d, ty, params)?, None))
     }
 
+    /// A material's kind from its parameters. A `coateddiffuse` is our coated material of
+    /// index `eta` (a float above 1) and pbrt's roughness, with `nonlinear` set: pbrt's random
+    /// walk in the layer meets the base's colour at every return. pbrt also attenuates light
+    /// crossing the layer by `exp(-thickness / |cos|)`, which we do not model: `thickness` is
+    /// taken and ignored, as are `g`, `maxdepth` and `nsamples`, which tune pbrt's stochastic
+    /// evaluation (`g` that of a medium in the layer, whose nonzero `albedo` we refuse).
     fn material_kind(&mut self, d: &Directive, ty: &str, params: &[Param]) -> Result<MaterialKind> {
         let smooth = |p: &Param| -> Result<()> {
             if d.float(p)? != 0.0 {
@@ -664,25 +667,10 @@ impl Reader<'_> {
             "conductor" => {
                 let mut reflectance = None;
                 let (mut eta, mut k) = (None, None);
-                let (mut roughness, mut remap) = (0.0f32, true);
-                // uroughness or vroughness, which must agree (isotropic).
-                let mut uv = None;
+                let mut roughness = Roughness::default();
                 for p in params {
                     match p.name.as_str() {
                         "reflectance" => reflectance = Some(d.colour(p, Some(1.0))?),
-                        "roughness" | "uroughness" | "vroughness" => {
-                            let r = d.float(p)?;
-                            if !(0.0..=1.0).contains(&r) {
-                                return Err(d.param_err(p, "must be in [0, 1]"));
-                            }
-                            if p.name != "roughness" && uv.replace(r).is_some_and(|u| u != r) {
-                                return Err(
-                                    d.param_err(p, format!("anisotropic roughness is {SUBSET}"))
-                                );
-                            }
-                            roughness = r;
-                        }
-                        "remaproughness" => remap = d.boolean(p)?,
                         "eta" | "k" if p.ty == "rgb" => {
                             let v = d.colour(p, None)?;
                             if p.name == "eta" {
@@ -691,14 +679,22 @@ impl Reader<'_> {
                                 k = Some(v);
                             }
                         }
-                        "eta" | "k" => {
-                            return Err(d.param_err(p, format!("a conductor given by a named or sampled spectrum is {SUBSET}: give \"rgb eta\" and \"rgb k\", or \"rgb reflectance\"")));
+                        "eta" | "k" if p.ty == "spectrum" && named_metal(&p.values).is_some() => {
+                            let v = named_metal(&p.values);
+                            if p.name == "eta" {
+                                eta = v;
+                            } else {
+                                k = v;
+                            }
                         }
+                        "eta" | "k" => {
+                            return Err(d.param_err(p, format!("a conductor given by a sampled spectrum, or a named one other than pbrt-v4's metal-{{Ag,Al,Au,Cu,CuZn}}-{{eta,k}}, is {SUBSET}: give \"rgb eta\" and \"rgb k\", or \"rgb reflectance\"")));
+                        }
+                        _ if roughness.read(d, p)? => {}
                         _ => return Err(unknown(p)),
                     }
                 }
-                // pbrt-v4's TrowbridgeReitzDistribution::RoughnessToAlpha.
-                let alpha = if remap { roughness.sqrt() } else { roughness };
+                let alpha = roughness.alpha();
                 match (eta, k, reflectance) {
                     // As our export writes a mirror.
                     (None, None, Some(reflectance)) if alpha == 0.0 => {
@@ -747,8 +743,51 @@ impl Reader<'_> {
                 }
                 Ok(MaterialKind::Glass { ior })
             }
+            // pbrt-v4's CoatedDiffuseMaterial, its defaults (reflectance 0.5, roughness 0,
+            // eta 1.5) and the rules above.
+            "coateddiffuse" => {
+                let mut albedo = Vec3::splat(0.5);
+                let mut ior = 1.5;
+                let mut roughness = Roughness::default();
+                for p in params {
+                    match p.name.as_str() {
+                        "reflectance" => albedo = d.colour(p, Some(1.0))?,
+                        "eta" if p.ty == "float" => {
+                            ior = d.float(p)?;
+                            if ior <= 1.0 {
+                                return Err(d.param_err(
+                                    p,
+                                    format!("{ior}: must be above 1 (the coat's index over the outside's)"),
+                                ));
+                            }
+                        }
+                        "eta" => {
+                            return Err(
+                                d.param_err(p, format!("a dispersive (spectral) eta is {SUBSET}"))
+                            );
+                        }
+                        "albedo" => {
+                            if p.ty == "texture" || d.colour(p, None)? != Vec3::ZERO {
+                                return Err(d.param_err(
+                                    p,
+                                    format!("a scattering medium in the coat's layer is {SUBSET} (albedo 0 only)"),
+                                ));
+                            }
+                        }
+                        "thickness" | "g" | "maxdepth" | "nsamples" => {}
+                        _ if roughness.read(d, p)? => {}
+                        _ => return Err(unknown(p)),
+                    }
+                }
+                Ok(MaterialKind::Coated {
+                    albedo,
+                    ior,
+                    alpha: roughness.alpha(),
+                    nonlinear: true,
+                })
+            }
             _ => Err(d.err(format!(
-                "material \"{ty}\" is {SUBSET} (diffuse, conductor, dielectric)"
+                "material \"{ty}\" is {SUBSET} (diffuse, coateddiffuse, conductor, dielectric)"
             ))),
         }
     }
@@ -929,6 +968,80 @@ fn dvec(v: &[f32]) -> DVec3 {
 
 fn vec(v: &[f32]) -> Vec3 {
     Vec3::new(v[0], v[1], v[2])
+}
+
+/// pbrt-v4's named metal spectra (`"spectrum eta" [ "metal-Ag-eta" ]`, `"metal-Ag-k"`) as
+/// our RGB values: the measured index or absorption at 650, 550 and 450 nm, interpolated
+/// linearly in pbrt-v4's own tables (the wavelengths of `scenes::material_scenes::GOLD`).
+/// `None` for any other value.
+fn named_metal(values: &[Token]) -> Option<Vec3> {
+    let [Token::Str(name)] = values else {
+        return None;
+    };
+    let (metal, part) = name.strip_prefix("metal-")?.rsplit_once('-')?;
+    let (eta, k) = match metal {
+        "Ag" => ([0.1394, 0.1248, 0.1517], [4.1288, 3.3396, 2.4704]),
+        "Al" => ([1.4748, 0.9586, 0.6180], [7.7941, 6.6870, 5.4694]),
+        "Au" => ([0.1678, 0.3504, 1.5085], [3.1378, 2.7141, 1.8788]),
+        "Cu" => ([0.2166, 0.9582, 1.1658], [3.6377, 2.5771, 2.3939]),
+        "CuZn" => ([0.4440, 0.5270, 1.0940], [3.6950, 2.7650, 1.8290]),
+        _ => return None,
+    };
+    match part {
+        "eta" => Some(Vec3::from(eta)),
+        "k" => Some(Vec3::from(k)),
+        _ => None,
+    }
+}
+
+/// A microfacet material's roughness as pbrt-v4 reads it: `roughness`, or `uroughness` and
+/// `vroughness` (which must agree: ours is isotropic), in [0, 1], and `remaproughness`.
+struct Roughness {
+    roughness: f32,
+    remap: bool,
+    /// `uroughness` or `vroughness`, the first given.
+    uv: Option<f32>,
+}
+
+impl Default for Roughness {
+    fn default() -> Self {
+        Self {
+            roughness: 0.0,
+            remap: true,
+            uv: None,
+        }
+    }
+}
+
+impl Roughness {
+    /// Reads `p` if it is one of the roughness parameters; false if it is not.
+    fn read(&mut self, d: &Directive, p: &Param) -> Result<bool> {
+        match p.name.as_str() {
+            "roughness" | "uroughness" | "vroughness" => {
+                let r = d.float(p)?;
+                if !(0.0..=1.0).contains(&r) {
+                    return Err(d.param_err(p, "must be in [0, 1]"));
+                }
+                if p.name != "roughness" && self.uv.replace(r).is_some_and(|u| u != r) {
+                    return Err(d.param_err(p, format!("anisotropic roughness is {SUBSET}")));
+                }
+                self.roughness = r;
+            }
+            "remaproughness" => self.remap = d.boolean(p)?,
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+
+    /// The GGX alpha: pbrt-v4's TrowbridgeReitzDistribution::RoughnessToAlpha (the square
+    /// root) unless `remaproughness` is false.
+    fn alpha(&self) -> f32 {
+        if self.remap {
+            self.roughness.sqrt()
+        } else {
+            self.roughness
+        }
+    }
 }
 
 /// A directive and its arguments, with the helpers that read them and name it in errors.

@@ -3,6 +3,7 @@
 use crate::file::interop::{
     Export, ExportOptions, common_notes, list3, mesh_names, scene_stem, texture_files,
 };
+use glam::Vec3;
 use ppm_core::scene::{MaterialKind, Scene, TextureFilter};
 use std::fmt::Write;
 
@@ -17,8 +18,13 @@ pub const PBRT_MAX_DEPTH: u32 = 100;
 /// dielectric surfaces are exact; a mirror is pbrt's `conductor` given `reflectance`, which
 /// pbrt treats as the Fresnel reflectance at normal incidence (listed in the notes); a
 /// conductor is pbrt's `conductor` of the same `eta`, `k` and GGX alpha (`remaproughness`
-/// off), without our reflectance factor, which pbrt lacks (listed when it is not one). A
-/// textured diffuse surface reads an `imagemap` of its image with the colour baked in.
+/// off), without our reflectance factor, which pbrt lacks (listed when it is not one); a
+/// coated surface is pbrt's `coateddiffuse` of our index and GGX alpha (`remaproughness`
+/// off) and a layer of thickness zero, where pbrt's walk attenuates nothing (its default,
+/// 0.01, would darken the base by a few percent); pbrt always meets the base's colour at
+/// every return (our `nonlinear`; listed where ours does not). A
+/// textured diffuse surface, or coated one's base, reads an `imagemap` of its image with the
+/// colour baked in.
 pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
@@ -41,13 +47,40 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     }
     for m in &scene.materials {
         if let MaterialKind::Conductor { reflectance, .. } = m.kind
-            && reflectance != glam::Vec3::ONE
+            && reflectance != Vec3::ONE
         {
             notes.push(format!(
                 "pbrt-v4's conductor has no reflectance factor: conductor \"{}\" reflects its \
                  Fresnel term there, not times ({})",
                 m.name,
                 list3(reflectance, ", ")
+            ));
+        }
+    }
+    if scene
+        .materials
+        .iter()
+        .any(|m| matches!(m.kind, MaterialKind::Coated { .. }))
+    {
+        notes.push(
+            "pbrt-v4's coateddiffuse estimates the light under its coat by a random walk of at \
+             most 10 bounces (maxdepth), through a rough coat by its microfacets' own \
+             transmission where we (and Mitsuba 3's roughplastic) take one minus their \
+             reflectance; the layer is written 0 thick so that pbrt attenuates nothing in it \
+             (exp(-thickness / |cos|), its default thickness 0.01)"
+                .into(),
+        );
+    }
+    for m in &scene.materials {
+        if let MaterialKind::Coated {
+            nonlinear: false, ..
+        } = m.kind
+        {
+            notes.push(format!(
+                "pbrt-v4's coateddiffuse meets the base's colour at every return under the coat \
+                 (our nonlinear = true): coated material \"{}\", ours with nonlinear = false \
+                 (Mitsuba's default), comes out darker and more saturated there",
+                m.name
             ));
         }
     }
@@ -112,34 +145,36 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     let _ = writeln!(w, "WorldBegin");
     for (m, file) in scene.materials.iter().zip(texture_files(scene)) {
         let name = quoted(&m.name);
-        if let (Some(t), Some(file), MaterialKind::Diffuse { .. }) = (&m.texture, file, &m.kind) {
-            // The image holds the colour (interop::texture_image); pbrt's (s, t) mapping and
-            // t flip are ours.
+        // A textured diffuse reflectance (a diffuse surface's or a coated one's base) reads
+        // an image that holds the colour (interop::texture_image); pbrt's (s, t) mapping and
+        // t flip are ours.
+        let mut texture = None;
+        if let (Some(t), Some(file)) = (&m.texture, file) {
             let filter = match t.filter {
                 TextureFilter::Bilinear => "bilinear",
                 TextureFilter::Nearest => "point",
             };
-            let texture = quoted(&format!("{}-texture", m.name));
+            let texture_name = quoted(&format!("{}-texture", m.name));
             let _ = writeln!(
                 w,
-                "Texture {texture} \"spectrum\" \"imagemap\" \"string filename\" [ {} ] \"string filter\" [ \"{filter}\" ] \"float uscale\" [ {} ] \"float vscale\" [ {} ] \"float udelta\" [ {} ] \"float vdelta\" [ {} ]",
+                "Texture {texture_name} \"spectrum\" \"imagemap\" \"string filename\" [ {} ] \"string filter\" [ \"{filter}\" ] \"float uscale\" [ {} ] \"float vscale\" [ {} ] \"float udelta\" [ {} ] \"float vdelta\" [ {} ]",
                 quoted(&file),
                 t.scale.x,
                 t.scale.y,
                 t.offset.x,
                 t.offset.y
             );
-            let _ = writeln!(
-                w,
-                "MakeNamedMaterial {name} \"string type\" [ \"diffuse\" ] \"texture reflectance\" [ {texture} ]"
-            );
-            continue;
+            texture = Some(texture_name);
         }
+        let reflectance = |colour: Vec3| match &texture {
+            Some(texture) => format!("\"texture reflectance\" [ {texture} ]"),
+            None => format!("\"rgb reflectance\" [ {} ]", list3(colour, " ")),
+        };
         let _ = match &m.kind {
             MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => writeln!(
                 w,
-                "MakeNamedMaterial {name} \"string type\" [ \"diffuse\" ] \"rgb reflectance\" [ {} ]",
-                list3(*albedo, " ")
+                "MakeNamedMaterial {name} \"string type\" [ \"diffuse\" ] {}",
+                reflectance(*albedo)
             ),
             MaterialKind::Mirror { reflectance } => writeln!(
                 w,
@@ -149,6 +184,15 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
             MaterialKind::Glass { ior } => writeln!(
                 w,
                 "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] \"float roughness\" [ 0 ]"
+            ),
+            // A layer of thickness zero attenuates nothing; `nonlinear` has no parameter
+            // (see the notes).
+            MaterialKind::Coated {
+                albedo, ior, alpha, ..
+            } => writeln!(
+                w,
+                "MakeNamedMaterial {name} \"string type\" [ \"coateddiffuse\" ] {} \"float roughness\" [ {alpha} ] \"bool remaproughness\" false \"float eta\" [ {ior} ] \"float thickness\" [ 0 ]",
+                reflectance(*albedo)
             ),
             MaterialKind::Conductor { eta, k, alpha, .. } => writeln!(
                 w,
