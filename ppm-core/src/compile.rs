@@ -280,10 +280,11 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
             kind: material_kind::MIRROR,
             ..Default::default()
         },
-        MaterialKind::Glass { ior } => GpuMaterial {
+        MaterialKind::Glass { ior, alpha } => GpuMaterial {
             albedo: [1.0; 3],
             kind: material_kind::GLASS,
             ior,
+            alpha,
             ..Default::default()
         },
         MaterialKind::Conductor {

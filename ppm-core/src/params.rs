@@ -58,6 +58,10 @@ pub enum DirectMode {
     Photons,
 }
 
+/// The bounces an eye path or a photon takes at most (`RenderParams::max_eye_depth` and
+/// `max_photon_depth` by default; the exports name it where other renderers differ).
+pub const MAX_DEPTH: u32 = 64;
+
 /// Everything a render needs besides the scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RenderParams {
@@ -79,7 +83,7 @@ pub struct RenderParams {
     pub alpha: f32,
     /// Initial gather radius (not squared).
     pub initial_radius: f32,
-    /// Specular bounces an eye path may take.
+    /// Bounces an eye path may take through mirrors, glass, metals and coats.
     pub max_eye_depth: u32,
     /// Bounces a photon may take.
     pub max_photon_depth: u32,
@@ -105,8 +109,8 @@ impl RenderParams {
             seed: 0,
             alpha: scene.render.alpha,
             initial_radius: scene.render.initial_radius,
-            max_eye_depth: 64,
-            max_photon_depth: 64,
+            max_eye_depth: MAX_DEPTH,
+            max_photon_depth: MAX_DEPTH,
             direct: DirectMode::Explicit,
             direct_samples: scene.render.estimator.default_direct_samples(),
             estimator: scene.render.estimator,

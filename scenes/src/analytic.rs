@@ -116,7 +116,10 @@ pub fn specular_furnace(albedo: Vec3, le: f32) -> Scene {
     });
     scene.materials.push(Material {
         name: "glass".into(),
-        kind: MaterialKind::Glass { ior: 1.5 },
+        kind: MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.0,
+        },
         texture: None,
     });
     scene.objects.push(Object {
@@ -210,7 +213,7 @@ pub fn water_furnace(albedo: Vec3, le: f32, ior: f32) -> Scene {
         glow("glow-under-water", ior * ior * le),
         Material {
             name: "water".into(),
-            kind: MaterialKind::Glass { ior },
+            kind: MaterialKind::Glass { ior, alpha: 0.0 },
             texture: None,
         },
         Material {

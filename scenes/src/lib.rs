@@ -66,6 +66,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         build: material_scenes::cornell_metal,
     },
     BuiltinScene {
+        name: "cornell-glass",
+        description: "cornell-box with blocks of rough glass (GGX alpha 0.1 and 0.4)",
+        build: material_scenes::cornell_glass,
+    },
+    BuiltinScene {
         name: "cornell-coated",
         description: "cornell-box with blocks of plastic: red under a rough coat (GGX alpha 0.2), blue under a smooth one",
         build: material_scenes::cornell_coated,

@@ -46,6 +46,31 @@ pub fn cornell_metal() -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// `cornell-glass`: cornell-box with blocks of rough glass of index 1.5, the tall one frosted
+/// lightly (GGX alpha 0.1), the short one heavily (alpha 0.4), each raised 1 mm off the
+/// floor: a glass face lying in the floor's plane would let a path leaving through it start
+/// below the floor and escape, whichever of the two the ray query returns first.
+pub fn cornell_glass() -> Result<Scene, SceneError> {
+    let mut scene = crate::cornell_box_file()?;
+    scene.name = "cornell-glass".into();
+    for (block, name, alpha) in [
+        ("tall-block", "light-frost", 0.1),
+        ("short-block", "heavy-frost", 0.4),
+    ] {
+        let object = scene
+            .object_index(block)
+            .expect("cornell-box has both blocks");
+        scene
+            .materials
+            .push(Material::new(name, MaterialKind::Glass { ior: 1.5, alpha }));
+        scene.objects[object].material = scene.materials.len() - 1;
+        for v in scene.objects[object].triangles.iter_mut().flatten() {
+            v.y += 1.0;
+        }
+    }
+    Ok(scene)
+}
+
 /// `cornell-coated`: cornell-box with a tall block of red plastic under a rough coat (GGX
 /// alpha 0.2, light meeting the base at each return under it) and a short block of blue
 /// plastic under a smooth one; both coats of index 1.5.

@@ -1,7 +1,7 @@
-//! Coated materials through the Mitsuba 3 and pbrt-v4 formats: written with `export_*` and
-//! read back, smooth and rough coats, textured and not, keep every field (pbrt's format has
-//! no `nonlinear`: its `coateddiffuse` always is, so a coat comes back from it with
-//! `nonlinear` on, and the export says so where ours is off).
+//! Coated materials and glass through the Mitsuba 3 and pbrt-v4 formats: written with
+//! `export_*` and read back, smooth and rough coats, textured and not, keep every field (pbrt's
+//! format has no `nonlinear`: its `coateddiffuse` always is, so a coat comes back from it with
+//! `nonlinear` on, and the export says so where ours is off), as smooth and rough glass do.
 
 use glam::Vec3;
 use ppm_core::compile::compile_scene;
@@ -165,4 +165,94 @@ fn a_linear_coat_comes_back_from_pbrt_nonlinear_and_is_named_in_the_notes() {
     );
     let back = round_trip(&export, "pbrt-linear");
     assert_eq!(surfaces(&back), surfaces(&coated_scene([true; 4])));
+}
+
+/// cornell-box with its blocks of glass: the tall one of index 1.5 and GGX roughness
+/// `tall_alpha`, the short one smooth, of index 1.33.
+fn glass_scene(tall_alpha: f32) -> Scene {
+    let mut scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    scene.moves.clear();
+    for (block, ior, alpha) in [("tall-block", 1.5, tall_alpha), ("short-block", 1.33, 0.0)] {
+        scene.materials.push(Material::new(
+            format!("{block}-glass"),
+            MaterialKind::Glass { ior, alpha },
+        ));
+        let object = scene.object_index(block).unwrap();
+        scene.objects[object].material = scene.materials.len() - 1;
+    }
+    scene
+}
+
+/// The note on Mitsuba's masking term for rough glass.
+const ROUGH_GLASS_NOTE: &str =
+    "Mitsuba's roughdielectric masks and shadows with the separable Smith term";
+
+#[test]
+fn glass_round_trips_through_mitsuba_with_every_field() {
+    let scene = glass_scene(0.3);
+    let export = mitsuba::export_mitsuba(&scene, &ExportOptions::default());
+    assert!(
+        export
+            .text
+            .contains("<bsdf type=\"roughdielectric\" id=\"mat-tall-block-glass\">")
+    );
+    assert!(
+        export
+            .text
+            .contains("<string name=\"distribution\" value=\"ggx\"/>")
+    );
+    assert!(
+        export
+            .text
+            .contains("<float name=\"alpha\" value=\"0.3\"/>")
+    );
+    assert!(
+        export
+            .text
+            .contains("<bsdf type=\"dielectric\" id=\"mat-short-block-glass\">")
+    );
+    assert!(
+        export.notes.iter().any(|n| n.contains(ROUGH_GLASS_NOTE)),
+        "{:?}",
+        export.notes
+    );
+    assert!(
+        export.text.contains(ROUGH_GLASS_NOTE),
+        "the file's comment lists it"
+    );
+    let back = round_trip(&export, "mitsuba-glass");
+    assert_eq!(surfaces(&back), surfaces(&scene));
+    assert_eq!(compiled_materials(&back), compiled_materials(&scene));
+}
+
+/// Smooth glass is written as Mitsuba's `dielectric`, and needs no note on the masking term.
+#[test]
+fn smooth_glass_goes_to_mitsuba_as_a_dielectric_without_a_note() {
+    let scene = glass_scene(0.0);
+    let export = mitsuba::export_mitsuba(&scene, &ExportOptions::default());
+    assert!(!export.text.contains("roughdielectric"));
+    assert!(
+        !export.notes.iter().any(|n| n.contains("roughdielectric")),
+        "{:?}",
+        export.notes
+    );
+    let back = round_trip(&export, "mitsuba-smooth-glass");
+    assert_eq!(surfaces(&back), surfaces(&scene));
+}
+
+#[test]
+fn glass_round_trips_through_pbrt_with_every_field() {
+    for tall_alpha in [0.3, 0.0] {
+        let scene = glass_scene(tall_alpha);
+        let export = pbrt::export_pbrt(&scene, &ExportOptions::default());
+        assert!(export.text.contains(&format!(
+            "\"dielectric\" ] \"float eta\" [ 1.5 ] \"float roughness\" [ {tall_alpha} ] \"bool remaproughness\" false"
+        )));
+        assert!(export.text.contains(
+            "\"dielectric\" ] \"float eta\" [ 1.33 ] \"float roughness\" [ 0 ] \"bool remaproughness\" false"
+        ));
+        let back = round_trip(&export, &format!("pbrt-glass-{tall_alpha}"));
+        assert_eq!(surfaces(&back), surfaces(&scene), "{tall_alpha}");
+        assert_eq!(compiled_materials(&back), compiled_materials(&scene));
+    }
 }

@@ -631,3 +631,182 @@ fn pbrt_coated_diffuse_reads_with_pbrt_s_roughness_rules() {
         assert!(e.contains(says) && e.contains("scenes/test.pbrt:5"), "{e}");
     }
 }
+
+/// Mitsuba's `dielectric` and `roughdielectric` read as our glass: index `int_ior /
+/// ext_ior` (numbers or named materials), Mitsuba's defaults (BK7 in air, alpha 0.1) where a
+/// parameter is absent; a `roughdielectric` needs `distribution="ggx"` and an isotropic
+/// roughness, as a `roughconductor` does, and a tinted one is refused.
+#[test]
+fn mitsuba_rough_dielectrics_read_as_rough_glass_with_mitsuba_s_defaults() {
+    let dielectric = |inner: &str| {
+        let text = MITSUBA_OK.replace(
+            "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.8, 0.8, 0.8\"/></bsdf>",
+            inner,
+        );
+        mitsuba::parse_mitsuba(&text, "scenes/test.xml", Path::new("scenes"), "test")
+    };
+    let bk7_in_air = 1.5046f32 / 1.000277;
+    assert_eq!(
+        first_material(dielectric(r#"<bsdf type="dielectric"/>"#)),
+        MaterialKind::Glass {
+            ior: bk7_in_air,
+            alpha: 0.0,
+        }
+    );
+    assert_eq!(
+        first_material(dielectric(
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/></bsdf>"#
+        )),
+        MaterialKind::Glass {
+            ior: bk7_in_air,
+            alpha: 0.1,
+        }
+    );
+    let water = r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
+        <float name="alpha" value="0.25"/><string name="int_ior" value="water"/>
+        <string name="ext_ior" value="vacuum"/><rgb name="specular_reflectance" value="1, 1, 1"/>
+        <rgb name="specular_transmittance" value="1, 1, 1"/></bsdf>"#;
+    assert_eq!(
+        first_material(dielectric(water)),
+        MaterialKind::Glass {
+            ior: 1.333,
+            alpha: 0.25,
+        }
+    );
+    let equal_uv = r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
+        <float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.3"/>
+        <float name="int_ior" value="1.6"/><float name="ext_ior" value="1"/>
+        <boolean name="sample_visible" value="false"/></bsdf>"#;
+    assert_eq!(
+        first_material(dielectric(equal_uv)),
+        MaterialKind::Glass {
+            ior: 1.6,
+            alpha: 0.3,
+        }
+    );
+    for (inner, says) in [
+        (
+            r#"<bsdf type="roughdielectric"><float name="alpha" value="0.2"/></bsdf>"#,
+            "test.xml:13: <bsdf type=\"roughdielectric\">: a roughdielectric without distribution=\"ggx\" is Beckmann's",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="beckmann"/></bsdf>"#,
+            "test.xml:13: <string name=\"distribution\" value=\"beckmann\">: the beckmann distribution",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+            "<float name=\"alpha_v\" value=\"0.3\">: anisotropic roughness",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="1.5"/></bsdf>"#,
+            "<float name=\"alpha\" value=\"1.5\">: 1.5: must be in [0, 1]",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><rgb name="specular_reflectance" value="0.5, 0.5, 0.5"/></bsdf>"#,
+            "a specular_reflectance other than 1 (a tinted roughdielectric)",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><rgb name="specular_transmittance" value="1, 0.9, 1"/></bsdf>"#,
+            "a specular_transmittance other than 1 (a tinted roughdielectric)",
+        ),
+        (
+            r#"<bsdf type="dielectric"><rgb name="specular_transmittance" value="0.9, 0.9, 0.9"/></bsdf>"#,
+            "a specular_transmittance other than 1 (a tinted dielectric)",
+        ),
+        (
+            r#"<bsdf type="dielectric"><float name="alpha" value="0.1"/></bsdf>"#,
+            "unknown parameter of a dielectric",
+        ),
+        (
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="int_ior" value="-1.5"/></bsdf>"#,
+            "must be a positive number",
+        ),
+    ] {
+        let e = dielectric(inner).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains(says) && e.contains("scenes/test.xml"), "{e}");
+    }
+}
+
+/// pbrt's `dielectric` reads as our glass of index `eta` (default 1.5) and pbrt's roughness,
+/// remapped to GGX alpha by the square root unless `remaproughness` is off, as a conductor's
+/// and a coated diffuse's.
+#[test]
+fn pbrt_dielectrics_read_with_pbrt_s_roughness_rules() {
+    let dielectric = |params: &str| {
+        let text = pbrt_with_floor(&format!("Material \"dielectric\" {params}"));
+        pbrt::parse_pbrt(&text, "scenes/test.pbrt", Path::new("scenes"), "test")
+    };
+    assert_eq!(
+        first_material(dielectric("")),
+        MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.0,
+        }
+    );
+    // remaproughness (on by default) turns roughness 0.04 into alpha sqrt(0.04) = 0.2.
+    assert_eq!(
+        first_material(dielectric(
+            "\"float eta\" [ 1.33 ] \"float roughness\" [ 0.04 ]"
+        )),
+        MaterialKind::Glass {
+            ior: 1.33,
+            alpha: 0.2,
+        }
+    );
+    assert_eq!(
+        first_material(dielectric(
+            "\"float roughness\" [ 0.04 ] \"bool remaproughness\" true"
+        )),
+        MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.2,
+        }
+    );
+    assert_eq!(
+        first_material(dielectric(
+            "\"float roughness\" [ 0.04 ] \"bool remaproughness\" false"
+        )),
+        MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.04,
+        }
+    );
+    let equal_uv = "\"float uroughness\" [ 0.09 ] \"float vroughness\" [ 0.09 ]";
+    let MaterialKind::Glass { alpha, .. } = first_material(dielectric(equal_uv)) else {
+        panic!("not glass");
+    };
+    assert!((alpha - 0.3).abs() < 1e-6, "{alpha}");
+    assert!(matches!(
+        first_material(dielectric(
+            "\"float uroughness\" [ 0.09 ] \"float vroughness\" [ 0.09 ] \"bool remaproughness\" false"
+        )),
+        MaterialKind::Glass { alpha: 0.09, .. }
+    ));
+    for (params, says) in [
+        (
+            "\"float uroughness\" [ 0.1 ] \"float vroughness\" [ 0.2 ]",
+            "\"float vroughness\": anisotropic roughness",
+        ),
+        (
+            "\"float roughness\" [ 1.5 ]",
+            "\"float roughness\": must be in [0, 1]",
+        ),
+        (
+            "\"float roughness\" [ -0.1 ]",
+            "\"float roughness\": must be in [0, 1]",
+        ),
+        (
+            "\"float eta\" [ -1.5 ]",
+            "\"float eta\": must be a positive number",
+        ),
+        (
+            "\"spectrum eta\" \"glass-BK7\"",
+            "\"spectrum eta\": a dispersive (spectral) eta",
+        ),
+        ("\"bool remaproughness\" [ 1 ]", "remaproughness"),
+        ("\"rgb tint\" [ 0.5 0.5 0.5 ]", "unknown parameter"),
+    ] {
+        let e = dielectric(params).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains(says) && e.contains("scenes/test.pbrt:5"), "{e}");
+    }
+}

@@ -325,3 +325,70 @@ fn a_coated_material_loads_with_its_defaults() {
         }
     );
 }
+
+#[test]
+fn glass_rougher_than_one() {
+    insta::assert_snapshot!(error_for(
+        "lamp = { type",
+        "glass = { type = \"glass\", ior = 1.5, alpha = 1.5 }\nlamp = { type"
+    ));
+}
+
+/// A glass's roughness is checked as a conductor's or a coat's: NaN, infinity and values
+/// outside [0, 1] are refused by field and value.
+#[test]
+fn glass_roughness_that_cannot_be_is_refused_by_field() {
+    for (alpha, says) in [
+        ("nan", "materials.glass.alpha = NaN: must be in [0, 1]"),
+        ("inf", "materials.glass.alpha = inf: must be in [0, 1]"),
+        ("-0.1", "materials.glass.alpha = -0.1: must be in [0, 1]"),
+        ("1.01", "materials.glass.alpha = 1.01: must be in [0, 1]"),
+    ] {
+        let e = error_for(
+            "lamp = { type",
+            &format!("glass = {{ type = \"glass\", ior = 1.5, alpha = {alpha} }}\nlamp = {{ type"),
+        );
+        assert!(
+            e.starts_with("probe.toml: ") && e.contains(says),
+            "{alpha}: {e}"
+        );
+    }
+}
+
+/// A glass needs its index; its roughness defaults to zero (smooth) and is read when given,
+/// up to one.
+#[test]
+fn a_glass_loads_with_its_defaults() {
+    let glass = |fields: &str| {
+        let text = VALID.replacen(
+            "lamp = { type",
+            &format!("glass = {{ type = \"glass\", {fields} }}\nlamp = {{ type"),
+            1,
+        );
+        let scene = parse_scene(&text, "probe.toml", Path::new("scenes")).unwrap();
+        let glass = scene.materials.iter().find(|m| m.name == "glass").unwrap();
+        assert!(glass.texture.is_none());
+        glass.kind.clone()
+    };
+    assert_eq!(
+        glass("ior = 1.5"),
+        ppm_core::scene::MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.0,
+        }
+    );
+    assert_eq!(
+        glass("ior = 1.33, alpha = 0.25"),
+        ppm_core::scene::MaterialKind::Glass {
+            ior: 1.33,
+            alpha: 0.25,
+        }
+    );
+    assert_eq!(
+        glass("ior = 1.5, alpha = 1.0"),
+        ppm_core::scene::MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 1.0,
+        }
+    );
+}

@@ -26,8 +26,14 @@ struct BsdfSample {
 }
 
 fn bsdf_is_delta(material: GpuMaterial) -> bool {
-    return material.kind == MATERIAL_MIRROR || material.kind == MATERIAL_GLASS
-        || (material.kind == MATERIAL_CONDUCTOR && material.alpha < SMOOTH_ALPHA);
+    return material.kind == MATERIAL_MIRROR
+        || ((material.kind == MATERIAL_GLASS || material.kind == MATERIAL_CONDUCTOR) && material.alpha < SMOOTH_ALPHA);
+}
+
+// Whether eval_cos and pdf describe the bounces: not at delta surfaces nor at a rough
+// dielectric (ppm_core::bsdf::samples_lights).
+fn bsdf_samples_lights(material: GpuMaterial) -> bool {
+    return !bsdf_is_delta(material) && material.kind != MATERIAL_GLASS;
 }
 
 fn bsdf_holds_visible_points(material: GpuMaterial) -> bool {
@@ -238,7 +244,7 @@ fn coat_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
 fn bsdf_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, wi);
-    if cos_o <= 0.0 || cos_i <= 0.0 || bsdf_is_delta(material) {
+    if cos_o <= 0.0 || cos_i <= 0.0 || !bsdf_samples_lights(material) {
         return vec3<f32>(0.0);
     }
     if material.kind == MATERIAL_CONDUCTOR {
@@ -256,7 +262,7 @@ fn bsdf_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: ve
 fn bsdf_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, wi);
-    if cos_o <= 0.0 || cos_i <= 0.0 || bsdf_is_delta(material) {
+    if cos_o <= 0.0 || cos_i <= 0.0 || !bsdf_samples_lights(material) {
         return 0.0;
     }
     if material.kind == MATERIAL_CONDUCTOR {
@@ -277,7 +283,13 @@ struct GgxReflection {
     pdf: f32,
 }
 
-fn sample_ggx_reflection(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> GgxReflection {
+// A microfacet normal visible from wo, local and in world space (ppm_core::bsdf::visible_normal).
+struct VisibleNormal {
+    m: vec3<f32>,
+    h: vec3<f32>,
+}
+
+fn visible_normal(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> VisibleNormal {
     let basis = orthonormal_basis(facing);
     let local_o = vec3<f32>(dot(basis.tangent, wo), dot(basis.bitangent, wo), dot(facing, wo));
     let v = normalize(vec3<f32>(alpha * local_o.x, alpha * local_o.y, local_o.z));
@@ -294,18 +306,27 @@ fn sample_ggx_reflection(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f
     let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
     let nh = t1 * p1 + t2 * p2 + v * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
     let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
-    let h = to_world(m, facing);
+    return VisibleNormal(m, to_world(m, facing));
+}
+
+// G2 / G1(wo) in the form that cancels cos_o (ppm_core::bsdf::ggx_g2_over_g1).
+fn ggx_g2_over_g1(alpha: f32, cos_o: f32, cos_i: f32) -> f32 {
+    let root_o = smith_root(alpha, cos_o);
+    let root_i = smith_root(alpha, cos_i);
+    return cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i);
+}
+
+fn sample_ggx_reflection(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> GgxReflection {
+    let normal = visible_normal(alpha, facing, wo, u);
+    let m = normal.m;
+    let h = normal.h;
     let dir = reflect(-wo, h);
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, dir);
     if cos_o <= 0.0 || cos_i <= 0.0 {
         return GgxReflection(dir, h, 0.0, 0.0);
     }
-    // G2 / G1(wo) in the form that cancels cos_o (ppm_core::bsdf::ggx_g2_over_g1).
-    let root_o = smith_root(alpha, cos_o);
-    let root_i = smith_root(alpha, cos_i);
-    let g2_over_g1 = cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i);
-    return GgxReflection(dir, h, g2_over_g1, ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)));
+    return GgxReflection(dir, h, ggx_g2_over_g1(alpha, cos_o, cos_i), ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)));
 }
 
 // A rough conductor's visible normals (ppm_core::bsdf::sample_conductor).
@@ -313,6 +334,33 @@ fn bsdf_sample_conductor(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>
     let r = sample_ggx_reflection(material.alpha, facing, wo, u);
     let weight = material.albedo * conductor_fresnel(material, dot(wo, r.h)) * r.g2_over_g1;
     return BsdfSample(r.dir, weight, r.pdf, false);
+}
+
+// A rough dielectric: reflection with the Fresnel term at a visible microfacet as its
+// chance, else refraction through it; weight G2 / G1(wo), times (eta_i / eta_t)^2 for
+// radiance refracted; no density (ppm_core::bsdf::sample_rough_dielectric).
+fn bsdf_sample_rough_dielectric(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, u_dir: vec2<f32>, transport: u32) -> BsdfSample {
+    let wo = -incoming;
+    let eta = select(material.ior, 1.0 / material.ior, front);
+    let h = visible_normal(material.alpha, facing, wo, u_dir).h;
+    let fresnel = fresnel_refract(incoming, h, eta);
+    var dir = reflect(incoming, h);
+    var transmitted = false;
+    if fresnel.refracts && u_lobe >= fresnel.reflectance {
+        dir = fresnel.refracted;
+        transmitted = true;
+    }
+    let cos_o = dot(facing, wo);
+    let cos_i = dot(facing, dir);
+    let on_its_side = select(cos_i > 0.0, cos_i < 0.0, transmitted);
+    var weight = 0.0;
+    if cos_o > 0.0 && on_its_side {
+        weight = ggx_g2_over_g1(material.alpha, cos_o, abs(cos_i));
+    }
+    if transmitted && transport == TRANSPORT_RADIANCE {
+        weight *= eta * eta;
+    }
+    return BsdfSample(dir, vec3<f32>(weight), 0.0, transmitted);
 }
 
 // The cosine lobe at a visible point; the weight is f cos / pdf with the coat's arrival
@@ -378,6 +426,9 @@ fn bsdf_sample(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, fr
     }
     if material.kind == MATERIAL_COATED {
         return coat_sample(material, incoming, facing, u_lobe, u_dir);
+    }
+    if GLASS && material.kind == MATERIAL_GLASS {
+        return bsdf_sample_rough_dielectric(material, incoming, facing, front, u_lobe, u_dir, transport);
     }
     return bsdf_sample_visible(material, facing, u_dir);
 }

@@ -83,9 +83,9 @@ pub fn reference_key(scene: &Scene, request: &ReferenceRequest) -> u64 {
                 h.u32(1);
                 h.floats(&reflectance.to_array());
             }
-            MaterialKind::Glass { ior } => {
+            MaterialKind::Glass { ior, alpha } => {
                 h.u32(2);
-                h.floats(&[ior]);
+                h.floats(&[ior, alpha]);
             }
             MaterialKind::Conductor {
                 eta,

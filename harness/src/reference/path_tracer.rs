@@ -5,11 +5,12 @@
 //! white-furnace tests and against other renderers rather than against a second copy); the
 //! light transport is written here on its own (light sampling, multiple importance sampling,
 //! Russian roulette), so a mistake in the passes' transport does not repeat here.
-//! Per sample: a point uniform in the pixel's area (a box filter), then at every non-delta
-//! surface next-event estimation towards a point on the area lights and a bounce drawn from
-//! the BSDF, the two weighted by the power heuristic; at mirrors and glass the BSDF's delta
-//! lobes continue the path (radiance scaled by `(eta_i / eta_t)^2` through a refraction);
-//! emission reached directly or after a delta bounce counts whole.
+//! Per sample: a point uniform in the pixel's area (a box filter), then at every surface
+//! with a density (`bsdf::samples_lights`) next-event estimation towards a point on the area
+//! lights and a bounce drawn from the BSDF, the two weighted by the power heuristic; at
+//! mirrors and glass (smooth or rough) the BSDF's bounce alone continues the path (radiance
+//! scaled by `(eta_i / eta_t)^2` through a refraction); emission reached directly or after
+//! such a bounce counts whole.
 
 use super::sampler::Sampler;
 use backend_cpu::trace::SceneData;
@@ -102,14 +103,13 @@ impl PathTracer<'_> {
                 radiance += throughput * emission * weight;
             }
             let u = Bounce::new(sampler, bounce);
-            let delta = bsdf::is_delta(material);
             // A black diffuse surface ends the path (a coated one still reflects).
             if material.kind == material_kind::DIFFUSE
                 && bsdf::visible_point_f(material).max_element() <= 0.0
             {
                 break;
             }
-            if !delta {
+            if bsdf::samples_lights(material) {
                 let x = position + facing * self.ray_epsilon;
                 radiance += throughput * self.light_sample(x, material, facing, -dir, &u);
             }
@@ -135,7 +135,8 @@ impl PathTracer<'_> {
                 break;
             }
             throughput *= scattered.weight;
-            // A delta lobe (a coat's smooth reflection too) reports no density.
+            // A delta lobe (a coat's smooth reflection too) and a rough dielectric's bounce
+            // report no density: light sampling cannot weigh against them.
             bsdf_pdf = (scattered.pdf > 0.0).then_some(scattered.pdf);
             if bounce >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(0.95);

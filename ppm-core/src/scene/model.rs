@@ -75,10 +75,13 @@ pub enum MaterialKind {
         /// Reflectance per channel, in [0, 1].
         reflectance: Vec3,
     },
-    /// Smooth dielectric.
+    /// Dielectric: Fresnel reflection and refraction of index `ior`, on GGX microfacets of
+    /// roughness `alpha` (0: smooth).
     Glass {
         /// Index of refraction, positive.
         ior: f32,
+        /// GGX roughness, in [0, 1].
+        alpha: f32,
     },
     /// Metal: Fresnel reflection of complex index `eta + i k` (per channel), times
     /// `reflectance`, on GGX microfacets of roughness `alpha` (0: smooth).

@@ -81,6 +81,8 @@ enum MaterialFile {
     },
     Glass {
         ior: f32,
+        #[serde(default)]
+        alpha: f32,
     },
     Conductor {
         eta: [f32; 3],
@@ -433,11 +435,14 @@ impl Converter<'_> {
             MaterialFile::Mirror { reflectance } => MaterialKind::Mirror {
                 reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
             },
-            MaterialFile::Glass { ior } => {
+            MaterialFile::Glass { ior, alpha } => {
                 if !(ior.is_finite() && *ior > 0.0) {
                     return Err(self.err(field("ior"), ior, "must be a positive number"));
                 }
-                MaterialKind::Glass { ior: *ior }
+                MaterialKind::Glass {
+                    ior: *ior,
+                    alpha: self.roughness(&field("alpha"), *alpha)?,
+                }
             }
             MaterialFile::Conductor {
                 eta,

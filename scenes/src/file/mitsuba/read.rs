@@ -667,11 +667,7 @@ impl<'input> Reader<'_, 'input> {
                         return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                let alpha = if rough {
-                    self.ggx_alpha(node, &ty, &microfacet)?
-                } else {
-                    0.0
-                };
+                let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
                 match (eta, k) {
                     (None, None) if !rough => Ok(MaterialKind::Mirror { reflectance }),
                     // Mitsuba's material "none": a lossless metal, Fresnel factor one.
@@ -721,11 +717,7 @@ impl<'input> Reader<'_, 'input> {
                         return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                let alpha = if rough {
-                    self.ggx_alpha(node, &ty, &microfacet)?
-                } else {
-                    0.0
-                };
+                let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
                 let ior = if ext_ior == 1.0 {
                     int_ior
                 } else {
@@ -746,8 +738,12 @@ impl<'input> Reader<'_, 'input> {
                     nonlinear,
                 })
             }
-            "dielectric" => {
+            // Mitsuba 3's dielectric: smooth (or GGX-rough) glass of index int_ior / ext_ior,
+            // BK7 in air by default.
+            "dielectric" | "roughdielectric" => {
+                let rough = ty == "roughdielectric";
                 let (mut int_ior, mut ext_ior) = (1.5046f32, 1.000277f32);
+                let mut microfacet = Microfacet::default();
                 for p in &params {
                     if named(p, "int_ior") || named(p, "ext_ior") {
                         let v = self.ior(*p)?;
@@ -759,23 +755,28 @@ impl<'input> Reader<'_, 'input> {
                     } else if named(p, "specular_reflectance") || named(p, "specular_transmittance")
                     {
                         if self.colour(*p, None)? != Vec3::ONE {
-                            return Err(self.err(*p, format!("a tinted dielectric is {SUBSET}")));
+                            let name = p.attribute("name").unwrap_or_default();
+                            return Err(self.err(
+                                *p,
+                                format!("a {name} other than 1 (a tinted {ty}) is {SUBSET}"),
+                            ));
                         }
-                    } else {
-                        return Err(self.err(*p, "unknown parameter of a dielectric"));
+                    } else if !(rough && self.microfacet(*p, &mut microfacet)?) {
+                        return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
+                let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
                 let ior = if ext_ior == 1.0 {
                     int_ior
                 } else {
                     int_ior / ext_ior
                 };
-                Ok(MaterialKind::Glass { ior })
+                Ok(MaterialKind::Glass { ior, alpha })
             }
             _ => Err(self.err(
                 node,
                 format!(
-                    "{SUBSET} (diffuse, conductor, roughconductor, plastic, roughplastic, dielectric, twosided)"
+                    "{SUBSET} (diffuse, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric, twosided)"
                 ),
             )),
         }
@@ -810,10 +811,14 @@ impl<'input> Reader<'_, 'input> {
         Ok(true)
     }
 
-    /// The GGX roughness of the rough BSDF `node` (of type `ty`) whose microfacet parameters
-    /// were read into `m`: Mitsuba's default 0.1 where none is given. Without
-    /// `distribution="ggx"` the distribution is Beckmann's (Mitsuba's default), refused.
-    fn ggx_alpha(&self, node: Node, ty: &str, m: &Microfacet) -> Result<f32> {
+    /// The GGX roughness of the BSDF `node` (of type `ty`): 0 unless it is `rough`; else from
+    /// the microfacet parameters read into `m`, Mitsuba's default 0.1 where none is given.
+    /// Without `distribution="ggx"` the distribution is Beckmann's (Mitsuba's default),
+    /// refused.
+    fn ggx_alpha(&self, rough: bool, node: Node, ty: &str, m: &Microfacet) -> Result<f32> {
+        if !rough {
+            return Ok(0.0);
+        }
         if !m.ggx {
             return Err(self.err(
                 node,

@@ -3,6 +3,7 @@
 use crate::file::interop::{
     Export, ExportOptions, clip_range, common_notes, list3, mesh_names, texture_files,
 };
+use ppm_core::params::MAX_DEPTH;
 use ppm_core::scene::{MaterialKind, Scene, Texture, TextureFilter};
 use std::fmt::Write;
 
@@ -16,41 +17,49 @@ use std::fmt::Write;
 /// notes); a coated surface is a `twosided` `plastic`, or a `roughplastic` with the GGX
 /// distribution, of `int_ior` our index and `ext_ior` 1, with our `nonlinear` (its diffuse
 /// reflectance a `bitmap` where textured; a rough one's masking term listed as a
+/// conductor's); glass is a `dielectric`, or a `roughdielectric` with the GGX distribution,
+/// of `int_ior` our index and `ext_ior` 1 (a rough one's masking term listed as a
 /// conductor's); a light is a `twosided` diffuse surface carrying an `area` emitter, which
 /// emits on the side of the face normal as ours does (`face_normals` keeps Mitsuba from
 /// smoothing the normals).
 pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
-    notes.push(
-        "Mitsuba's path tracer runs to unbounded depth with Russian roulette; ours stops eye \
-         paths after 16 specular bounces and photons after 16 bounces"
-            .into(),
-    );
-    if scene
-        .materials
-        .iter()
-        .any(|m| matches!(m.kind, MaterialKind::Conductor { alpha, .. } if alpha > 0.0))
-    {
-        notes.push(
-            "Mitsuba's roughconductor masks and shadows with the separable Smith term \
-             G1(wo) G1(wi), ours (as pbrt-v4's) with the height-correlated one, which is larger: \
-             a rough conductor comes out a little darker there (0.4-0.6% for GGX alpha 0.3, \
-             docs/materials.md)"
-                .into(),
-        );
-    }
-    if scene
-        .materials
-        .iter()
-        .any(|m| matches!(m.kind, MaterialKind::Coated { alpha, .. } if alpha > 0.0))
-    {
-        notes.push(
-            "Mitsuba's roughplastic masks and shadows its coat's reflection with the separable \
-             Smith term G1(wo) G1(wi), ours with the height-correlated one, which is larger: a \
-             rough coat's reflection comes out a little darker there"
-                .into(),
-        );
+    notes.push(format!(
+        "Mitsuba's path tracer runs to unbounded depth with Russian roulette; ours stops \
+             eye paths and photons after {MAX_DEPTH} bounces"
+    ));
+    // Mitsuba masks and shadows every rough BSDF with the separable Smith term: its plugin,
+    // which of our kinds it writes, and what that changes.
+    type RoughPlugin = (&'static str, fn(&MaterialKind) -> bool, &'static str);
+    let rough: [RoughPlugin; 3] = [
+        (
+            "roughconductor",
+            |k| matches!(k, MaterialKind::Conductor { alpha, .. } if *alpha > 0.0),
+            "a rough conductor comes out a little darker there (0.4-0.6% for GGX alpha 0.3, \
+             docs/materials.md)",
+        ),
+        (
+            "roughplastic",
+            |k| matches!(k, MaterialKind::Coated { alpha, .. } if *alpha > 0.0),
+            "a rough coat's reflection comes out a little darker there; its coat also lets \
+             less light through at grazing angles than ours (docs/materials.md, \"Coated \
+             diffuse\")",
+        ),
+        (
+            "roughdielectric",
+            |k| matches!(k, MaterialKind::Glass { alpha, .. } if *alpha > 0.0),
+            "rough glass comes out a little darker there",
+        ),
+    ];
+    for (plugin, used, what) in rough {
+        if scene.materials.iter().any(|m| used(&m.kind)) {
+            notes.push(format!(
+                "Mitsuba's {plugin} masks and shadows with the separable Smith term G1(wo) \
+                 G1(wi), ours (as pbrt-v4's) with the height-correlated one, which is larger: \
+                 {what}"
+            ));
+        }
     }
     let c = &scene.camera;
     let (near, far) = clip_range(scene);
@@ -209,8 +218,14 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }
-            MaterialKind::Glass { ior } => {
-                let _ = writeln!(w, "    <bsdf type=\"dielectric\" id=\"{id}\">");
+            MaterialKind::Glass { ior, alpha } => {
+                if *alpha > 0.0 {
+                    let _ = writeln!(w, "    <bsdf type=\"roughdielectric\" id=\"{id}\">");
+                    let _ = writeln!(w, "        <string name=\"distribution\" value=\"ggx\"/>");
+                    let _ = writeln!(w, "        <float name=\"alpha\" value=\"{alpha}\"/>");
+                } else {
+                    let _ = writeln!(w, "    <bsdf type=\"dielectric\" id=\"{id}\">");
+                }
                 let _ = writeln!(w, "        <float name=\"int_ior\" value=\"{ior}\"/>");
                 let _ = writeln!(w, "        <float name=\"ext_ior\" value=\"1\"/>");
                 let _ = writeln!(w, "    </bsdf>");

@@ -639,12 +639,6 @@ impl Reader<'_> {
     /// taken and ignored, as are `g`, `maxdepth` and `nsamples`, which tune pbrt's stochastic
     /// evaluation (`g` that of a medium in the layer, whose nonzero `albedo` we refuse).
     fn material_kind(&mut self, d: &Directive, ty: &str, params: &[Param]) -> Result<MaterialKind> {
-        let smooth = |p: &Param| -> Result<()> {
-            if d.float(p)? != 0.0 {
-                return Err(d.param_err(p, format!("a rough surface is {SUBSET}")));
-            }
-            Ok(())
-        };
         let unknown = |p: &Param| {
             d.param_err(
                 p,
@@ -721,8 +715,11 @@ impl Reader<'_> {
                     _ => Err(d.err("a conductor takes \"rgb eta\" and \"rgb k\" together, or \"rgb reflectance\" alone")),
                 }
             }
+            // pbrt-v4's DielectricMaterial: eta 1.5 and roughness 0 by default, the roughness
+            // read as a conductor's.
             "dielectric" => {
                 let mut ior = 1.5;
+                let mut roughness = Roughness::default();
                 for p in params {
                     match p.name.as_str() {
                         "eta" if p.ty == "float" => {
@@ -736,12 +733,14 @@ impl Reader<'_> {
                                 d.param_err(p, format!("a dispersive (spectral) eta is {SUBSET}"))
                             );
                         }
-                        "roughness" | "uroughness" | "vroughness" => smooth(p)?,
-                        "remaproughness" => {}
+                        _ if roughness.read(d, p)? => {}
                         _ => return Err(unknown(p)),
                     }
                 }
-                Ok(MaterialKind::Glass { ior })
+                Ok(MaterialKind::Glass {
+                    ior,
+                    alpha: roughness.alpha(),
+                })
             }
             // pbrt-v4's CoatedDiffuseMaterial, its defaults (reflectance 0.5, roughness 0,
             // eta 1.5) and the rules above.

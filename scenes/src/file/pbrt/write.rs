@@ -4,18 +4,20 @@ use crate::file::interop::{
     Export, ExportOptions, common_notes, list3, mesh_names, scene_stem, texture_files,
 };
 use glam::Vec3;
+use ppm_core::params::MAX_DEPTH;
 use ppm_core::scene::{MaterialKind, Scene, TextureFilter};
 use std::fmt::Write;
 
-/// Path depth given to pbrt's path tracer: beyond the 16 + 16 bounces our eye and photon
-/// paths may take together, and Russian roulette ends paths long before it.
-pub const PBRT_MAX_DEPTH: u32 = 100;
+/// Path depth given to pbrt's path tracer: the bounces our eye and photon paths may take
+/// together, and Russian roulette ends paths long before it.
+pub const PBRT_MAX_DEPTH: u32 = 2 * MAX_DEPTH;
 
 /// The scene in pbrt-v4's format, meshes as `plymesh` shapes.
 ///
 /// `Scale -1 1 1` before `LookAt` turns pbrt's left-handed camera space into our image
-/// orientation; `WorldBegin` resets the transform, so shapes are in world space. Diffuse and
-/// dielectric surfaces are exact; a mirror is pbrt's `conductor` given `reflectance`, which
+/// orientation; `WorldBegin` resets the transform, so shapes are in world space. Diffuse
+/// surfaces are exact, and so is glass: pbrt's `dielectric` of our index and GGX alpha
+/// (`remaproughness` off); a mirror is pbrt's `conductor` given `reflectance`, which
 /// pbrt treats as the Fresnel reflectance at normal incidence (listed in the notes); a
 /// conductor is pbrt's `conductor` of the same `eta`, `k` and GGX alpha (`remaproughness`
 /// off), without our reflectance factor, which pbrt lacks (listed when it is not one); a
@@ -86,7 +88,7 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     }
     notes.push(format!(
         "pbrt's path tracer stops at depth {PBRT_MAX_DEPTH} with Russian roulette; ours stops \
-         eye paths after 16 specular bounces and photons after 16 bounces"
+         eye paths and photons after {MAX_DEPTH} bounces"
     ));
     let c = &scene.camera;
     let mut t = String::new();
@@ -181,9 +183,9 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
                 "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] \"rgb reflectance\" [ {} ] \"float roughness\" [ 0 ]",
                 list3(*reflectance, " ")
             ),
-            MaterialKind::Glass { ior } => writeln!(
+            MaterialKind::Glass { ior, alpha } => writeln!(
                 w,
-                "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] \"float roughness\" [ 0 ]"
+                "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] \"float roughness\" [ {alpha} ] \"bool remaproughness\" false"
             ),
             // A layer of thickness zero attenuates nothing; `nonlinear` has no parameter
             // (see the notes).
