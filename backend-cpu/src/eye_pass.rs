@@ -148,8 +148,8 @@ fn trace_eye_path(
         let normal = Vec3::from(tri.normal);
         let front = dir.dot(normal) < 0.0;
         let facing = if front { normal } else { -normal };
-        let u = key.eye_bounce(depth);
-        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u.0) {
+        let u_lobe = key.eye_lobe(depth);
+        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u_lobe) {
             out.position = position.into();
             out.normal = facing.into();
             out.material = tri.material;
@@ -162,6 +162,7 @@ fn trace_eye_path(
             return u64::from(depth) + 1;
         }
         out.flags |= hit_flags::EYE_CHAINED;
+        let u = key.eye_bounce(depth);
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             // A glossy direction below the surface: the path ends without a visible point.

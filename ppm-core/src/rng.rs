@@ -116,13 +116,20 @@ pub const EYE_GLASS_DIM: u32 = 2;
 pub const EYE_GLOSSY_DIM: u32 = 1 << 16;
 
 impl StreamKey {
-    /// The numbers of an eye path's bounce at `depth`: the one that picks at glass, and the
-    /// pair that draws a glossy direction ([`crate::bsdf::sample`]'s `u`).
+    /// The number that picks a lobe at an eye path's bounce at `depth` (at glass, or between
+    /// a coat's reflection and its base), alone: what decides whether the path stops there.
+    #[inline]
+    pub fn eye_lobe(&self, depth: u32) -> f32 {
+        self.uniform(EYE_GLASS_DIM + depth)
+    }
+
+    /// The numbers of an eye path's bounce at `depth`: [`Self::eye_lobe`], and the pair that
+    /// draws a glossy direction ([`crate::bsdf::sample`]'s `u`).
     #[inline]
     pub fn eye_bounce(&self, depth: u32) -> (f32, (f32, f32)) {
         let glossy = EYE_GLOSSY_DIM + 2 * depth;
         (
-            self.uniform(EYE_GLASS_DIM + depth),
+            self.eye_lobe(depth),
             (self.uniform(glossy), self.uniform(glossy + 1)),
         )
     }

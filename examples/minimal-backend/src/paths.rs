@@ -140,8 +140,8 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         let facing = if front { normal } else { -normal };
         // A diffuse surface holds the visible point; a coated one when the path takes its
         // base, whose transmittance then rides in the throughput too (ppm_core::bsdf).
-        let u = key.eye_bounce(depth);
-        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u.0) {
+        let u_lobe = key.eye_lobe(depth);
+        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u_lobe) {
             hp.position = position.into();
             hp.normal = facing.into();
             hp.material = tri.material;
@@ -153,6 +153,7 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
         }
         // Mirror, glass, conductor or a coat's reflection: follow the bounce.
         hp.flags |= hit_flags::EYE_CHAINED;
+        let u = key.eye_bounce(depth);
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             return u64::from(depth) + 1;
