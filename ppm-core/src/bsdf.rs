@@ -607,7 +607,8 @@ pub fn conductor(eta: [f32; 3], k: [f32; 3], alpha: f32) -> GpuMaterial {
     }
 }
 
-/// A coated diffuse surface as the compiler makes it (its coat's tables included).
+/// A coated diffuse surface's record, its coat's tables included: what the compiler makes of
+/// one and what the test vectors use.
 pub fn coated(albedo: [f32; 3], ior: f32, alpha: f32, nonlinear: bool) -> GpuMaterial {
     let (internal, transmittance) = coat_tables(ior, alpha);
     GpuMaterial {
@@ -617,6 +618,7 @@ pub fn coated(albedo: [f32; 3], ior: f32, alpha: f32, nonlinear: bool) -> GpuMat
         alpha,
         coat_internal: internal,
         coat_nonlinear: u32::from(nonlinear),
+        // Mitsuba 3's weight: the coat's reflectance (one) against the base's mean.
         coat_specular_weight: 1.0 / (1.0 + albedo.iter().sum::<f32>() / 3.0),
         coat_transmittance: transmittance,
         ..Zeroable::zeroed()

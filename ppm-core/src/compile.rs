@@ -305,21 +305,7 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
             ior,
             alpha,
             nonlinear,
-        } => {
-            let (internal, transmittance) = bsdf::coat_tables(ior, alpha);
-            GpuMaterial {
-                albedo: albedo.into(),
-                kind: material_kind::COATED,
-                ior,
-                alpha,
-                coat_internal: internal,
-                coat_nonlinear: u32::from(nonlinear),
-                // Mitsuba 3's weight: the coat's reflectance (one) against the base's mean.
-                coat_specular_weight: 1.0 / (1.0 + albedo.element_sum() / 3.0),
-                coat_transmittance: transmittance,
-                ..Default::default()
-            }
-        }
+        } => bsdf::coated(albedo.into(), ior, alpha, nonlinear),
         MaterialKind::Light { radiance, albedo } => GpuMaterial {
             albedo: albedo.into(),
             kind: material_kind::DIFFUSE,

@@ -718,11 +718,7 @@ impl<'input> Reader<'_, 'input> {
                     }
                 }
                 let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
-                let ior = if ext_ior == 1.0 {
-                    int_ior
-                } else {
-                    int_ior / ext_ior
-                };
+                let ior = ior_ratio(int_ior, ext_ior);
                 if ior <= 1.0 || !ior.is_finite() {
                     return Err(self.err(
                         node,
@@ -766,11 +762,7 @@ impl<'input> Reader<'_, 'input> {
                     }
                 }
                 let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
-                let ior = if ext_ior == 1.0 {
-                    int_ior
-                } else {
-                    int_ior / ext_ior
-                };
+                let ior = ior_ratio(int_ior, ext_ior);
                 Ok(MaterialKind::Glass { ior, alpha })
             }
             _ => Err(self.err(
@@ -988,4 +980,14 @@ fn describe(node: Node) -> String {
     }
     s.push('>');
     s
+}
+
+/// The index Mitsuba's `int_ior` and `ext_ior` make, `int / ext`; `int` itself in air of
+/// index one, so that it keeps its bits.
+fn ior_ratio(int_ior: f32, ext_ior: f32) -> f32 {
+    if ext_ior == 1.0 {
+        int_ior
+    } else {
+        int_ior / ext_ior
+    }
 }
