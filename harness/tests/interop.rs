@@ -5,6 +5,7 @@
 
 use ppm_core::compile::compile_scene;
 use ppm_core::scene::{MaterialKind, Scene};
+use scenes::file::bands::Colours;
 use scenes::file::{Export, ExportOptions, mitsuba, pbrt};
 use std::path::{Path, PathBuf};
 
@@ -75,7 +76,7 @@ fn round_trip(export: &Export, dir: &Path) -> Scene {
 }
 
 #[test]
-fn every_builtin_scene_round_trips_through_mitsuba_and_pbrt_exactly() {
+fn every_builtin_scene_round_trips_through_mitsuba_and_pbrt_exactly_in_rgb_and_bands() {
     for builtin in scenes::BUILTIN {
         let scene = builtin.load().unwrap();
         let frames: &[u32] = if scene.moves.is_empty() {
@@ -83,11 +84,15 @@ fn every_builtin_scene_round_trips_through_mitsuba_and_pbrt_exactly() {
         } else {
             &[0, 1]
         };
-        for &frame in frames {
+        for (&frame, colours) in frames
+            .iter()
+            .flat_map(|f| [(f, Colours::Rgb), (f, Colours::Bands)])
+        {
             let posed = scene.at_frame(frame);
             let options = ExportOptions {
                 samples_per_pixel: 64,
                 frame,
+                colours: Some(colours),
             };
             for (format, export, posed) in [
                 (
@@ -101,10 +106,10 @@ fn every_builtin_scene_round_trips_through_mitsuba_and_pbrt_exactly() {
                     as_pbrt_holds_it(&posed),
                 ),
             ] {
-                let dir = scratch(&format!("{}-{frame}-{format}", builtin.name));
+                let dir = scratch(&format!("{}-{frame}-{format}-{colours:?}", builtin.name));
                 let back = round_trip(&export, &dir);
                 std::fs::remove_dir_all(&dir).ok();
-                let what = format!("{} frame {frame} via {format}", builtin.name);
+                let what = format!("{} frame {frame} via {format}, {colours:?}", builtin.name);
                 assert_eq!(back.camera, posed.camera, "{what}");
                 let kinds = |s: &Scene| -> Vec<MaterialKind> {
                     s.materials.iter().map(|m| m.kind.clone()).collect()

@@ -342,7 +342,7 @@ fn pbrt_conductors_read_with_pbrt_s_roughness_and_reflectance_rules() {
     for (params, says) in [
         (
             "\"spectrum eta\" \"metal-Pt-eta\" \"spectrum k\" \"metal-Pt-k\"",
-            "sampled spectrum, or a named one other than",
+            "or a named one other than",
         ),
         (
             "\"spectrum eta\" [ 400 1.2 700 0.4 ] \"spectrum k\" \"metal-Au-k\"",

@@ -302,6 +302,7 @@ fn mutated_mitsuba_and_pbrt_files_are_refused_or_render() {
     let options = ExportOptions {
         samples_per_pixel: 16,
         frame: 0,
+        ..ExportOptions::default()
     };
     let dir = scratch("import");
     type Load = fn(&std::path::Path) -> Result<Scene, SceneError>;

@@ -4,6 +4,7 @@ use crate::cli::options::check_frame;
 use anyhow::{Result, bail};
 use clap::ValueEnum;
 use scenes::file::ExportOptions;
+use scenes::file::bands::Colours;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -12,6 +13,17 @@ pub enum ExportFormat {
     Mitsuba,
     /// pbrt-v4.
     Pbrt,
+}
+
+/// How colours are written (`--colours`).
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ColourForm {
+    /// RGB triples: exact for an RGB renderer (Mitsuba 3's scalar_rgb); the default for
+    /// Mitsuba.
+    Rgb,
+    /// Spectra constant in three bands of wavelengths, which a spectral renderer multiplies
+    /// as we multiply RGB (pbrt-v4, Mitsuba 3's scalar_spectral); the default for pbrt.
+    Bands,
 }
 
 #[derive(clap::Args)]
@@ -33,6 +45,9 @@ pub struct ExportArgs {
     /// Image height (default: the scene's).
     #[arg(long)]
     height: Option<u32>,
+    /// How colours are written (default: bands for pbrt, rgb for Mitsuba).
+    #[arg(long, value_enum)]
+    colours: Option<ColourForm>,
     /// Folder to write the scene file and its meshes into.
     #[arg(short, long)]
     output: PathBuf,
@@ -57,6 +72,10 @@ pub fn export(args: ExportArgs) -> Result<()> {
     let options = ExportOptions {
         samples_per_pixel: args.spp,
         frame: args.frame,
+        colours: args.colours.map(|c| match c {
+            ColourForm::Rgb => Colours::Rgb,
+            ColourForm::Bands => Colours::Bands,
+        }),
     };
     let export = match args.format {
         ExportFormat::Mitsuba => scenes::file::mitsuba::export_mitsuba(&scene, &options),

@@ -7,6 +7,7 @@
 //! pixel (0, 0) at the top-left. Our camera's image right is `forward x up`, which is
 //! Mitsuba's `look_at` as written and pbrt's `LookAt` after `Scale -1 1 1`.
 
+use crate::file::bands::Colours;
 use crate::file::image::ImageFiles;
 use crate::file::mesh::{MeshData, write_ply};
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
@@ -26,6 +27,9 @@ pub struct ExportOptions {
     pub samples_per_pixel: u32,
     /// Which frame of the scene the exported scene is (only named in the file's comment).
     pub frame: u32,
+    /// How colours are written; `None` takes the format's own choice: band spectra for
+    /// pbrt-v4, which renders spectrally, RGB for Mitsuba 3, whose `scalar_rgb` is exact.
+    pub colours: Option<Colours>,
 }
 
 impl Default for ExportOptions {
@@ -33,6 +37,7 @@ impl Default for ExportOptions {
         Self {
             samples_per_pixel: 1024,
             frame: 0,
+            colours: None,
         }
     }
 }

@@ -5,6 +5,7 @@
 //! ([`texture_image`]), files written
 //! whole or not at all ([`output`]) and the sizes refused before reading ([`limits`]).
 
+pub mod bands;
 pub mod image;
 pub mod interop;
 pub mod limits;

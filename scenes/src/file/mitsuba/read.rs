@@ -2,6 +2,7 @@
 //!
 //! roxmltree parses the XML: it keeps every element's position, so an error names its line.
 
+use crate::file::bands;
 use crate::file::interop::{
     SceneBuilder, camera_pose, look_at, mesh_triangles, swaps_handedness, unit_cube,
     unit_rectangle, vertical_fov,
@@ -201,17 +202,50 @@ impl<'input> Reader<'_, 'input> {
         }
     }
 
-    /// A colour parameter (`rgb`, a constant `spectrum`, or a `float`), checked to lie in
-    /// [0, max] when `max` is given.
+    /// The colour a `spectrum` of `wavelength:value` pairs holds, when it is a band
+    /// spectrum of `ppm export` (`read`: [`bands::read_reflectance`] or
+    /// [`bands::read_illuminant`]).
+    fn band_colour(
+        &self,
+        node: Node,
+        text: &str,
+        read: fn(&[(f32, f32)]) -> Option<Vec3>,
+    ) -> Result<Vec3> {
+        let points: Option<Vec<(f32, f32)>> = text
+            .split(',')
+            .map(|pair| {
+                let (l, v) = pair.trim().split_once(':')?;
+                Some((l.trim().parse().ok()?, v.trim().parse().ok()?))
+            })
+            .collect();
+        points.as_deref().and_then(read).ok_or_else(|| {
+            self.err(
+                node,
+                format!("a sampled spectrum other than the band spectra ppm export writes is {SUBSET} (RGB only)"),
+            )
+        })
+    }
+
+    /// An emitter's radiance: as [`Self::colour`], or a band spectrum of a light.
+    fn radiance(&self, node: Node) -> Result<Vec3> {
+        match self.attr(node, "value")? {
+            Some(text) if node.tag_name().name() == "spectrum" && text.contains(':') => {
+                self.band_colour(node, &text, bands::read_illuminant)
+            }
+            _ => self.colour(node, None),
+        }
+    }
+
+    /// A colour parameter (`rgb`, a constant `spectrum`, a band spectrum of `ppm export`,
+    /// or a `float`), checked to lie in [0, max] when `max` is given.
     fn colour(&self, node: Node, max: Option<f32>) -> Result<Vec3> {
         let c = match node.tag_name().name() {
+            "spectrum" if self.attr(node, "value")?.is_some_and(|t| t.contains(':')) => {
+                let text = self.required(node, "value")?;
+                self.band_colour(node, &text, bands::read_reflectance)?
+            }
             "rgb" | "spectrum" | "float" => {
                 let text = self.required(node, "value")?;
-                if text.contains(':') {
-                    return Err(
-                        self.err(node, format!("a sampled spectrum is {SUBSET} (RGB only)"))
-                    );
-                }
                 match self.numbers(node, &text)?.as_slice() {
                     [v] => Vec3::splat(*v),
                     [r, g, b] if node.tag_name().name() == "rgb" => Vec3::new(*r, *g, *b),
@@ -896,7 +930,7 @@ impl<'input> Reader<'_, 'input> {
                     let mut radiance = None;
                     for q in p.children().filter(Node::is_element) {
                         if q.attribute("name") == Some("radiance") {
-                            radiance = Some(self.colour(q, None)?);
+                            radiance = Some(self.radiance(q)?);
                         } else {
                             return Err(self.err(q, "unknown parameter of an area emitter"));
                         }

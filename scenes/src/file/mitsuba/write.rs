@@ -1,8 +1,10 @@
 //! Writes a [`Scene`] as a Mitsuba 3 XML scene with PLY meshes beside it.
 
+use crate::file::bands::{self, Colours};
 use crate::file::interop::{
     Export, ExportOptions, clip_range, common_notes, list3, mesh_names, texture_files,
 };
+use glam::Vec3;
 use ppm_core::params::MAX_DEPTH;
 use ppm_core::scene::{MaterialKind, Scene, Texture, TextureFilter};
 use std::fmt::Write;
@@ -21,7 +23,8 @@ use std::fmt::Write;
 /// of `int_ior` our index and `ext_ior` 1 (a rough one's masking term listed as a
 /// conductor's); a light is a `twosided` diffuse surface carrying an `area` emitter, which
 /// emits on the side of the face normal as ours does (`face_normals` keeps Mitsuba from
-/// smoothing the normals).
+/// smoothing the normals). Colours are RGB, exact in Mitsuba's RGB variants, unless
+/// `options.colours` asks for band spectra ([`bands`]) for its spectral variants.
 pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
@@ -60,6 +63,26 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                  {what}"
             ));
         }
+    }
+    let colours = options.colours.unwrap_or(Colours::Rgb);
+    notes.push(match colours {
+        Colours::Rgb => "colours are RGB, exact for Mitsuba's RGB variants (scalar_rgb); a \
+             spectral variant turns them into smooth spectra, whose products are not products \
+             of RGB colours (export with band colours for those)"
+            .into(),
+        Colours::Bands => "colours are written for Mitsuba's spectral variants \
+             (scalar_spectral): spectra constant in three bands of wavelengths, lights shaped \
+             so that each band lights one sRGB channel (scenes/src/file/bands.rs), so that \
+             products of colours come out as ours; an RGB variant would turn them into other \
+             colours"
+            .into(),
+    });
+    if colours == Colours::Bands && scene.materials.iter().any(|m| m.texture.is_some()) {
+        notes.push(
+            "texture images stay RGB, which a spectral variant turns into smooth spectra: a \
+             textured colour's products with other colours are not ours"
+                .into(),
+        );
     }
     let c = &scene.camera;
     let (near, far) = clip_range(scene);
@@ -131,8 +154,8 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                     _ => {
                         let _ = writeln!(
                             w,
-                            "            <rgb name=\"reflectance\" value=\"{}\"/>",
-                            list3(*albedo, ", ")
+                            "            {}",
+                            colour_element("reflectance", *albedo, colours)
                         );
                     }
                 }
@@ -145,8 +168,8 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 let _ = writeln!(w, "            <string name=\"material\" value=\"none\"/>");
                 let _ = writeln!(
                     w,
-                    "            <rgb name=\"specular_reflectance\" value=\"{}\"/>",
-                    list3(*reflectance, ", ")
+                    "            {}",
+                    colour_element("specular_reflectance", *reflectance, colours)
                 );
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
@@ -173,11 +196,7 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                     ("k", k),
                     ("specular_reflectance", reflectance),
                 ] {
-                    let _ = writeln!(
-                        w,
-                        "            <rgb name=\"{name}\" value=\"{}\"/>",
-                        list3(*value, ", ")
-                    );
+                    let _ = writeln!(w, "            {}", colour_element(name, *value, colours));
                 }
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
@@ -210,8 +229,8 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                     _ => {
                         let _ = writeln!(
                             w,
-                            "            <rgb name=\"diffuse_reflectance\" value=\"{}\"/>",
-                            list3(*albedo, ", ")
+                            "            {}",
+                            colour_element("diffuse_reflectance", *albedo, colours)
                         );
                     }
                 }
@@ -249,17 +268,44 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
         );
         if let MaterialKind::Light { radiance, .. } = material.kind {
             let _ = writeln!(w, "        <emitter type=\"area\">");
-            let _ = writeln!(
-                w,
-                "            <rgb name=\"radiance\" value=\"{}\"/>",
-                list3(radiance, ", ")
-            );
+            let _ = writeln!(w, "            {}", radiance_element(radiance, colours));
             let _ = writeln!(w, "        </emitter>");
         }
         let _ = writeln!(w, "    </shape>");
     }
     let _ = writeln!(w, "</scene>");
     Export::of(scene, "xml", x, names, notes)
+}
+
+/// A colour parameter: `<rgb>`, or with band colours a band `<spectrum>`. A grey stays
+/// `<rgb>`, a flat spectrum in every variant (Mitsuba refuses a spectrum that is zero
+/// everywhere).
+fn colour_element(name: &str, colour: Vec3, colours: Colours) -> String {
+    if colours == Colours::Rgb || colour.min_element() == colour.max_element() {
+        return format!("<rgb name=\"{name}\" value=\"{}\"/>", list3(colour, ", "));
+    }
+    spectrum_element(name, &bands::reflectance(colour))
+}
+
+/// An emitter's radiance: `<rgb>`, or with band colours a band `<spectrum>`, which a
+/// spectral variant takes as it is.
+fn radiance_element(radiance: Vec3, colours: Colours) -> String {
+    if colours == Colours::Rgb || radiance == Vec3::ZERO {
+        return format!(
+            "<rgb name=\"radiance\" value=\"{}\"/>",
+            list3(radiance, ", ")
+        );
+    }
+    spectrum_element("radiance", &bands::illuminant(radiance))
+}
+
+/// A `<spectrum>` of (wavelength, value) pairs, which Mitsuba interpolates linearly.
+fn spectrum_element(name: &str, points: &[(f32, f32)]) -> String {
+    let values: Vec<String> = points.iter().map(|(l, v)| format!("{l}:{v}")).collect();
+    format!(
+        "<spectrum name=\"{name}\" value=\"{}\"/>",
+        values.join(", ")
+    )
 }
 
 /// A diffuse reflectance, the parameter `name`, read from `file` (the texture's image,

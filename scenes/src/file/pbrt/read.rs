@@ -1,6 +1,7 @@
 //! Reads the subset of pbrt-v4's scene format that we can render.
 
 use super::lexer::{Param, Token, tokenize};
+use crate::file::bands;
 use crate::file::interop::{
     SceneBuilder, camera_pose, look_at, mesh_triangles, sphere_mesh, swaps_handedness,
 };
@@ -665,24 +666,21 @@ impl Reader<'_> {
                 for p in params {
                     match p.name.as_str() {
                         "reflectance" => reflectance = Some(d.colour(p, Some(1.0))?),
-                        "eta" | "k" if p.ty == "rgb" => {
-                            let v = d.colour(p, None)?;
+                        "eta" | "k" => {
+                            let v = match (p.ty.as_str(), named_metal(&p.values)) {
+                                ("spectrum", Some(v)) => v,
+                                ("spectrum", None)
+                                    if d.band_colour(p, bands::read_reflectance).is_none() =>
+                                {
+                                    return Err(d.param_err(p, format!("a conductor given by a sampled spectrum (other than the band spectra ppm export writes), or a named one other than pbrt-v4's metal-{{Ag,Al,Au,Cu,CuZn}}-{{eta,k}}, is {SUBSET}: give \"rgb eta\" and \"rgb k\", or \"rgb reflectance\"")));
+                                }
+                                _ => d.colour(p, None)?,
+                            };
                             if p.name == "eta" {
                                 eta = Some(v);
                             } else {
                                 k = Some(v);
                             }
-                        }
-                        "eta" | "k" if p.ty == "spectrum" && named_metal(&p.values).is_some() => {
-                            let v = named_metal(&p.values);
-                            if p.name == "eta" {
-                                eta = v;
-                            } else {
-                                k = v;
-                            }
-                        }
-                        "eta" | "k" => {
-                            return Err(d.param_err(p, format!("a conductor given by a sampled spectrum, or a named one other than pbrt-v4's metal-{{Ag,Al,Au,Cu,CuZn}}-{{eta,k}}, is {SUBSET}: give \"rgb eta\" and \"rgb k\", or \"rgb reflectance\"")));
                         }
                         _ if roughness.read(d, p)? => {}
                         _ => return Err(unknown(p)),
@@ -797,8 +795,17 @@ impl Reader<'_> {
             return Err(d.err(format!("{SUBSET}: only \"diffuse\" area lights")));
         }
         let (mut radiance, mut scale) = (Vec3::ONE, 1.0f32);
+        // pbrt divides a light's spectrum by its luminance (an RGB light's by its
+        // illuminant's, which keeps the colour's own).
+        let mut per_luminance = false;
         for p in d.params(1)? {
             match p.name.as_str() {
+                "L" if p.ty == "spectrum" => {
+                    radiance = d.band_colour(&p, bands::read_illuminant).ok_or_else(|| {
+                        d.param_err(&p, format!("a light given by a spectrum other than the band spectra ppm export writes is {SUBSET}: give \"rgb L\""))
+                    })?;
+                    per_luminance = true;
+                }
                 "L" => radiance = d.colour(&p, None)?,
                 "scale" => scale = d.float(&p)?,
                 "twosided" => {
@@ -811,6 +818,13 @@ impl Reader<'_> {
         }
         if scale < 0.0 {
             return Err(d.err(format!("scale = {scale}: must not be negative")));
+        }
+        if per_luminance {
+            let luminance = bands::luminance(radiance);
+            if luminance <= 0.0 {
+                return Err(d.err("a light spectrum of luminance 0: pbrt-v4 divides by it"));
+            }
+            scale /= luminance;
         }
         self.state.emission = Some(if scale == 1.0 {
             radiance
@@ -1230,7 +1244,20 @@ impl Directive<'_> {
         }
     }
 
-    /// An `rgb` colour (or a `float` grey), in [0, max] when `max` is given.
+    /// The colour a `spectrum` of (wavelength, value) pairs holds, when it is a band
+    /// spectrum of `ppm export` (`read`: [`bands::read_reflectance`] or
+    /// [`bands::read_illuminant`]); `None` for any other spectrum.
+    fn band_colour(&self, p: &Param, read: fn(&[(f32, f32)]) -> Option<Vec3>) -> Option<Vec3> {
+        let values = self.floats(p).ok()?;
+        if values.len() % 2 != 0 {
+            return None;
+        }
+        let points: Vec<(f32, f32)> = values.chunks(2).map(|c| (c[0], c[1])).collect();
+        read(&points)
+    }
+
+    /// An `rgb` colour (or a `float` grey, or a band spectrum of `ppm export`), in [0, max]
+    /// when `max` is given.
     fn colour(&self, p: &Param, max: Option<f32>) -> Result<Vec3> {
         let c = match p.ty.as_str() {
             "rgb" | "color" => match self.floats(p)?.as_slice() {
@@ -1238,6 +1265,9 @@ impl Directive<'_> {
                 v => return Err(self.param_err(p, format!("{} values: an rgb has 3", v.len()))),
             },
             "float" => Vec3::splat(self.float(p)?),
+            "spectrum" => self.band_colour(p, bands::read_reflectance).ok_or_else(|| {
+                self.param_err(p, format!("a spectrum other than the band spectra ppm export writes is {SUBSET} (rgb only)"))
+            })?,
             "texture" => return Err(self.param_err(p, format!("a textured parameter is {SUBSET}"))),
             _ => return Err(self.param_err(p, format!("a {} value is {SUBSET} (rgb only)", p.ty))),
         };

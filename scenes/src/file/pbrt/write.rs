@@ -1,5 +1,6 @@
 //! Writes a [`Scene`] as a pbrt-v4 scene file with PLY meshes beside it.
 
+use crate::file::bands::{self, Colours};
 use crate::file::interop::{
     Export, ExportOptions, common_notes, list3, mesh_names, scene_stem, texture_files,
 };
@@ -26,15 +27,33 @@ pub const PBRT_MAX_DEPTH: u32 = 2 * MAX_DEPTH;
 /// 0.01, would darken the base by a few percent); pbrt always meets the base's colour at
 /// every return (our `nonlinear`; listed where ours does not). A
 /// textured diffuse surface, or coated one's base, reads an `imagemap` of its image with the
-/// colour baked in.
+/// colour baked in. Colours are band spectra unless `options.colours` asks for RGB
+/// ([`bands`]: pbrt renders spectrally, and products of its smooth spectra for RGB colours
+/// are not products of the colours), a light's with its luminance as `scale`, which pbrt
+/// divides a light's spectrum by.
 pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
-    notes.push(
-        "pbrt-v4 renders spectrally: RGB reflectances and radiances are turned into spectra \
-         and back, so colours match ours closely but not bit for bit"
+    let colours = options.colours.unwrap_or(Colours::Bands);
+    notes.push(match colours {
+        Colours::Bands => "pbrt-v4 renders spectrally: colours are written as spectra constant \
+             in three bands of wavelengths, lights shaped so that each band lights one sRGB \
+             channel (scenes/src/file/bands.rs), so that products of colours come out as ours \
+             (within 1e-4 by the CIE 1931 observer)"
             .into(),
-    );
+        Colours::Rgb => "pbrt-v4 renders spectrally: RGB reflectances and radiances are turned \
+             into smooth spectra, whose products are not products of RGB colours (our \
+             cornell-box's red wall keeps a sixth of its blue); export with band colours to \
+             avoid it"
+            .into(),
+    });
+    if colours == Colours::Bands && scene.materials.iter().any(|m| m.texture.is_some()) {
+        notes.push(
+            "texture images stay RGB, which pbrt-v4 turns into smooth spectra: a textured \
+             colour's products with other colours are not ours"
+                .into(),
+        );
+    }
     if scene
         .materials
         .iter()
@@ -170,7 +189,7 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         }
         let reflectance = |colour: Vec3| match &texture {
             Some(texture) => format!("\"texture reflectance\" [ {texture} ]"),
-            None => format!("\"rgb reflectance\" [ {} ]", list3(colour, " ")),
+            None => colour_param("reflectance", colour, colours),
         };
         let _ = match &m.kind {
             MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => writeln!(
@@ -180,8 +199,8 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
             ),
             MaterialKind::Mirror { reflectance } => writeln!(
                 w,
-                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] \"rgb reflectance\" [ {} ] \"float roughness\" [ 0 ]",
-                list3(*reflectance, " ")
+                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] {} \"float roughness\" [ 0 ]",
+                colour_param("reflectance", *reflectance, colours)
             ),
             MaterialKind::Glass { ior, alpha } => writeln!(
                 w,
@@ -198,9 +217,9 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
             ),
             MaterialKind::Conductor { eta, k, alpha, .. } => writeln!(
                 w,
-                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] \"rgb eta\" [ {} ] \"rgb k\" [ {} ] \"float roughness\" [ {alpha} ] \"bool remaproughness\" false",
-                list3(*eta, " "),
-                list3(*k, " ")
+                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] {} {} \"float roughness\" [ {alpha} ] \"bool remaproughness\" false",
+                colour_param("eta", *eta, colours),
+                colour_param("k", *k, colours)
             ),
         };
     }
@@ -211,8 +230,8 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         if let MaterialKind::Light { radiance, .. } = material.kind {
             let _ = writeln!(
                 w,
-                "  AreaLightSource \"diffuse\" \"rgb L\" [ {} ]",
-                list3(radiance, " ")
+                "  AreaLightSource \"diffuse\" {}",
+                light_param(radiance, colours)
             );
         }
         let _ = writeln!(
@@ -223,6 +242,37 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         let _ = writeln!(w, "AttributeEnd");
     }
     Export::of(scene, "pbrt", t, names, notes)
+}
+
+/// A colour parameter: an `rgb` triple, or with band colours a band spectrum. A grey
+/// stays `rgb`: pbrt's RGB model makes it a flat spectrum, exact.
+fn colour_param(name: &str, colour: Vec3, colours: Colours) -> String {
+    if colours == Colours::Rgb || colour.min_element() == colour.max_element() {
+        return format!("\"rgb {name}\" [ {} ]", list3(colour, " "));
+    }
+    format!(
+        "\"spectrum {name}\" [ {} ]",
+        spectrum_values(&bands::reflectance(colour))
+    )
+}
+
+/// An area light's radiance: `rgb`, or with band colours a band spectrum scaled by its
+/// luminance, which pbrt divides a light's spectrum by.
+fn light_param(radiance: Vec3, colours: Colours) -> String {
+    if colours == Colours::Rgb || radiance == Vec3::ZERO {
+        return format!("\"rgb L\" [ {} ]", list3(radiance, " "));
+    }
+    format!(
+        "\"spectrum L\" [ {} ] \"float scale\" [ {} ]",
+        spectrum_values(&bands::illuminant(radiance)),
+        bands::luminance(radiance)
+    )
+}
+
+/// Interleaved wavelengths and values, as pbrt's `spectrum` parameters take them.
+fn spectrum_values(points: &[(f32, f32)]) -> String {
+    let values: Vec<String> = points.iter().map(|(l, v)| format!("{l} {v}")).collect();
+    values.join(" ")
 }
 
 /// A pbrt string literal (pbrt strings cannot hold a double quote or a line break).
