@@ -277,27 +277,39 @@ pub struct MoveParams {
 /// ([`MoveParams::correction_for`]).
 pub const ITERATIONS_PER_CORRECTION_PASS: u32 = 64;
 
+/// Iterations since the last move that pay for one pass of a move's correction
+/// ([`MoveParams::correction_for`]): a correction costs at most about a fifth of the
+/// rendering since the move before (a pass traces both poses and gathers twice).
+pub const ITERATIONS_PAYING_A_CORRECTION_PASS: u32 = 8;
+
 impl MoveParams {
-    /// Local mode's correction for a move that keeps `history` iterations (those since the
-    /// last move or the start): ordinary passes' worth of photons per pose (0: none), and
-    /// the disc, in initial radii, they are gathered within at least.
+    /// Local mode's correction for a move after `history` iterations of rendering (what
+    /// the slots it keeps may hold), `since_move` of them since the last move: ordinary
+    /// passes' worth of photons per pose (0: none), and the disc, in initial radii, they
+    /// are gathered within at least.
     ///
     /// A kept slot weighs its history against the correction's noise
-    /// ([`crate::update::history_kept`]), so a long history is worth a large correction and a
-    /// short one, as in a drag that moves at every iteration, a small and quick one: one pass
-    /// per [`ITERATIONS_PER_CORRECTION_PASS`] iterations, at least one (a drag step with a
-    /// quarter or half of one was measurably worse right after the drag:
-    /// docs/error-vs-time.md), at most `correction_passes`. The disc narrows as `passes^(-1/6)`, a density
-    /// estimate's bandwidth rule in two dimensions, trading the correction's noise for its
-    /// blur of the change. Measured after 15 s of warm-up (about 500 iterations) on
-    /// cornell-box, local mode reached restart's error 8 s after the move 4.00 s after it
-    /// with 2 passes within 3 radii, 1.88 s with 8 within 3, 1.26 s with 8 within 2, and
-    /// 1.39 s with 16 within 2 (whose move cost 531 ms).
-    pub fn correction_for(&self, history: u32) -> (f32, f32) {
+    /// ([`crate::update::history_kept`]), so a long history is worth a large correction:
+    /// one pass per [`ITERATIONS_PER_CORRECTION_PASS`] iterations of it. What the moves may
+    /// spend is what the time between them pays for: one pass per
+    /// [`ITERATIONS_PAYING_A_CORRECTION_PASS`] since the last move, so that a drag, which
+    /// moves at every iteration, corrects with one small and quick pass (a quarter or half
+    /// of one was measurably worse right after the drag: docs/error-vs-time.md), and moves a
+    /// second apart after a long history with several. At least one, at most
+    /// `correction_passes`. The disc narrows as `passes^(-1/6)`, a density estimate's
+    /// bandwidth rule in two dimensions, trading the correction's noise for its blur of the
+    /// change. Measured after 15 s of warm-up (about 500 iterations) on cornell-box, local
+    /// mode reached restart's error 8 s after the move 4.00 s after it with 2 passes within
+    /// 3 radii, 1.88 s with 8 within 3, 1.26 s with 8 within 2, and 1.39 s with 16 within 2
+    /// (whose move cost 531 ms).
+    pub fn correction_for(&self, history: u32, since_move: u32) -> (f32, f32) {
         if self.correction_passes == 0 {
             return (0.0, self.correction_radii);
         }
-        let share = (history as f32 / ITERATIONS_PER_CORRECTION_PASS as f32)
+        let worth = history as f32 / ITERATIONS_PER_CORRECTION_PASS as f32;
+        let affordable = since_move as f32 / ITERATIONS_PAYING_A_CORRECTION_PASS as f32;
+        let share = worth
+            .min(affordable)
             .clamp(1.0, self.correction_passes as f32);
         (share, self.correction_radii * share.powf(-1.0 / 6.0))
     }
@@ -359,10 +371,11 @@ mod tests {
     #[test]
     fn a_local_correction_grows_with_the_history_it_keeps_within_its_bounds() {
         let moves = MoveParams::default();
-        let mut last = (0.0, f32::INFINITY);
         let most = moves.correction_passes as f32;
+        // A first move: all of the history came since the last move.
+        let mut last = (0.0, f32::INFINITY);
         for history in [0, 1, 16, 17, 64, 65, 200, 500, 10_000] {
-            let (passes, radii) = moves.correction_for(history);
+            let (passes, radii) = moves.correction_for(history, history);
             assert!((1.0..=most).contains(&passes), "{history}");
             assert!(
                 passes >= last.0 && radii <= last.1,
@@ -370,19 +383,24 @@ mod tests {
             );
             last = (passes, radii);
         }
-        assert_eq!(
-            moves.correction_for(1).0,
-            1.0,
-            "a drag step corrects with one pass"
-        );
-        assert_eq!(moves.correction_for(64).0, 1.0);
+        assert_eq!(moves.correction_for(64, 64).0, 1.0);
         assert_eq!(last.0, most);
+        // Later moves spend what the time since the last one pays for.
+        for history in [1, 64, 500, 10_000] {
+            assert_eq!(
+                moves.correction_for(history, 1).0,
+                1.0,
+                "a drag step corrects with one pass, after {history} iterations"
+            );
+        }
+        assert_eq!(moves.correction_for(500, 32).0, 4.0, "a second apart");
+        assert_eq!(moves.correction_for(128, 32).0, 2.0, "a short history");
         let none = MoveParams {
             correction_passes: 0,
             ..MoveParams::default()
         };
         assert_eq!(
-            none.correction_for(500).0,
+            none.correction_for(500, 500).0,
             0.0,
             "no correction asked, none traced"
         );

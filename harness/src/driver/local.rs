@@ -139,7 +139,9 @@ impl Renderer<'_> {
     ///
     /// [`MoveParams::correction_for`]: ppm_core::params::MoveParams::correction_for
     fn local_correction(&self) -> CorrectionSize {
-        let (share, radii) = self.moves.correction_for(self.counters.steps_since_move);
+        let (share, radii) = self
+            .moves
+            .correction_for(self.counters.iteration, self.counters.steps_since_move);
         // At most `correction_passes` passes' worth, which the options hold under 2^32.
         let photons = (f64::from(share) * f64::from(self.params.photons_per_pass)).round();
         let photons = photons.min(f64::from(u32::MAX)) as u32;
