@@ -133,7 +133,8 @@ pub fn read_illuminant(points: &[(f32, f32)]) -> Option<Vec3> {
 fn read(points: &[(f32, f32)], shape: impl Fn(usize) -> f32) -> Option<Vec3> {
     let ordered = points.windows(2).all(|w| w[0].0 < w[1].0);
     let covers = points.first()?.0 <= LAMBDA_MIN && points.last()?.0 >= LAMBDA_MAX;
-    if !ordered || !covers || points.iter().any(|p| !p.1.is_finite()) {
+    // Colours and radiances are never negative.
+    if !ordered || !covers || points.iter().any(|p| !(p.1.is_finite() && p.1 >= 0.0)) {
         return None;
     }
     let at = |lambda: f32| {
@@ -232,5 +233,7 @@ mod tests {
         let rgb = Vec3::new(0.63, 0.065, 0.05);
         assert_eq!(read_illuminant(&reflectance(rgb)), None);
         assert_eq!(read_reflectance(&reflectance(rgb)[1..]), None);
+        let negative: Vec<_> = illuminant(rgb).iter().map(|&(l, v)| (l, -v)).collect();
+        assert_eq!(read_illuminant(&negative), None);
     }
 }
