@@ -18,6 +18,7 @@
 //! the surface.
 
 mod coat;
+pub mod rough_glass;
 
 pub use coat::{
     NODES as COAT_NODES, arrival, coat_tables, dielectric_fresnel, specular_probability,
@@ -81,11 +82,16 @@ pub fn is_delta(material: &GpuMaterial) -> bool {
 /// Whether [`eval_cos`] and [`pdf`] describe the surface's bounces, so that light samples
 /// can be weighed against them: every non-delta surface but a rough dielectric, whose
 /// Fresnel term depends on the side a path is on, which neither takes. Its bounces report
-/// no density and are counted whole, as a delta surface's (paths reach lights through it by
-/// their own bounce only).
+/// no density; [`rough_glass::eval_cos_pdf`] gives it, side included.
 #[inline]
 pub fn samples_lights(material: &GpuMaterial) -> bool {
     !is_delta(material) && material.kind != material_kind::GLASS
+}
+
+/// Whether the material is a rough dielectric ([`rough_glass`]).
+#[inline]
+pub fn is_rough_glass(material: &GpuMaterial) -> bool {
+    material.kind == material_kind::GLASS && !is_delta(material)
 }
 
 /// Whether photons are stored on the material and eye paths may stop there (its visible

@@ -105,10 +105,11 @@ fn cornell_textured_agrees_with_the_path_tracer_on_every_backend() {
 }
 
 /// Rough glass blocks, lightly and heavily frosted: eye paths and photons refract and
-/// reflect through them by their microfacets, and the path tracer reaches the light through
-/// them by its own bounces (a rough dielectric reports no density to weigh light samples
-/// against). A refraction's radiance scale or Fresnel choice gone wrong, or a microfacet
-/// drawn for the wrong side, fails.
+/// reflect through them by their microfacets; the path tracer also samples the light at
+/// them, weighed against its bounces by their density on either side
+/// (`ppm_core::bsdf::rough_glass`). A refraction's radiance scale or Fresnel choice gone
+/// wrong, a microfacet drawn for the wrong side, or a density that disagrees with the
+/// sampler's, fails.
 #[test]
 fn cornell_glass_agrees_with_the_path_tracer_on_every_backend() {
     agrees_with_the_path_tracer(

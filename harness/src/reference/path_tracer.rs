@@ -6,18 +6,19 @@
 //! light transport is written here on its own (light sampling, multiple importance sampling,
 //! Russian roulette), so a mistake in the passes' transport does not repeat here.
 //! Per sample: a point uniform in the pixel's area (a box filter), then at every surface
-//! with a density (`bsdf::samples_lights`) next-event estimation towards a point on the area
-//! lights and a bounce drawn from the BSDF, the two weighted by the power heuristic; at
-//! mirrors and glass (smooth or rough) the BSDF's bounce alone continues the path (radiance
-//! scaled by `(eta_i / eta_t)^2` through a refraction); emission reached directly or after
-//! such a bounce counts whole.
+//! with a density (`bsdf::samples_lights`, and rough glass, whose density takes the side:
+//! `bsdf::rough_glass`) next-event estimation towards a point on the area lights and a
+//! bounce drawn from the BSDF, the two weighted by the power heuristic; at mirrors and
+//! smooth glass the BSDF's bounce alone continues the path (radiance scaled by
+//! `(eta_i / eta_t)^2` through a refraction); emission reached directly or after such a
+//! bounce counts whole.
 
 use super::sampler::Sampler;
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
-use ppm_core::bsdf::{self, Transport};
+use ppm_core::bsdf::{self, Transport, rough_glass};
 use ppm_core::compile::camera_ray;
-use ppm_core::layout::{GpuCamera, GpuLight, GpuMaterial, NO_MATERIAL, material_kind};
+use ppm_core::layout::{GpuCamera, GpuLight, NO_MATERIAL, material_kind};
 use ppm_core::sampling::{sample_cdf, uniform_triangle};
 
 /// Bounces after which a path stops. Russian roulette ends paths long before in any scene
@@ -109,9 +110,21 @@ impl PathTracer<'_> {
             {
                 break;
             }
+            let wo = -dir;
             if bsdf::samples_lights(material) {
-                let x = position + facing * self.ray_epsilon;
-                radiance += throughput * self.light_sample(x, material, facing, -dir, &u);
+                let eval = |w| {
+                    (
+                        bsdf::eval_cos(material, facing, wo, w),
+                        bsdf::pdf(material, facing, wo, w),
+                    )
+                };
+                radiance += throughput * self.light_sample(position, facing, eval, &u);
+            } else if bsdf::is_rough_glass(material) {
+                let eval = |w| {
+                    let (f_cos, pdf) = rough_glass::eval_cos_pdf(material, facing, front, wo, w);
+                    (Vec3::splat(f_cos), pdf)
+                };
+                radiance += throughput * self.light_sample(position, facing, eval, &u);
             }
             // The lobe is picked by the light choice's number: a coated surface draws its
             // base's direction from both numbers of `direction`, which must not also pick
@@ -135,9 +148,15 @@ impl PathTracer<'_> {
                 break;
             }
             throughput *= scattered.weight;
-            // A delta lobe (a coat's smooth reflection too) and a rough dielectric's bounce
-            // report no density: light sampling cannot weigh against them.
-            bsdf_pdf = (scattered.pdf > 0.0).then_some(scattered.pdf);
+            // A delta lobe (a coat's smooth reflection too) reports no density: light
+            // sampling cannot weigh against it. A rough dielectric's bounce reports none
+            // either, since its density takes the side: asked here.
+            let pdf = if bsdf::is_rough_glass(material) {
+                rough_glass::eval_cos_pdf(material, facing, front, wo, scattered.dir).1
+            } else {
+                scattered.pdf
+            };
+            bsdf_pdf = (pdf > 0.0).then_some(pdf);
             if bounce >= ROULETTE_AFTER {
                 let survive = throughput.max_element().min(0.95);
                 if u.roulette >= survive {
@@ -149,9 +168,18 @@ impl PathTracer<'_> {
         radiance
     }
 
-    /// Light reflected towards `wo`, `f Le cos_x cos_l / (d^2 p_area)`, from one point on the
-    /// lights, weighted against the BSDF's bounce by the power heuristic.
-    fn light_sample(&self, x: Vec3, material: &GpuMaterial, n: Vec3, wo: Vec3, u: &Bounce) -> Vec3 {
+    /// Light scattered towards the eye from one point on the lights, `f cos_x Le cos_l /
+    /// (d^2 p_area)`, weighted against the BSDF's bounce by the power heuristic. `eval`
+    /// gives the surface's `f cos_x` and density for a direction to the light; the shadow ray
+    /// leaves from the side of the surface that direction is on (`facing`'s, unless the
+    /// surface lets light through).
+    fn light_sample(
+        &self,
+        position: Vec3,
+        facing: Vec3,
+        eval: impl Fn(Vec3) -> (Vec3, f32),
+        u: &Bounce,
+    ) -> Vec3 {
         let lights = &self.scene.lights;
         if lights.is_empty() {
             return Vec3::ZERO;
@@ -159,24 +187,29 @@ impl PathTracer<'_> {
         let light = &lights[sample_cdf(|i| lights[i].cdf, lights.len(), u.light)];
         let (b1, b2) = uniform_triangle(u.light_point.0, u.light_point.1);
         let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
-        let to_light = y - x;
-        let dist2 = to_light.length_squared();
-        let dist = dist2.sqrt();
+        let towards = |x: Vec3| {
+            let to_light = y - x;
+            let dist = to_light.length();
+            (x, to_light / dist, dist)
+        };
+        let (mut x, mut w, mut dist) = towards(position + facing * self.ray_epsilon);
+        if facing.dot(w) < 0.0 {
+            (x, w, dist) = towards(position - facing * self.ray_epsilon);
+        }
         if dist <= 0.0 || dist.is_nan() {
             return Vec3::ZERO;
         }
-        let w = to_light / dist;
-        let (cos_x, cos_l) = (n.dot(w), -Vec3::from(light.normal).dot(w));
-        if cos_x <= 0.0 || cos_l <= 0.0 {
+        let cos_l = -Vec3::from(light.normal).dot(w);
+        if cos_l <= 0.0 {
             return Vec3::ZERO;
         }
-        if self.scene.occluded(x, w, dist - 2.0 * self.ray_epsilon) {
+        let (f_cos, pb) = eval(w);
+        if f_cos.max_element() <= 0.0 || self.scene.occluded(x, w, dist - 2.0 * self.ray_epsilon) {
             return Vec3::ZERO;
         }
         let pl = self.light_pdf(light, dist, cos_l);
         let le = Vec3::from(self.scene.materials[light.material as usize].emission);
-        let f_cos = bsdf::eval_cos(material, n, wo, w);
-        f_cos * le / pl * power_heuristic(pl, bsdf::pdf(material, n, wo, w))
+        f_cos * le / pl * power_heuristic(pl, pb)
     }
 
     /// Solid-angle density with which light sampling picks a point of `light` seen at
