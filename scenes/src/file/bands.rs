@@ -16,6 +16,7 @@
 //! where the colours do.
 
 use glam::Vec3;
+use ppm_core::scene::Scene;
 
 /// How an export writes its colours.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -24,6 +25,33 @@ pub enum Colours {
     Rgb,
     /// Band spectra (this module): for a spectral renderer.
     Bands,
+}
+
+impl Colours {
+    /// The band spectrum an export writes for a reflectance, or `None` where it writes RGB:
+    /// with RGB colours, and for a grey, which both renderers make a flat spectrum, exact
+    /// (Mitsuba also refuses a spectrum that is zero everywhere).
+    pub fn reflectance(self, colour: Vec3) -> Option<Vec<(f32, f32)>> {
+        (self == Colours::Bands && colour.min_element() != colour.max_element())
+            .then(|| reflectance(colour))
+    }
+
+    /// The band spectrum an export writes for a light's radiance, or `None` where it writes
+    /// RGB: with RGB colours, and for no light at all.
+    pub fn illuminant(self, radiance: Vec3) -> Option<Vec<(f32, f32)>> {
+        (self == Colours::Bands && radiance != Vec3::ZERO).then(|| illuminant(radiance))
+    }
+
+    /// The note an export's header carries where band colours meet texture images, which
+    /// stay RGB and which `renderer` turns into smooth spectra.
+    pub fn texture_note(self, scene: &Scene, renderer: &str) -> Option<String> {
+        (self == Colours::Bands && scene.materials.iter().any(|m| m.texture.is_some())).then(|| {
+            format!(
+                "texture images stay RGB, which {renderer} turns into smooth spectra: a \
+                 textured colour's products with other colours are not ours"
+            )
+        })
+    }
 }
 
 /// Number of cells, each 5 nm but the first and last (2.5 nm).

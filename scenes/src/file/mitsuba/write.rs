@@ -1,6 +1,6 @@
 //! Writes a [`Scene`] as a Mitsuba 3 XML scene with PLY meshes beside it.
 
-use crate::file::bands::{self, Colours};
+use crate::file::bands::Colours;
 use crate::file::interop::{
     Export, ExportOptions, clip_range, common_notes, list3, mesh_names, texture_files,
 };
@@ -24,7 +24,7 @@ use std::fmt::Write;
 /// conductor's); a light is a `twosided` diffuse surface carrying an `area` emitter, which
 /// emits on the side of the face normal as ours does (`face_normals` keeps Mitsuba from
 /// smoothing the normals). Colours are RGB, exact in Mitsuba's RGB variants, unless
-/// `options.colours` asks for band spectra ([`bands`]) for its spectral variants.
+/// `options.colours` asks for band spectra ([`bands`](crate::file::bands)) for its spectral variants.
 pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
     let mut notes = common_notes(scene, options);
@@ -77,13 +77,7 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
              colours"
             .into(),
     });
-    if colours == Colours::Bands && scene.materials.iter().any(|m| m.texture.is_some()) {
-        notes.push(
-            "texture images stay RGB, which a spectral variant turns into smooth spectra: a \
-             textured colour's products with other colours are not ours"
-                .into(),
-        );
-    }
+    notes.extend(colours.texture_note(scene, "a spectral variant"));
     let c = &scene.camera;
     let (near, far) = clip_range(scene);
     let mut x = String::new();
@@ -281,22 +275,22 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
 /// `<rgb>`, a flat spectrum in every variant (Mitsuba refuses a spectrum that is zero
 /// everywhere).
 fn colour_element(name: &str, colour: Vec3, colours: Colours) -> String {
-    if colours == Colours::Rgb || colour.min_element() == colour.max_element() {
-        return format!("<rgb name=\"{name}\" value=\"{}\"/>", list3(colour, ", "));
+    match colours.reflectance(colour) {
+        Some(spectrum) => spectrum_element(name, &spectrum),
+        None => format!("<rgb name=\"{name}\" value=\"{}\"/>", list3(colour, ", ")),
     }
-    spectrum_element(name, &bands::reflectance(colour))
 }
 
 /// An emitter's radiance: `<rgb>`, or with band colours a band `<spectrum>`, which a
 /// spectral variant takes as it is.
 fn radiance_element(radiance: Vec3, colours: Colours) -> String {
-    if colours == Colours::Rgb || radiance == Vec3::ZERO {
-        return format!(
+    match colours.illuminant(radiance) {
+        Some(spectrum) => spectrum_element("radiance", &spectrum),
+        None => format!(
             "<rgb name=\"radiance\" value=\"{}\"/>",
             list3(radiance, ", ")
-        );
+        ),
     }
-    spectrum_element("radiance", &bands::illuminant(radiance))
 }
 
 /// A `<spectrum>` of (wavelength, value) pairs, which Mitsuba interpolates linearly.

@@ -47,13 +47,7 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
              avoid it"
             .into(),
     });
-    if colours == Colours::Bands && scene.materials.iter().any(|m| m.texture.is_some()) {
-        notes.push(
-            "texture images stay RGB, which pbrt-v4 turns into smooth spectra: a textured \
-             colour's products with other colours are not ours"
-                .into(),
-        );
-    }
+    notes.extend(colours.texture_note(scene, "pbrt-v4"));
     if scene
         .materials
         .iter()
@@ -247,26 +241,23 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
 /// A colour parameter: an `rgb` triple, or with band colours a band spectrum. A grey
 /// stays `rgb`: pbrt's RGB model makes it a flat spectrum, exact.
 fn colour_param(name: &str, colour: Vec3, colours: Colours) -> String {
-    if colours == Colours::Rgb || colour.min_element() == colour.max_element() {
-        return format!("\"rgb {name}\" [ {} ]", list3(colour, " "));
+    match colours.reflectance(colour) {
+        Some(spectrum) => format!("\"spectrum {name}\" [ {} ]", spectrum_values(&spectrum)),
+        None => format!("\"rgb {name}\" [ {} ]", list3(colour, " ")),
     }
-    format!(
-        "\"spectrum {name}\" [ {} ]",
-        spectrum_values(&bands::reflectance(colour))
-    )
 }
 
 /// An area light's radiance: `rgb`, or with band colours a band spectrum scaled by its
 /// luminance, which pbrt divides a light's spectrum by.
 fn light_param(radiance: Vec3, colours: Colours) -> String {
-    if colours == Colours::Rgb || radiance == Vec3::ZERO {
-        return format!("\"rgb L\" [ {} ]", list3(radiance, " "));
+    match colours.illuminant(radiance) {
+        Some(spectrum) => format!(
+            "\"spectrum L\" [ {} ] \"float scale\" [ {} ]",
+            spectrum_values(&spectrum),
+            bands::luminance(radiance)
+        ),
+        None => format!("\"rgb L\" [ {} ]", list3(radiance, " ")),
     }
-    format!(
-        "\"spectrum L\" [ {} ] \"float scale\" [ {} ]",
-        spectrum_values(&bands::illuminant(radiance)),
-        bands::luminance(radiance)
-    )
 }
 
 /// Interleaved wavelengths and values, as pbrt's `spectrum` parameters take them.
