@@ -16,7 +16,7 @@ use thiserror::Error;
 
 /// Changes whenever the path tracer's output for the same inputs changes, so that stale
 /// cached references are not reused.
-pub const PATH_TRACER_VERSION: u32 = 3;
+pub const PATH_TRACER_VERSION: u32 = 4;
 
 /// Why a cached reference could not be had.
 #[derive(Debug, Error)]

@@ -45,9 +45,9 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
         (
             "roughplastic",
             |k| matches!(k, MaterialKind::Coated { alpha, .. } if *alpha > 0.0),
-            "a rough coat's reflection comes out a little darker there; its coat also lets \
-             less light through at grazing angles than ours (docs/materials.md, \"Coated \
-             diffuse\")",
+            "a rough coat's reflection comes out a little darker there, and so does the \
+             light through it (1-2% on cornell-coated's rough block, docs/materials.md, \
+             \"Coated diffuse\")",
         ),
         (
             "roughdielectric",
