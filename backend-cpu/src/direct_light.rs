@@ -8,7 +8,7 @@ use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::bsdf;
 use ppm_core::layout::{
-    DirectLightParams, GpuMaterial, HitPoint, NO_MATERIAL, direct_accumulate, hit_flags,
+    ChainLight, DirectLightParams, GpuMaterial, HitPoint, NO_MATERIAL, direct_accumulate, hit_flags,
 };
 use ppm_core::passes::DirectStats;
 use ppm_core::rng::{PassKind, StratifiedStream};
@@ -46,11 +46,13 @@ pub const RAYS_PER_SAMPLE: u32 = 2;
 
 /// Adds one iteration's direct light to every slot's direct sum (or replaces the sum with it,
 /// `params.accumulate == 0`): emission seen plus reflected light from the area lights, times
-/// the eye path's throughput, zero where the slot has no visible point this iteration.
+/// the eye path's throughput, zero where the slot has no visible point this iteration; plus
+/// what the eye path's glossy bounces found, where `chain` holds it (a glossy scene).
 pub fn direct_light_main(
     params: &DirectLightParams,
     scene: &SceneData,
     hit_points: &mut [HitPoint],
+    chain: &[ChainLight],
 ) -> DirectStats {
     let rays = hit_points
         .par_iter_mut()
@@ -60,11 +62,8 @@ pub fn direct_light_main(
             if hp.flags & hit_flags::RESTING != 0 {
                 return 0;
             }
-            let (estimate, rays) = if hp.is_valid() {
-                slot_direct(params, scene, hp, slot as u32)
-            } else {
-                (Vec3::ZERO, 0)
-            };
+            let chain = chain.get(slot).unwrap_or(&ChainLight::NONE);
+            let (estimate, rays) = slot_direct(params, scene, hp, chain, slot as u32);
             if params.accumulate == direct_accumulate::ADD {
                 hp.direct = (Vec3::from(hp.direct) + estimate).into();
                 hp.iterations += 1;
@@ -78,18 +77,24 @@ pub fn direct_light_main(
     DirectStats { rays }
 }
 
-/// One visible point's direct radiance towards the eye, throughput included, and the rays
-/// traced for it; `slot` keys its random numbers. Local mode's direct-light correction
-/// calls it on the host at visible points of its own.
+/// One eye path's direct radiance towards the eye, throughput included: what its glossy
+/// bounces found (`chain`) and, where it has a visible point, the light seen there; and the
+/// rays traced for it; `slot` keys its random numbers. Local mode's direct-light correction
+/// calls it on the host for eye paths of its own.
 pub fn slot_direct(
     params: &DirectLightParams,
     scene: &SceneData,
     hp: &HitPoint,
+    chain: &ChainLight,
     slot: u32,
 ) -> (Vec3, u64) {
+    let found = Vec3::from(chain.radiance);
+    if !hp.is_valid() {
+        return (found, 0);
+    }
     let material = &scene.materials[hp.material as usize];
     let mut direct = if hp.flags & hit_flags::FRONT != 0 {
-        Vec3::from(material.emission)
+        Vec3::from(material.emission) * chain.emission_weight
     } else {
         Vec3::ZERO
     };
@@ -101,7 +106,7 @@ pub fn slot_direct(
         direct += estimate_reflected(params, scene, material, hp, slot);
         rays = u64::from(params.samples * RAYS_PER_SAMPLE);
     }
-    (Vec3::from(hp.throughput) * direct, rays)
+    (Vec3::from(hp.throughput) * direct + found, rays)
 }
 
 /// Light from the lights reflected towards the eye, `integral of f Le cos_x`: per sample,

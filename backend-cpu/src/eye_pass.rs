@@ -1,58 +1,66 @@
 //! Eye pass (docs/algorithm.md 1.1): each slot's visible point, where its eye path first meets a
 //! non-specular surface, following mirror and glass chains iteratively.
 
+use crate::chain_light::{ChainTracker, GlossyVertex};
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::camera_ray;
 use ppm_core::layout::{
-    EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, SlotBounds, eye_flags, hit_flags,
+    ChainLight, EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, SlotBounds, eye_flags, hit_flags,
 };
 use ppm_core::passes::EyeStats;
 use ppm_core::rng::{PassKind, StreamKey, stratified_pair};
+use rayon::iter::Either;
 use rayon::prelude::*;
 
 /// Writes the visible point of every slot of `hit_points` (`width * height * spp` slots,
 /// slot = pixel * spp + sample), starting the slots fresh or keeping their statistics as
-/// `params.flags` says; with [`eye_flags::RECORD_BOUNDS`], extends each slot's `bounds`.
+/// `params.flags` says; with [`eye_flags::RECORD_BOUNDS`], extends each slot's `bounds`;
+/// with `chain` (a scene with glossy surfaces), writes the light its glossy bounces found.
 pub fn eye_pass_main(
     params: &EyePassParams,
     camera: &GpuCamera,
     scene: &SceneData,
     hit_points: &mut [HitPoint],
     bounds: Option<&mut [SlotBounds]>,
+    chain: Option<&mut [ChainLight]>,
 ) -> EyeStats {
-    let trace = |slot: usize, hp: &mut HitPoint| {
-        let mut path = PathBounds::NOTHING;
-        let rays = trace_eye_path(params, camera, scene, slot as u32, hp, &mut path);
-        (rays, u64::from(hp.is_valid()), path)
-    };
+    let slots = hit_points.len();
     let record = params.flags & eye_flags::RECORD_BOUNDS != 0;
-    let (rays, visible) = match bounds {
-        Some(bounds) if record => hit_points
-            .par_iter_mut()
-            .zip(bounds.par_iter_mut())
-            .enumerate()
-            .with_min_len(256)
-            .map(|(slot, (hp, b))| {
-                let (rays, visible, path) = trace(slot, hp);
+    let bounds = if record { bounds } else { None };
+    let (rays, visible) = hit_points
+        .par_iter_mut()
+        .zip(each_or_none(bounds, slots))
+        .zip(each_or_none(chain, slots))
+        .enumerate()
+        .with_min_len(256)
+        .map(|(slot, ((hp, b), c))| {
+            let mut path = PathBounds::NOTHING;
+            let (rays, found) = trace_eye_path(params, camera, scene, slot as u32, hp, &mut path);
+            if let Some(b) = b {
                 *b = extended(*b, hp, path);
-                (rays, visible)
-            })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
-        _ => hit_points
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(256)
-            .map(|(slot, hp)| {
-                let (rays, visible, _) = trace(slot, hp);
-                (rays, visible)
-            })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1)),
-    };
+            }
+            if let (Some(c), Some(found)) = (c, found) {
+                *c = found;
+            }
+            (rays, u64::from(hp.is_valid()))
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     EyeStats {
         rays,
         hit_points: visible,
+    }
+}
+
+/// Each element of `slice` as `Some`, or `None` `len` times.
+fn each_or_none<T: Send>(
+    slice: Option<&mut [T]>,
+    len: usize,
+) -> impl IndexedParallelIterator<Item = Option<&mut T>> {
+    match slice {
+        Some(slice) => Either::Left(slice.par_iter_mut().map(Some)),
+        None => Either::Right((0..len).into_par_iter().map(|_| None)),
     }
 }
 
@@ -76,7 +84,8 @@ fn extended(bounds: SlotBounds, hp: &HitPoint, path: PathBounds) -> SlotBounds {
 /// The vertices of one eye path after the camera, as a box.
 type PathBounds = SlotBounds;
 
-/// Traces one slot's eye path and writes its visible point; returns the rays traced.
+/// Traces one slot's eye path and writes its visible point; returns the rays traced and
+/// what its glossy bounces found (`None` for a slot that rests).
 fn trace_eye_path(
     params: &EyePassParams,
     camera: &GpuCamera,
@@ -84,12 +93,12 @@ fn trace_eye_path(
     slot: u32,
     out: &mut HitPoint,
     vertices: &mut PathBounds,
-) -> u64 {
+) -> (u64, Option<ChainLight>) {
     let pixel = slot / params.spp;
     let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
     if keep && params.flags & eye_flags::FOCUS != 0 && out.iterations >= params.rest_at {
         out.flags |= hit_flags::RESTING;
-        return 0;
+        return (0, None);
     }
     // Kept slots continue their own sequence (see direct_light::sequence_start); a re-trace
     // repeats the stratum it last used.
@@ -132,9 +141,15 @@ fn trace_eye_path(
     let mut dir = camera_ray(camera, px, py);
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
+    let mut chain = ChainTracker::default();
+    let sample_lights = params.flags & eye_flags::SAMPLE_LIGHTS != 0;
+    let end = |depth: u32, chain: &ChainTracker, stop| {
+        let rays = u64::from(depth) + 1 + chain.rays();
+        (rays, Some(chain.finish(scene, stop)))
+    };
     for depth in 0..=params.max_depth {
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
-            return u64::from(depth) + 1;
+            return end(depth, &chain, None);
         };
         let tri = &scene.triangles[hit.triangle as usize];
         out.eye_met |= tri.group;
@@ -159,19 +174,31 @@ fn trace_eye_path(
             out.flags |= hit_flags::VALID
                 | if front { hit_flags::FRONT } else { 0 }
                 | (tri.object << hit_flags::OBJECT_SHIFT);
-            return u64::from(depth) + 1;
+            return end(depth, &chain, Some((&hit, dir)));
         }
         out.flags |= hit_flags::EYE_CHAINED;
+        let at = GlossyVertex {
+            position,
+            facing,
+            wo: -dir,
+            depth,
+        };
+        if sample_lights {
+            chain.before_bounce(scene, material, &at, throughput, &key, params.ray_epsilon);
+        }
         let u = key.eye_bounce(depth);
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             // A glossy direction below the surface: the path ends without a visible point.
-            return u64::from(depth) + 1;
+            return end(depth, &chain, None);
+        }
+        if sample_lights {
+            chain.after_bounce(material, &at, bounce.dir);
         }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
         origin = position + side * params.ray_epsilon;
     }
-    u64::from(params.max_depth) + 1
+    end(params.max_depth, &chain, None)
 }

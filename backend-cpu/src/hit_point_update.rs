@@ -5,7 +5,7 @@ use crate::eye_pass::eye_pass_main;
 use crate::gather_pass::Pending;
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::layout::{EyePassParams, GpuCamera, HitPoint, eye_flags, hit_flags};
+use ppm_core::layout::{ChainLight, EyePassParams, GpuCamera, HitPoint, eye_flags, hit_flags};
 use ppm_core::passes::UpdateStats;
 use rayon::prelude::*;
 
@@ -15,7 +15,7 @@ pub fn object_of(hp: &HitPoint) -> u32 {
 }
 
 /// Compares a fresh eye pass with `hit_points` and resets the slots that changed (and their
-/// pending region photons).
+/// pending region photons); `chain` takes what the fresh paths' glossy bounces found.
 pub fn update_hit_points_main(
     params: &EyePassParams,
     camera: &GpuCamera,
@@ -23,6 +23,7 @@ pub fn update_hit_points_main(
     epsilon: f32,
     hit_points: &mut [HitPoint],
     pending: &mut [Pending],
+    chain: Option<&mut [ChainLight]>,
 ) -> UpdateStats {
     // Each slot's last sample again: the re-trace reads the stratum from the slot's copy.
     let mut fresh = hit_points.to_vec();
@@ -31,7 +32,7 @@ pub fn update_hit_points_main(
             | eye_flags::RETRACE,
         ..*params
     };
-    let eye = eye_pass_main(&fresh_params, camera, scene, &mut fresh, None);
+    let eye = eye_pass_main(&fresh_params, camera, scene, &mut fresh, None, chain);
     let updated: u64 = hit_points
         .par_iter_mut()
         .zip(&fresh)

@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+pub mod chain_light;
 pub mod direct_light;
 mod eye_pass;
 mod gather_pass;
@@ -25,8 +26,8 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon, PhotonPassParams,
-    ResolveParams, SlotBounds,
+    ChainLight, DirectLightParams, EyePassParams, GatherParams, GpuCamera, HitPoint, Photon,
+    PhotonPassParams, ResolveParams, SlotBounds,
 };
 use ppm_core::layout::{eye_flags, hit_flags, photon_flags};
 use ppm_core::passes::{
@@ -46,6 +47,11 @@ pub struct CpuBackend {
     hit_points: Vec<HitPoint>,
     /// The box of each slot's eye-path vertices (eye passes that record it).
     slot_bounds: Vec<SlotBounds>,
+    /// What each slot's eye path found at glossy bounces; empty for a scene without glossy
+    /// surfaces.
+    chain_light: Vec<ChainLight>,
+    /// The loaded scene has glossy surfaces (`SceneFeatures::glossy`).
+    glossy: bool,
     /// Squared radius new hit points start with (from the last eye pass).
     r2_initial: f32,
     photons: Vec<Photon>,
@@ -133,8 +139,10 @@ fn loaded<'a>(
 impl SceneUpload for CpuBackend {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.scene = Some((SceneData::new(scene), scene.camera));
+        self.glossy = scene.features.glossy;
         self.hit_points.clear();
         self.slot_bounds.clear();
+        self.chain_light.clear();
         self.photons.clear();
         self.weights = None;
         self.grid = PhotonIndex::NoPass;
@@ -199,12 +207,15 @@ impl EyePass for CpuBackend {
         let mut hit_points = std::mem::take(&mut self.hit_points);
         hit_points.resize(slots, HitPoint::default());
         self.slot_bounds.resize(slots, SlotBounds::NOTHING);
+        self.chain_light
+            .resize(if self.glossy { slots } else { 0 }, ChainLight::NONE);
         let stats = eye_pass::eye_pass_main(
             params,
             camera,
             scene,
             &mut hit_points,
             Some(&mut self.slot_bounds),
+            self.glossy.then_some(&mut self.chain_light[..]),
         );
         self.hit_points = hit_points;
         if !keep {
@@ -219,7 +230,8 @@ impl EyePass for CpuBackend {
 impl DirectLight for CpuBackend {
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "direct light")?;
-        let stats = direct_light::direct_light_main(params, scene, &mut self.hit_points);
+        let stats =
+            direct_light::direct_light_main(params, scene, &mut self.hit_points, &self.chain_light);
         check_slots("direct light", &self.hit_points)?;
         Ok(stats)
     }
@@ -291,6 +303,7 @@ impl DynamicBackend for CpuBackend {
             epsilon,
             &mut self.hit_points,
             &mut self.pending,
+            (!self.chain_light.is_empty()).then_some(&mut self.chain_light[..]),
         );
         self.r2_initial = params.r2_initial;
         check_slots("hit-point update", &self.hit_points)?;

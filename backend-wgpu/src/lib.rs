@@ -29,9 +29,9 @@ use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
 use layout::UpdateParams;
 use passes::{
-    CheckKernel, DirectLightKernel, EyePassKernel, GatherInputs, GatherKernel, GatherStage,
-    HitPointUpdateKernel, LandingPathsKernel, PhotonPassKernel, PhotonTargets, ResolveKernel,
-    RngVectorsKernel, Slots,
+    CheckKernel, DirectLightKernel, EyeOutputs, EyePassKernel, GatherInputs, GatherKernel,
+    GatherStage, HitPointUpdateKernel, LandingPathsKernel, PhotonPassKernel, PhotonTargets,
+    ResolveKernel, RngVectorsKernel, Slots,
 };
 use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::bsdf::{BsdfCase, BsdfOutcome};
@@ -40,7 +40,7 @@ use ppm_core::compile::{CompiledScene, SceneFeatures};
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
     ResolveParams, SlotBounds, emission_kind, eye_flags, gather_kind, photon_flags,
 };
 use ppm_core::passes::{
@@ -103,6 +103,9 @@ pub struct WgpuBackend {
     hit_points: Option<(wgpu::Buffer, u32)>,
     /// Per hit point: the box of its eye paths' vertices (`slot_bounds` in eye_pass.wgsl).
     slot_bounds: Option<wgpu::Buffer>,
+    /// Per hit point in a scene with glossy surfaces, else one element: what its eye path
+    /// found at glossy bounces (`chain_light` in eye_pass.wgsl).
+    chain_light: Option<wgpu::Buffer>,
     /// Per hit point: photons found, their power and weight so far in the current pass.
     accumulated: Option<wgpu::Buffer>,
     /// Per hit point: deferred region photons (the moves' deferred passes), allocated when a
@@ -175,6 +178,7 @@ impl WgpuBackend {
             scene: None,
             hit_points: None,
             slot_bounds: None,
+            chain_light: None,
             accumulated: None,
             pending: None,
             placeholder,
@@ -370,6 +374,7 @@ impl SceneUpload for WgpuBackend {
         self.features = Some(scene.features);
         self.hit_points = None;
         self.slot_bounds = None;
+        self.chain_light = None;
         self.accumulated = None;
         self.pending = None;
         self.map = None;
@@ -401,8 +406,15 @@ impl EyePass for WgpuBackend {
         if !keep || self.slot_bounds.is_none() {
             let bytes = slots64 * size_of::<SlotBounds>() as u64;
             self.slot_bounds = Some(storage_zeroed(&self.ctx, "slot bounds", bytes)?);
+            let glossy = self.features.is_some_and(|f| f.glossy);
+            let chained = if glossy { slots64 } else { 1 };
+            let bytes = chained * size_of::<ChainLight>() as u64;
+            self.chain_light = Some(storage_zeroed(&self.ctx, "chain light", bytes)?);
         }
-        let bounds = self.slot_bounds.as_ref().expect("allocated above");
+        let outputs = EyeOutputs {
+            bounds: self.slot_bounds.as_ref().expect("allocated above"),
+            chain_light: self.chain_light.as_ref().expect("allocated above"),
+        };
         let scene = self.scene("eye")?;
         let targets = Slots {
             hit_points: &hit_points,
@@ -413,7 +425,7 @@ impl EyePass for WgpuBackend {
         let counters = self.run("eye", |encoder| {
             self.kernels
                 .eye
-                .record(&self.ctx, encoder, params, scene, &targets, bounds, spec);
+                .record(&self.ctx, encoder, params, scene, &targets, &outputs, spec);
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;
@@ -441,10 +453,14 @@ impl DirectLight for WgpuBackend {
             counters: &self.counters,
             count: *slots,
         };
+        let chain_light = self.chain_light.as_ref().ok_or(BackendError::OutOfOrder {
+            pass: "direct light",
+            needs: "an eye pass",
+        })?;
         let counters = self.run("direct light", |encoder| {
             self.kernels
                 .direct
-                .record(&self.ctx, encoder, params, scene, &targets);
+                .record(&self.ctx, encoder, params, scene, &targets, chain_light);
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;
@@ -712,10 +728,16 @@ impl DynamicBackend for WgpuBackend {
                 | eye_flags::RETRACE,
             ..*params
         };
-        let bounds = self.slot_bounds.as_ref().ok_or(BackendError::OutOfOrder {
-            pass: "hit-point update",
-            needs: "an eye pass",
-        })?;
+        let (Some(bounds), Some(chain_light)) = (&self.slot_bounds, &self.chain_light) else {
+            return Err(BackendError::OutOfOrder {
+                pass: "hit-point update",
+                needs: "an eye pass",
+            });
+        };
+        let outputs = EyeOutputs {
+            bounds,
+            chain_light,
+        };
         let spec = self.specialisation(false);
         let eye = self.run("hit-point update eye", |encoder| {
             // Each slot's last sample again: the re-trace reads the stratum from the copy.
@@ -726,7 +748,7 @@ impl DynamicBackend for WgpuBackend {
                 &fresh_params,
                 scene,
                 &eye_targets,
-                bounds,
+                &outputs,
                 spec,
             );
             Ok(())

@@ -51,7 +51,7 @@ impl EyePassKernel {
         };
         self.variants[spec.index()].get_or_init(|| {
             let slots = [
-                Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Read,
+                Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite,
             ];
             // The eye pass declares SPECULAR and GLASS, not MOVERS.
             let mut constants = spec.constants();
@@ -67,8 +67,8 @@ impl EyePassKernel {
         })
     }
 
-    /// Records the eye pass over every hit-point slot; `bounds` holds a box per slot, which
-    /// the pass extends with [`ppm_core::layout::eye_flags::RECORD_BOUNDS`].
+    /// Records the eye pass over every hit-point slot; `outputs.bounds` holds a box per slot,
+    /// which the pass extends with [`ppm_core::layout::eye_flags::RECORD_BOUNDS`].
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -77,7 +77,7 @@ impl EyePassKernel {
         params: &EyePassParams,
         scene: &SceneBuffers,
         slots: &Slots,
-        bounds: &wgpu::Buffer,
+        outputs: &EyeOutputs,
         spec: Specialisation,
     ) {
         let kernel = self.kernel(ctx, spec);
@@ -91,12 +91,22 @@ impl EyePassKernel {
                 &scene.index,
                 slots.hit_points,
                 slots.counters,
-                bounds,
+                outputs.bounds,
                 &scene.texels,
+                outputs.chain_light,
             ],
         );
         kernel.dispatch(encoder, &group, slots.count);
     }
+}
+
+/// What the eye pass writes besides the slots.
+pub struct EyeOutputs<'a> {
+    /// A box per slot (`slot_bounds` in eye_pass.wgsl).
+    pub bounds: &'a wgpu::Buffer,
+    /// What each slot's glossy bounces found (`chain_light`): one per slot in a scene with
+    /// glossy surfaces, one placeholder element otherwise.
+    pub chain_light: &'a wgpu::Buffer,
 }
 
 /// The specialisations of `variants` compiled so far.
@@ -113,7 +123,7 @@ impl DirectLightKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
-        let slots = [Uniform, Table, Uniform, ReadWrite, ReadWrite];
+        let slots = [Uniform, Table, Uniform, ReadWrite, ReadWrite, Read];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -123,7 +133,8 @@ impl DirectLightKernel {
         ))
     }
 
-    /// Records the direct-light pass over every hit point.
+    /// Records the direct-light pass over every hit point, adding what `chain_light` holds
+    /// ([`EyeOutputs::chain_light`]).
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -131,6 +142,7 @@ impl DirectLightKernel {
         params: &DirectLightParams,
         scene: &SceneBuffers,
         slots: &Slots,
+        chain_light: &wgpu::Buffer,
     ) {
         let params = uniform(ctx, "direct params", params);
         let group = self.0.bind(
@@ -141,6 +153,7 @@ impl DirectLightKernel {
                 &scene.index,
                 slots.hit_points,
                 slots.counters,
+                chain_light,
             ],
         );
         self.0.dispatch(encoder, &group, slots.count);

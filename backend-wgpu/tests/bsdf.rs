@@ -26,7 +26,7 @@ fn close(a: f32, b: f32, tolerance: f32) -> bool {
     (a - b).abs() <= tolerance * a.abs().max(b.abs()).max(1.0)
 }
 
-fn fields(o: &BsdfOutcome) -> [f32; 11] {
+fn fields(o: &BsdfOutcome) -> [f32; 15] {
     [
         o.dir[0],
         o.dir[1],
@@ -39,6 +39,10 @@ fn fields(o: &BsdfOutcome) -> [f32; 11] {
         o.f_cos[1],
         o.f_cos[2],
         o.pdf_of_dir,
+        o.glossy_f_cos[0],
+        o.glossy_f_cos[1],
+        o.glossy_f_cos[2],
+        o.glossy_pdf,
     ]
 }
 

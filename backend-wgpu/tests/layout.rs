@@ -118,6 +118,10 @@ fn buffer_elements_match_their_wgsl_twins() {
         uv2,
         _pad
     });
+    same_layout!(ChainLight {
+        radiance,
+        emission_weight
+    });
     same_layout!(GpuBounds {
         min,
         _pad0,
@@ -191,7 +195,9 @@ fn the_bsdf_s_test_structs_match_their_wgsl_twins() {
         weight,
         transmitted,
         f_cos,
-        pdf_of_dir
+        pdf_of_dir,
+        glossy_f_cos,
+        glossy_pdf
     });
 }
 
@@ -337,6 +343,7 @@ fn shared_constants_agree() {
         ("TRANSPORT_RADIANCE", Transport::Radiance as u32),
         ("EYE_GLASS_DIM", ppm_core::rng::EYE_GLASS_DIM),
         ("EYE_GLOSSY_DIM", ppm_core::rng::EYE_GLOSSY_DIM),
+        ("EYE_LIGHT_DIM", ppm_core::rng::EYE_LIGHT_DIM),
         ("TRANSPORT_IMPORTANCE", Transport::Importance as u32),
         ("HIT_VALID", hit_flags::VALID),
         ("HIT_FRONT", hit_flags::FRONT),
@@ -349,6 +356,7 @@ fn shared_constants_agree() {
         ("EYE_FOCUS", eye_flags::FOCUS),
         ("EYE_RECORD_BOUNDS", eye_flags::RECORD_BOUNDS),
         ("EYE_RETRACE", eye_flags::RETRACE),
+        ("EYE_SAMPLE_LIGHTS", eye_flags::SAMPLE_LIGHTS),
         ("PHOTON_CHANGED_ONLY", photon_flags::CHANGED_ONLY),
         ("PHOTON_RECORD_CROSSED", photon_flags::RECORD_CROSSED),
         ("PHOTON_CULL_UNCROSSED", photon_flags::CULL_UNCROSSED),

@@ -141,6 +141,12 @@ pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -
                 .to_owned(),
         );
     }
+    if !features.glossy {
+        out.push(
+            "light samples at glossy eye bounces (16 bytes a slot): no rough metal or rough coat"
+                .to_owned(),
+        );
+    }
     if !features.specular() {
         out.push(
             "specular eye chains and caustic photon paths: no mirror, glass, conductor or coat"

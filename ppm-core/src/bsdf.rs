@@ -10,8 +10,9 @@
 //! surface, slots and photons store no direction. **Glossy** materials (a rough conductor:
 //! GGX microfacets, Walter et al. 2007, sampled by their visible normals, Heitz 2018) have a
 //! density but a lobe too narrow for a photon disc: eye and photon paths continue through
-//! them by sampling it, as through a delta surface, and the reference path tracer also
-//! samples the lights there (docs/algorithm.md 1, "Materials", says why).
+//! them by sampling it, as through a delta surface, and sample the lights there too
+//! ([`glossy_lobe`]; the reference path tracer with [`eval_cos`]); docs/algorithm.md 1,
+//! "Materials", says why.
 //!
 //! Directions follow the passes: `incoming` is the unit direction a path travels (towards
 //! the surface), `facing` the unit normal on its side, and every sampled direction leaves
@@ -86,6 +87,37 @@ pub fn is_delta(material: &GpuMaterial) -> bool {
 #[inline]
 pub fn samples_lights(material: &GpuMaterial) -> bool {
     !is_delta(material) && material.kind != material_kind::GLASS
+}
+
+/// Whether an eye path that continues through the material does so by a glossy lobe with a
+/// density ([`glossy_lobe`]), so that the eye pass samples the lights there: a rough
+/// conductor, a rough coat's reflection. Not rough glass, whose lobe depends on the side
+/// ([`samples_lights`]): light through it is found by the path's own bounce.
+#[inline]
+pub fn chain_samples_lights(material: &GpuMaterial) -> bool {
+    match material.kind {
+        material_kind::CONDUCTOR => !is_delta(material),
+        material_kind::COATED => !coat::is_smooth(material),
+        _ => false,
+    }
+}
+
+/// The lobe an eye path continues by at a surface where [`chain_samples_lights`]: `f cos` at
+/// `wi` over the chance of taking that lobe (a coat's reflection; one elsewhere), and the
+/// density with which [`sample`] draws `wi` within it, for weighing a light sample against
+/// the path's own bounce. Zero below the surface and on every other material.
+pub fn glossy_lobe(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+    if cos_o <= 0.0 || cos_i <= 0.0 || !chain_samples_lights(material) {
+        return (Vec3::ZERO, 0.0);
+    }
+    match material.kind {
+        material_kind::COATED => coat::reflection_lobe(material, facing, wo, wi),
+        _ => (
+            eval_cos(material, facing, wo, wi),
+            pdf(material, facing, wo, wi),
+        ),
+    }
 }
 
 /// Whether the material is a rough dielectric ([`rough_glass`]).
@@ -554,8 +586,8 @@ pub struct BsdfCase {
     pub _pad: u32,
 }
 
-/// What the BSDF gives for one [`BsdfCase`]: [`sample`], and at its direction [`eval_cos`]
-/// and [`pdf`]. 48 bytes, bsdf_vectors.wgsl's `BsdfOutcome`.
+/// What the BSDF gives for one [`BsdfCase`]: [`sample`], and at its direction [`eval_cos`],
+/// [`pdf`] and [`glossy_lobe`]. 64 bytes, bsdf_vectors.wgsl's `BsdfOutcome`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BsdfOutcome {
@@ -571,6 +603,10 @@ pub struct BsdfOutcome {
     pub f_cos: [f32; 3],
     /// [`pdf`] of the sampled direction.
     pub pdf_of_dir: f32,
+    /// [`glossy_lobe`]'s `f cos` at the sampled direction.
+    pub glossy_f_cos: [f32; 3],
+    /// [`glossy_lobe`]'s density of the sampled direction.
+    pub glossy_pdf: f32,
 }
 
 impl BsdfCase {
@@ -590,6 +626,7 @@ impl BsdfCase {
             (self.u_lobe, (self.u_dir[0], self.u_dir[1])),
             transport,
         );
+        let (glossy_f_cos, glossy_pdf) = glossy_lobe(&self.material, facing, wo, s.dir);
         BsdfOutcome {
             dir: s.dir.into(),
             pdf: s.pdf,
@@ -597,6 +634,8 @@ impl BsdfCase {
             transmitted: u32::from(s.transmitted),
             f_cos: eval_cos(&self.material, facing, wo, s.dir).into(),
             pdf_of_dir: pdf(&self.material, facing, wo, s.dir),
+            glossy_f_cos: glossy_f_cos.into(),
+            glossy_pdf,
         }
     }
 }
@@ -1065,6 +1104,53 @@ mod tests {
         };
         let kept = photon_bounce(&mirror, -Vec3::Z, Vec3::Z, true, (0.99, (0.5, 0.5)));
         assert_eq!(kept.map(|s| s.weight), Some(Vec3::splat(0.9)));
+    }
+
+    /// The eye pass weighs a light sample at a glossy bounce against the bounce with
+    /// `glossy_lobe`: its `f cos / pdf` must be the weight the bounce carries (else the two
+    /// strategies estimate different integrals), and its density must integrate to the share
+    /// of bounces kept (else the weights do not sum to one).
+    #[test]
+    fn the_glossy_lobe_is_what_an_eye_path_s_bounce_samples() {
+        let materials = [
+            conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.3),
+            conductor([0.15, 0.4, 1.4], [3.6, 2.5, 1.9], 0.05),
+            coated([0.3, 0.9, 0.6], 1.6, 0.3, true),
+            coated([0.8; 3], 1.5, 0.1, false),
+        ];
+        const N: u32 = 1 << 16;
+        for material in materials {
+            for cos_o in [0.95f32, 0.5, 0.15] {
+                let wo = Vec3::new((1.0 - cos_o * cos_o).sqrt(), cos_o, 0.0);
+                let (mut kept, mut integral) = (0u32, 0.0f64);
+                for i in 0..N {
+                    let u = (
+                        (i as f32 + 0.5) / N as f32,
+                        ((i.wrapping_mul(40503)) % N) as f32 / N as f32,
+                    );
+                    // Below any coat's chance of reflecting: the lobe the eye path continues by.
+                    let s = sample(&material, -wo, Vec3::Y, true, (0.0, u), Transport::Radiance);
+                    if s.weight.x > 0.0 {
+                        kept += 1;
+                        let (f_cos, pdf) = glossy_lobe(&material, Vec3::Y, wo, s.dir);
+                        let w = f_cos / pdf;
+                        assert!(
+                            (w - s.weight).abs().max_element() <= 1e-3 * s.weight.max_element(),
+                            "{material:?} cos_o {cos_o}: {w} against {}",
+                            s.weight
+                        );
+                    }
+                    let wi = crate::sampling::uniform_cone(u.1, u.0, -1.0);
+                    integral += f64::from(glossy_lobe(&material, Vec3::Y, wo, wi).1);
+                }
+                let integral = integral * 4.0 * std::f64::consts::PI / f64::from(N);
+                let share = f64::from(kept) / f64::from(N);
+                assert!(
+                    (integral - share).abs() < 0.02,
+                    "{material:?} cos_o {cos_o}: density integrates to {integral}, kept {share}"
+                );
+            }
+        }
     }
 
     #[test]

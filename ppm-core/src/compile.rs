@@ -25,6 +25,10 @@ pub struct SceneFeatures {
     /// Some surface is coated diffuse: eye paths and photons may reflect off its coat.
     #[serde(default)]
     pub coated: bool,
+    /// Some surface is glossy where eye paths continue (a rough conductor, a rough coat's
+    /// reflection): the eye pass samples the lights there ([`crate::bsdf::chain_samples_lights`]).
+    #[serde(default)]
+    pub glossy: bool,
     /// Some material's colour comes from an image texture.
     #[serde(default)]
     pub textured: bool,
@@ -157,6 +161,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let bvh_built_cost = tree_cost(&bvh);
     let (lo, hi) = bounds(&triangles);
     let extent = (hi - lo).length();
+    let glossy = materials.iter().any(crate::bsdf::chain_samples_lights);
     CompiledScene {
         camera: gpu_camera(&scene.camera, width, height),
         triangles,
@@ -181,6 +186,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 .materials
                 .iter()
                 .any(|m| matches!(m.kind, MaterialKind::Coated { .. })),
+            glossy,
             textured: !textures.is_empty(),
             moving_objects: !scene.moves.is_empty(),
         },

@@ -128,6 +128,33 @@ impl HitPoint {
     }
 }
 
+/// What one slot's eye path found at its glossy bounces, for the direct-light pass to add
+/// (docs/algorithm.md 1.2). 16 bytes; held only for a scene with glossy surfaces
+/// ([`SceneFeatures::glossy`](crate::compile::SceneFeatures::glossy)).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ChainLight {
+    /// The light samples' radiance towards the eye, the path's throughput included.
+    pub radiance: [f32; 3],
+    /// The power-heuristic weight of the emission at the visible point against a light
+    /// sample at the glossy bounce before it: one when none came before.
+    pub emission_weight: f32,
+}
+
+impl ChainLight {
+    /// A path without glossy bounces.
+    pub const NONE: Self = Self {
+        radiance: [0.0; 3],
+        emission_weight: 1.0,
+    };
+}
+
+impl Default for ChainLight {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
 /// A photon deposit made during a photon pass.
 ///
 /// 32 bytes, so that ten million photons fit in 320 MB. The surface normal is packed
@@ -381,6 +408,11 @@ pub mod eye_flags {
     /// longer follows: every move after the first then found nearly every visible point
     /// moved and reset it.
     pub const RETRACE: u32 = 16;
+    /// Take a light sample at each glossy bounce, weighed against the bounce, for the
+    /// direct-light pass ([`ChainLight`](super::ChainLight)): direct light is explicit.
+    /// Without it (photons carry direct light) the bounce alone finds what a glossy surface
+    /// reflects of the lights.
+    pub const SAMPLE_LIGHTS: u32 = 32;
 }
 
 /// Parameters of one eye pass. 32 bytes.

@@ -162,14 +162,20 @@ pub trait EyePass {
     /// [`crate::layout::eye_flags::KEEP_STATISTICS`] the slots start fresh (`r2 =
     /// params.r2_initial`, all else zero, the buffer allocated to the camera's size); with it
     /// they keep their statistics (and the `UPDATED` flag) and only the visible point changes.
+    /// With [`crate::layout::eye_flags::SAMPLE_LIGHTS`], a path takes a light sample at each
+    /// glossy bounce ([`crate::bsdf::glossy_lobe`]) and keeps, beside its slot, what they found
+    /// and the weight of the emission at its visible point ([`crate::layout::ChainLight`]),
+    /// for the direct-light pass.
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError>;
 }
 
 /// Direct light at every visible point (docs/algorithm.md 1.2).
 pub trait DirectLight {
-    /// Estimates emission seen plus reflected direct light at each visible point, times the
-    /// eye path's throughput (zero for a slot without one), and adds it to the slot's direct
-    /// sum as one more iteration, or replaces the sum with it (`params.accumulate`).
+    /// Estimates emission seen (times its [`crate::layout::ChainLight`] weight) plus
+    /// reflected direct light at each visible point, times the eye path's throughput (zero
+    /// for a slot without one), plus what the path's glossy bounces found, and adds it to the
+    /// slot's direct sum as one more iteration, or replaces the sum with it
+    /// (`params.accumulate`).
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError>;
 }
 

@@ -22,7 +22,8 @@
 //!   Fresnel reflectance, at a coated surface it takes the coat's reflection when that
 //!   dimension is below its chance (`ppm_core::bsdf::specular_probability`) and stops at the
 //!   base otherwise; at a rough conductor or coat dimensions `EYE_GLOSSY_DIM + 2 d` and the next
-//!   draw the direction.
+//!   draw the direction, and dimensions `EYE_LIGHT_DIM + 3 d` to `+ 2` the light sample taken
+//!   there ([`StreamKey::eye_light`]).
 //! - **Direct light** ([`PassKind::DirectLight`]). Sample `s` of the pass is point `start *
 //!   p.samples + s` of the stream `StratifiedStream::new(p.seed, DirectLight, slot)`, with
 //!   `start` the slot's `iterations` when the pass adds to its sum and `p.iteration`
@@ -115,6 +116,11 @@ pub const EYE_GLASS_DIM: u32 = 2;
 /// `EYE_GLOSSY_DIM + 2 d` and the next, apart from the glass numbers at any depth.
 pub const EYE_GLOSSY_DIM: u32 = 1 << 16;
 
+/// An eye path's first light-sample dimension: at a glossy bounce at depth `d`, dimension
+/// `EYE_LIGHT_DIM + 3 d` picks the light and the next two the point on it
+/// ([`StreamKey::eye_light`]).
+pub const EYE_LIGHT_DIM: u32 = 1 << 17;
+
 impl StreamKey {
     /// The number that picks a lobe at an eye path's bounce at `depth` (at glass, or between
     /// a coat's reflection and its base), alone: what decides whether the path stops there.
@@ -131,6 +137,17 @@ impl StreamKey {
         (
             self.eye_lobe(depth),
             (self.uniform(glossy), self.uniform(glossy + 1)),
+        )
+    }
+
+    /// The numbers of the light sample at an eye path's glossy bounce at `depth`: the one
+    /// that picks the light, and the pair that picks the point on it.
+    #[inline]
+    pub fn eye_light(&self, depth: u32) -> (f32, (f32, f32)) {
+        let first = EYE_LIGHT_DIM + 3 * depth;
+        (
+            self.uniform(first),
+            (self.uniform(first + 1), self.uniform(first + 2)),
         )
     }
 

@@ -8,6 +8,9 @@
 @group(0) @binding(2) var<uniform> scene: SceneIndex;
 @group(0) @binding(3) var<storage, read_write> hit_points: array<HitPoint>;
 @group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 4>;
+// What each slot's eye path found at glossy bounces (eye_pass.wgsl), in a scene with glossy
+// surfaces; else one placeholder element.
+@group(0) @binding(5) var<storage, read> chain_light: array<ChainLight>;
 
 // Stratified pairs of each sample (see backend-cpu's direct_light.rs).
 const PAIR_LIGHT_POINT: u32 = 0u;
@@ -78,16 +81,21 @@ fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if (hp.flags & HIT_RESTING) != 0u {
         return;
     }
-    var estimate = vec3<f32>(0.0);
+    var chain = ChainLight(vec3<f32>(0.0), 1.0);
+    if arrayLength(&chain_light) == arrayLength(&hit_points) {
+        chain = chain_light[slot];
+    }
+    var estimate = chain.radiance;
     if (hp.flags & HIT_VALID) != 0u {
         let material = scene_material(hp.material);
-        var direct = select(vec3<f32>(0.0), material.emission, (hp.flags & HIT_FRONT) != 0u);
+        let emission = material.emission * chain.emission_weight;
+        var direct = select(vec3<f32>(0.0), emission, (hp.flags & HIT_FRONT) != 0u);
         let f = visible_point_f(material);
         if params.samples > 0u && max(f.x, max(f.y, f.z)) > 0.0 && scene.light_count > 0u {
             direct += estimate_reflected(material, hp, slot);
             atomicAdd(&counters[COUNTER_RAYS], params.samples * RAYS_PER_SAMPLE);
         }
-        estimate = hp.throughput * direct;
+        estimate += hp.throughput * direct;
     }
     var direct = estimate;
     var iterations = 1u;

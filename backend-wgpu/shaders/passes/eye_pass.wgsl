@@ -1,4 +1,4 @@
-// #import layout rng qmc sampling geometry bsdf bvh tables scene materials textures
+// #import layout rng qmc sampling geometry bsdf bvh lights tables scene materials textures
 // Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
 // visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
 
@@ -10,10 +10,55 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(6) var<storage, read_write> slot_bounds: array<GpuBounds>;
 @group(0) @binding(7) var<storage, read> scene_texels: array<vec2<u32>>;
+// One per slot in a scene with glossy surfaces, else one placeholder element.
+@group(0) @binding(8) var<storage, read_write> chain_light: array<ChainLight>;
 
 // False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
 // bounces through them are compiled out (backend_wgpu::Specialisation).
 override SPECULAR: bool = true;
+
+// The light sample at a glossy bounce at `depth` (backend-cpu's chain_light.rs): f cos Le /
+// p_light weighed against the bounce's density in xyz, before the path's throughput; w one
+// when a shadow ray was traced.
+fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<f32>, wo: vec3<f32>, key: StreamKey, depth: u32) -> vec4<f32> {
+    if scene.light_count == 0u {
+        return vec4<f32>(0.0);
+    }
+    let first = EYE_LIGHT_DIM + 3u * depth;
+    let light = scene_light(sample_light(stream_uniform(key, first)));
+    let b = uniform_triangle(stream_uniform(key, first + 1u), stream_uniform(key, first + 2u));
+    let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
+    let origin = position + facing * params.ray_epsilon;
+    let to_light = y - origin;
+    let dist2 = dot(to_light, to_light);
+    if dist2 <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let dist = sqrt(dist2);
+    let wi = to_light / dist;
+    let cos_l = -dot(light.normal, wi);
+    let lobe = bsdf_glossy_lobe(material, facing, wo, wi);
+    if cos_l <= 0.0 || all(lobe.xyz == vec3<f32>(0.0)) {
+        return vec4<f32>(0.0);
+    }
+    if occluded(origin, wi, dist - 2.0 * params.ray_epsilon) {
+        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    }
+    let le = scene_material(light.material).emission;
+    let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
+    return vec4<f32>(lobe.xyz * le * (power_heuristic(pl, lobe.w) / pl), 1.0);
+}
+
+// The weight of the emission met at `hit` travelling `dir` after a glossy bounce of density
+// `bounce_pdf` (negative: none), against the light sample taken there.
+fn emission_weight(hit: Hit, tri: GpuTriangle, dir: vec3<f32>, bounce_pdf: f32) -> f32 {
+    let cos_l = -dot(tri.normal, dir);
+    if bounce_pdf < 0.0 || tri.light == NO_MATERIAL || cos_l <= 0.0 {
+        return 1.0;
+    }
+    let light = scene_light(tri.light);
+    return power_heuristic(bounce_pdf, light_pdf(light.pdf, light.area, hit.t * hit.t, cos_l));
+}
 
 // The slot before this iteration's eye path: fresh, or its statistics without a visible point.
 fn cleared_slot(slot: u32, pixel: u32) -> HitPoint {
@@ -69,9 +114,16 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     var throughput = vec3<f32>(1.0);
     var out = cleared_slot(slot, pixel);
     var rays = params.max_depth + 1u;
+    var shadow_rays = 0u;
     // The box of the path's vertices after the camera (backend-cpu's eye_pass.rs).
     var lo = vec3<f32>(F32_MAX);
     var hi = vec3<f32>(-F32_MAX);
+    // What the glossy bounces found (backend-cpu's chain_light.rs): the light samples'
+    // radiance, and the last bounce's density within its glossy lobe (negative: none).
+    let chained = arrayLength(&chain_light) == arrayLength(&hit_points);
+    let sample_lights = chained && (params.flags & EYE_SAMPLE_LIGHTS) != 0u;
+    var chain = ChainLight(vec3<f32>(0.0), 1.0);
+    var bounce_pdf = -1.0;
     for (var depth = 0u; depth <= params.max_depth; depth++) {
         let hit = closest_hit(origin, dir, T_MISS);
         if hit.triangle == 0xffffffffu {
@@ -101,10 +153,17 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             // a coat's transmittance towards the eye (ppm_core::bsdf).
             out.throughput = throughput * visible_point_scale(base, material, texture) * stop;
             out.flags |= HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
+            chain.emission_weight = emission_weight(hit, tri, dir, bounce_pdf);
             rays = depth + 1u;
             break;
         }
         out.flags |= HIT_EYE_CHAINED;
+        let glossy_lobe = sample_lights && bsdf_chain_samples_lights(material);
+        if glossy_lobe {
+            let light = glossy_vertex_light(material, position, facing, -dir, key, depth);
+            chain.radiance += throughput * light.xyz;
+            shadow_rays += u32(light.w);
+        }
         let glossy = EYE_GLOSSY_DIM + 2u * depth;
         let u_dir = vec2<f32>(stream_uniform(key, glossy), stream_uniform(key, glossy + 1u));
         let bounce = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_RADIANCE);
@@ -113,12 +172,19 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             rays = depth + 1u;
             break;
         }
+        bounce_pdf = -1.0;
+        if glossy_lobe {
+            bounce_pdf = bsdf_glossy_lobe(material, facing, -dir, bounce.dir).w;
+        }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = select(facing, -facing, bounce.transmitted);
         origin = position + side * params.ray_epsilon;
     }
     hit_points[slot] = out;
+    if chained {
+        chain_light[slot] = chain;
+    }
     if (params.flags & EYE_RECORD_BOUNDS) != 0u {
         // Started over where the slot's statistics start (no direct sample yet).
         var bounds = GpuBounds(vec3<f32>(F32_MAX), 0u, vec3<f32>(-F32_MAX), 0u);
@@ -127,7 +193,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         slot_bounds[slot] = GpuBounds(min(bounds.min, lo), 0u, max(bounds.max, hi), 0u);
     }
-    atomicAdd(&counters[COUNTER_RAYS], rays);
+    atomicAdd(&counters[COUNTER_RAYS], rays + shadow_rays);
     if (out.flags & HIT_VALID) != 0u {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
     }

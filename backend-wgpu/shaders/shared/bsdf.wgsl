@@ -274,6 +274,34 @@ fn bsdf_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
     return visible_point_pdf(facing, wi);
 }
 
+// Whether an eye path continuing through the material samples the lights there: a rough
+// conductor, a rough coat's reflection (ppm_core::bsdf::chain_samples_lights).
+fn bsdf_chain_samples_lights(material: GpuMaterial) -> bool {
+    return (material.kind == MATERIAL_CONDUCTOR && !bsdf_is_delta(material))
+        || (material.kind == MATERIAL_COATED && !coat_is_smooth(material));
+}
+
+// The lobe an eye path continues by at such a surface: f cos over the lobe's chance in xyz,
+// the density of wi within it in w (ppm_core::bsdf::glossy_lobe).
+fn bsdf_glossy_lobe(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
+    let cos_o = dot(facing, wo);
+    let cos_i = dot(facing, wi);
+    if cos_o <= 0.0 || cos_i <= 0.0 || !bsdf_chain_samples_lights(material) {
+        return vec4<f32>(0.0);
+    }
+    if material.kind == MATERIAL_COATED {
+        let p = coat_specular_probability(material, cos_o);
+        if p <= 0.0 {
+            return vec4<f32>(0.0);
+        }
+        let h = half_vector(wo, wi);
+        let lobe = ggx_reflection_cos(material.alpha, facing, wo, wi);
+        let f_cos = dielectric_fresnel(dot(wo, h), 1.0 / material.ior) * lobe / p;
+        return vec4<f32>(vec3<f32>(f_cos), ggx_pdf(material.alpha, facing, wo, wi));
+    }
+    return vec4<f32>(bsdf_eval_cos(material, facing, wo, wi), bsdf_pdf(material, facing, wo, wi));
+}
+
 // A reflection off a GGX microfacet drawn from the normals visible from wo (Heitz 2018;
 // ppm_core::bsdf::sample_ggx_reflection): g2_over_g1 and pdf zero below the surface.
 struct GgxReflection {

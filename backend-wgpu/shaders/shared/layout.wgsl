@@ -128,6 +128,7 @@ const EYE_JITTER: u32 = 2u;
 const EYE_FOCUS: u32 = 4u;
 const EYE_RECORD_BOUNDS: u32 = 8u;
 const EYE_RETRACE: u32 = 16u;
+const EYE_SAMPLE_LIGHTS: u32 = 32u;
 
 struct EyePassParams {
     seed: u32,
@@ -275,6 +276,12 @@ fn is_finite_vec3(v: vec3<f32>) -> bool {
 const F32_MAX: f32 = 3.4028235e38;
 // The smallest positive normal f32 (Rust's f32::MIN_POSITIVE).
 const F32_MIN_POSITIVE: f32 = 1.17549435e-38;
+
+// What a slot's eye path found at its glossy bounces (ppm_core::layout::ChainLight).
+struct ChainLight {
+    radiance: vec3<f32>,
+    emission_weight: f32,
+}
 
 struct GpuBounds {
     min: vec3<f32>,

@@ -10,6 +10,9 @@ const PASS_GUIDED: u32 = 5u;
 // glass with EYE_GLASS_DIM + d and draws a glossy bounce from EYE_GLOSSY_DIM + 2 d and the next.
 const EYE_GLASS_DIM: u32 = 2u;
 const EYE_GLOSSY_DIM: u32 = 65536u;
+// A light sample at a glossy bounce at depth d: EYE_LIGHT_DIM + 3 d picks the light, the
+// next two the point on it (ppm_core::rng::EYE_LIGHT_DIM).
+const EYE_LIGHT_DIM: u32 = 131072u;
 
 struct StreamKey {
     seed: u32,

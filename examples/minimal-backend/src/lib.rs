@@ -8,7 +8,8 @@
 //! What each trait asks, and where this file answers it:
 //! - [`SceneUpload`]: keep the compiled scene (its buffers are already GPU-shaped).
 //! - [`EyePass`]: one eye path per slot to its visible point ([`paths::eye_path`]).
-//! - [`DirectLight`]: emission seen plus light from the lights ([`paths::direct_light`]).
+//! - [`DirectLight`]: emission seen plus light from the lights, and what the eye path's
+//!   glossy bounces found ([`paths::direct_light`]).
 //! - [`PhotonPass`]: photons from the lights, their deposits in path order
 //!   ([`paths::photon_path`]); a move's other photon sources are refused.
 //! - [`GatherPass`]: each slot's photons within its radius, folded in by
@@ -30,7 +31,7 @@ use ppm_core::emission::PhotonSource;
 use ppm_core::geometry::oct_faces;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
+    ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
     ResolveParams, direct_accumulate, eye_flags,
 };
 use ppm_core::passes::{
@@ -46,6 +47,8 @@ use ppm_core::update::radiance;
 pub struct MinimalBackend {
     scene: Option<paths::Scene>,
     hit_points: Vec<HitPoint>,
+    /// What each slot's eye path found at glossy bounces, for the direct-light pass.
+    chain_light: Vec<ChainLight>,
     /// Each slot's deferred sum; a still frame never defers, so it stays zero.
     pending: Vec<[f32; 4]>,
     photons: Vec<Photon>,
@@ -99,12 +102,20 @@ impl EyePass for MinimalBackend {
         }
         if !keep {
             self.hit_points = vec![HitPoint::default(); slots];
+            self.chain_light = vec![ChainLight::NONE; slots];
             self.pending = vec![[0.0; 4]; slots];
             self.r2_initial = params.r2_initial;
         }
         let mut stats = EyeStats::default();
-        for (slot, hp) in self.hit_points.iter_mut().enumerate() {
-            stats.rays += paths::eye_path(params, scene, slot as u32, hp);
+        for (slot, (hp, chain)) in self
+            .hit_points
+            .iter_mut()
+            .zip(&mut self.chain_light)
+            .enumerate()
+        {
+            let (rays, found) = paths::eye_path(params, scene, slot as u32, hp);
+            *chain = found;
+            stats.rays += rays;
             stats.hit_points += u64::from(hp.is_valid());
         }
         check_hit_points("eye", &self.hit_points)?;
@@ -116,11 +127,13 @@ impl DirectLight for MinimalBackend {
     fn direct_light(&mut self, params: &DirectLightParams) -> Result<DirectStats, BackendError> {
         let scene = loaded(&self.scene, "direct light")?;
         let mut stats = DirectStats::default();
-        for (slot, hp) in self.hit_points.iter_mut().enumerate() {
-            let (estimate, rays) = match hp.is_valid() {
-                true => paths::direct_light(params, scene, hp, slot as u32),
-                false => ([0.0; 3], 0),
-            };
+        for (slot, (hp, chain)) in self
+            .hit_points
+            .iter_mut()
+            .zip(&self.chain_light)
+            .enumerate()
+        {
+            let (estimate, rays) = paths::direct_light(params, scene, hp, chain, slot as u32);
             stats.rays += rays;
             if params.accumulate == direct_accumulate::ADD {
                 hp.direct = [0, 1, 2].map(|c| hp.direct[c] + estimate[c]);

@@ -10,8 +10,9 @@ use ppm_core::compile::{CompiledScene, camera_ray};
 use ppm_core::emission::{EMISSION_DIMS, Emission};
 use ppm_core::geometry::{intersect_triangle, oct_encode};
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, HitPoint,
-    NO_MATERIAL, Photon, PhotonPassParams, direct_accumulate, eye_flags, first_hit, hit_flags,
+    ChainLight, DirectLightParams, EyePassParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle,
+    HitPoint, NO_MATERIAL, Photon, PhotonPassParams, direct_accumulate, eye_flags, first_hit,
+    hit_flags,
 };
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey, stratified_pair};
 use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
@@ -80,8 +81,14 @@ fn occluded(scene: &Scene, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
 
 /// Traces slot `slot`'s eye path (docs/algorithm.md 1.1) and writes its visible point into
 /// `hp`: fresh statistics, or with [`eye_flags::KEEP_STATISTICS`] the slot's own, which then
-/// continues its own sample sequence. Returns the rays traced.
-pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPoint) -> u64 {
+/// continues its own sample sequence. Returns the rays traced and what the path's glossy
+/// bounces found, for the direct-light pass.
+pub fn eye_path(
+    params: &EyePassParams,
+    scene: &Scene,
+    slot: u32,
+    hp: &mut HitPoint,
+) -> (u64, ChainLight) {
     let camera = &scene.camera;
     let pixel = slot / params.spp;
     let keep = params.flags & eye_flags::KEEP_STATISTICS != 0;
@@ -124,9 +131,15 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
     let mut dir = camera_ray(camera, x, y);
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
+    // At a glossy bounce, with explicit direct light: a light sample, and the bounce's
+    // density, which weighs the emission the path meets next against it.
+    let sample_lights = params.flags & eye_flags::SAMPLE_LIGHTS != 0;
+    let mut chain = ChainLight::NONE;
+    let mut shadow_rays = 0;
+    let mut bounce_pdf = None;
     for depth in 0..=params.max_depth {
         let Some((t, index)) = closest_hit(scene, origin, dir, f32::INFINITY) else {
-            return u64::from(depth) + 1;
+            return (u64::from(depth) + 1 + shadow_rays, chain);
         };
         let tri = &scene.triangles[index as usize];
         hp.eye_met |= tri.group;
@@ -149,36 +162,100 @@ pub fn eye_path(params: &EyePassParams, scene: &Scene, slot: u32, hp: &mut HitPo
             hp.flags |= hit_flags::VALID
                 | if front { hit_flags::FRONT } else { 0 }
                 | (tri.object << hit_flags::OBJECT_SHIFT);
-            return u64::from(depth) + 1;
+            let cos_l = -normal.dot(dir);
+            if let Some(pb) = bounce_pdf.filter(|_| tri.light != NO_MATERIAL && cos_l > 0.0) {
+                let light = &scene.lights[tri.light as usize];
+                let pl = light_pdf(light.pdf, light.area, t * t, cos_l);
+                chain.emission_weight = power_heuristic(pb, pl);
+            }
+            return (u64::from(depth) + 1 + shadow_rays, chain);
         }
         // Mirror, glass, conductor or a coat's reflection: follow the bounce.
         hp.flags |= hit_flags::EYE_CHAINED;
+        let glossy = sample_lights && bsdf::chain_samples_lights(material);
+        if glossy && !scene.lights.is_empty() {
+            let (light, traced) = glossy_light(
+                params,
+                scene,
+                material,
+                (position, facing, -dir),
+                &key,
+                depth,
+            );
+            chain.radiance = (Vec3::from(chain.radiance) + throughput * light).into();
+            shadow_rays += u64::from(traced);
+        }
         let u = key.eye_bounce(depth);
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
-            return u64::from(depth) + 1;
+            return (u64::from(depth) + 1 + shadow_rays, chain);
         }
+        bounce_pdf = glossy.then(|| bsdf::glossy_lobe(material, facing, -dir, bounce.dir).1);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
         origin = position + side * params.ray_epsilon;
     }
-    u64::from(params.max_depth) + 1
+    (u64::from(params.max_depth) + 1 + shadow_rays, chain)
 }
 
-/// A visible point's direct radiance towards the eye, throughput included (docs/algorithm.md
-/// 1.2): the emission it shows, plus per sample a shadow ray to a point on a light and a ray
-/// drawn from the BSDF that may meet one, weighted by the power heuristic. Returns it and the
-/// rays traced.
+/// The light sample at a glossy bounce at `depth` (`position`, the normal on the path's
+/// side, the direction back along the path): a light by power and a point on it by area
+/// from the eye stream's light dimensions ([`StreamKey::eye_light`]), its `f cos Le /
+/// p_light` from the lobe the path continues by, weighed against that lobe's density. Returns
+/// it and whether a shadow ray was traced.
+fn glossy_light(
+    params: &EyePassParams,
+    scene: &Scene,
+    material: &GpuMaterial,
+    (position, facing, wo): (Vec3, Vec3, Vec3),
+    key: &StreamKey,
+    depth: u32,
+) -> (Vec3, bool) {
+    let (choice, (u1, u2)) = key.eye_light(depth);
+    let light = &scene.lights[sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice)];
+    let (b1, b2) = uniform_triangle(u1, u2);
+    let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
+    let origin = position + facing * params.ray_epsilon;
+    let to_light = y - origin;
+    let dist2 = to_light.length_squared();
+    if dist2 <= 0.0 {
+        return (Vec3::ZERO, false);
+    }
+    let dist = dist2.sqrt();
+    let wi = to_light / dist;
+    let cos_l = -Vec3::from(light.normal).dot(wi);
+    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, wo, wi);
+    if cos_l <= 0.0 || f_cos == Vec3::ZERO {
+        return (Vec3::ZERO, false);
+    }
+    if occluded(scene, origin, wi, dist - 2.0 * params.ray_epsilon) {
+        return (Vec3::ZERO, true);
+    }
+    let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
+    let le = Vec3::from(scene.materials[light.material as usize].emission);
+    (f_cos * le * (power_heuristic(pl, pb) / pl), true)
+}
+
+/// An eye path's direct radiance towards the eye, throughput included (docs/algorithm.md
+/// 1.2): what its glossy bounces found (`chain`), and at its visible point, if it has one, the
+/// emission it shows (weighed by `chain`'s weight) plus per sample a shadow ray to a point on a
+/// light and a ray drawn from the BSDF that may meet one, weighted by the power heuristic.
+/// Returns it and the rays traced.
 pub fn direct_light(
     params: &DirectLightParams,
     scene: &Scene,
     hp: &HitPoint,
+    chain: &ChainLight,
     slot: u32,
 ) -> ([f32; 3], u64) {
+    let found = Vec3::from(chain.radiance);
+    if !hp.is_valid() {
+        return (found.into(), 0);
+    }
     let material = &scene.materials[hp.material as usize];
     let mut radiance = match hp.flags & hit_flags::FRONT != 0 {
-        true => Vec3::from(material.emission),
+        true => Vec3::from(material.emission) * chain.emission_weight,
         false => Vec3::ZERO,
     };
     let mut rays = 0;
@@ -189,7 +266,7 @@ pub fn direct_light(
         radiance += reflected(params, scene, material, hp, slot);
         rays = u64::from(params.samples) * 2;
     }
-    ((Vec3::from(hp.throughput) * radiance).into(), rays)
+    ((Vec3::from(hp.throughput) * radiance + found).into(), rays)
 }
 
 /// Light from the lights reflected at a visible point, `params.samples` samples of both

@@ -63,6 +63,11 @@ pub(super) fn direct_changes(
     settings: &ProbeSettings,
 ) -> Vec<Option<DirectChange>> {
     let poses = [before, after].map(|p| (p.compiled, p.scene()));
+    // Its eye paths take the light samples the eye pass takes at glossy bounces.
+    let settings = ProbeSettings {
+        sample_lights: true,
+        ..*settings
+    };
     let light = DirectLightParams {
         seed: settings.seed ^ CHANGE_SEED,
         samples: 1,
@@ -94,9 +99,9 @@ pub(super) fn direct_changes(
                             ..light
                         };
                         let [a, b] = poses.map(|(pose, scene)| {
-                            eye_path(scene, pose, hp.pixel, jitter, &key, 0, settings)
-                                .visible
-                                .map_or(Vec3::ZERO, |v| slot_direct(&params, scene, &v, slot).0)
+                            let path = eye_path(scene, pose, hp.pixel, jitter, &key, 0, &settings);
+                            let visible = path.visible.unwrap_or(HitPoint::empty(hp.pixel));
+                            slot_direct(&params, scene, &visible, &path.chain, slot).0
                         });
                         b - a
                     })

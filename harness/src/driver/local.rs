@@ -16,7 +16,8 @@
 //!   the host);
 //! - any other slot keeps its visible points, the light it saw directly and its photon
 //!   statistics. Its direct light can change only through shadow or cosine rays from its
-//!   visible points to a light that cross a moved object's box in either pose: where a
+//!   visible points, or light samples from its paths' glossy bounces, to a light that cross
+//!   a moved object's box in either pose: all start inside the slot's box, so where a
 //!   segment from its box to a light's box may cross one ([`segments_may_meet`]), its direct
 //!   sum is corrected by the change over its pixel that paired eye paths and light samples
 //!   estimate in both poses ([`super::direct_change`], traced on the host: an unbiased
@@ -361,6 +362,7 @@ impl Renderer<'_> {
             seed: self.params.seed,
             max_depth: self.params.max_eye_depth,
             ray_epsilon: pass_params::ray_epsilon(&self.params, self.extent),
+            sample_lights: false,
         }
     }
 

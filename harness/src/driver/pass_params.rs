@@ -28,11 +28,14 @@ pub fn ray_epsilon(params: &RenderParams, extent: f32) -> f32 {
 
 /// The eye pass keyed by `key`: fresh slots, or (`keep`) their statistics kept; `sppm`
 /// jitters the point in the pixel and records what the slots' paths reached (what a local
-/// move tests against).
+/// move tests against); explicit direct light takes light samples at glossy bounces.
 pub fn eye_pass(params: &RenderParams, extent: f32, key: u32, keep: bool) -> EyePassParams {
     let mut flags = if keep { eye_flags::KEEP_STATISTICS } else { 0 };
     if params.estimator == Estimator::Sppm {
         flags |= eye_flags::JITTER | eye_flags::RECORD_BOUNDS;
+    }
+    if params.direct == DirectMode::Explicit {
+        flags |= eye_flags::SAMPLE_LIGHTS;
     }
     EyePassParams {
         seed: params.seed,

@@ -5,11 +5,12 @@
 //! full-image eye passes on the backend (each of which visits every slot), and every backend
 //! then resets the same slots.
 
+use backend_cpu::chain_light::{ChainTracker, GlossyVertex};
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
 use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::{CompiledScene, camera_ray};
-use ppm_core::layout::{HitPoint, hit_flags};
+use ppm_core::layout::{ChainLight, HitPoint, hit_flags};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
 use std::cell::OnceCell;
@@ -47,11 +48,14 @@ impl<'a> HostPose<'a> {
     }
 }
 
-/// How the probe's paths are traced: the render's seed, depth and ray offset.
+/// How the probe's paths are traced: the render's seed, depth and ray offset, and whether
+/// they take the light samples the eye pass takes at glossy bounces (for their direct light).
+#[derive(Clone, Copy)]
 pub(super) struct ProbeSettings {
     pub seed: u32,
     pub max_depth: u32,
     pub ray_epsilon: f32,
+    pub sample_lights: bool,
 }
 
 /// Per pixel of `pixels`, whether one of [`PROBE_PATHS`] eye paths through random points of
@@ -102,6 +106,9 @@ pub(super) struct EyePath {
     /// Its visible point (position, facing normal, material, throughput and `VALID` and
     /// `FRONT` flags, as the eye pass writes them), if it reached one before meeting a group.
     pub visible: Option<HitPoint>,
+    /// What its glossy bounces found, as the eye pass finds it, when the settings sample
+    /// lights ([`ChainLight::NONE`] otherwise).
+    pub chain: ChainLight,
 }
 
 /// Dimensions `DIM_GLOSSY + 2 depth` and the next of a probe's key draw a glossy bounce
@@ -126,19 +133,22 @@ pub(super) fn eye_path(
     let mut dir = camera_ray(camera, px, py);
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
-    let nothing = EyePath {
+    let mut chain = ChainTracker::default();
+    let nothing = |chain: &ChainTracker| EyePath {
         met: false,
         visible: None,
+        chain: chain.finish(scene, None),
     };
     for depth in 0..=settings.max_depth {
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
-            return nothing;
+            return nothing(&chain);
         };
         let tri = &scene.triangles[hit.triangle as usize];
         if tri.group & groups != 0 {
             return EyePath {
                 met: true,
                 visible: None,
+                chain: ChainLight::NONE,
             };
         }
         let position = origin + dir * hit.t;
@@ -166,16 +176,29 @@ pub(super) fn eye_path(
                     flags: hit_flags::VALID | front,
                     ..HitPoint::empty(pixel)
                 }),
+                chain: chain.finish(scene, Some((&hit, dir))),
             };
+        }
+        let at = GlossyVertex {
+            position,
+            facing,
+            wo: -dir,
+            depth,
+        };
+        if settings.sample_lights {
+            chain.before_bounce(scene, material, &at, throughput, key, settings.ray_epsilon);
         }
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
-            return nothing;
+            return nothing(&chain);
+        }
+        if settings.sample_lights {
+            chain.after_bounce(material, &at, bounce.dir);
         }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
         origin = position + side * settings.ray_epsilon;
     }
-    nothing
+    nothing(&chain)
 }

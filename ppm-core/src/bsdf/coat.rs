@@ -124,6 +124,19 @@ pub fn eval_cos(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> Vec
     diffuse + Vec3::splat(dielectric_fresnel(wo.dot(h), 1.0 / material.ior) * lobe)
 }
 
+/// The rough coat's reflection lobe alone, the one an eye path continues by: `f cos` over
+/// the chance of taking it, and the density with which [`sample`] draws `wi` once it has
+/// ([`super::glossy_lobe`]).
+pub fn reflection_lobe(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+    let p = specular_probability(material, facing.dot(wo));
+    if p <= 0.0 {
+        return (Vec3::ZERO, 0.0);
+    }
+    let (lobe, h) = ggx_reflection_cos(material.alpha, facing, wo, wi);
+    let f_cos = dielectric_fresnel(wo.dot(h), 1.0 / material.ior) * lobe / p;
+    (Vec3::splat(f_cos), ggx_pdf(material.alpha, facing, wo, wi))
+}
+
 /// The density of `wi` over both lobes, each weighed by its chance.
 pub fn pdf(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     let p = specular_probability(material, facing.dot(wo));
