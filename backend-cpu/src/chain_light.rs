@@ -12,14 +12,17 @@ use ppm_core::layout::{ChainLight, GpuMaterial, NO_MATERIAL};
 use ppm_core::rng::StreamKey;
 use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
 
-/// A glossy bounce of an eye path: where, the normal on the path's side, towards where the
-/// path came from, and its depth (which keys the light sample's numbers).
+/// A glossy bounce of an eye path: where, the normal on the path's side and whether that is
+/// the outside, towards where the path came from, and its depth (which keys the light
+/// sample's numbers).
 #[derive(Clone, Copy)]
 pub struct GlossyVertex {
     /// The bounce's position.
     pub position: Vec3,
     /// The unit normal on the side the path arrived from.
     pub facing: Vec3,
+    /// The path arrived from the surface's front (outside, for glass).
+    pub front: bool,
     /// The unit direction back along the path.
     pub wo: Vec3,
     /// The bounce's depth on the path.
@@ -38,6 +41,7 @@ fn glossy_vertex_light(
     let GlossyVertex {
         position,
         facing,
+        front,
         wo,
         depth,
     } = *at;
@@ -48,7 +52,13 @@ fn glossy_vertex_light(
     let light = &scene.lights[sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice)];
     let (b1, b2) = uniform_triangle(u1, u2);
     let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
-    let origin = position + facing * ray_epsilon;
+    // The shadow ray leaves from the light's side (the far one through rough glass).
+    let side = if facing.dot(y - position) >= 0.0 {
+        facing
+    } else {
+        -facing
+    };
+    let origin = position + side * ray_epsilon;
     let to_light = y - origin;
     let dist2 = to_light.length_squared();
     if dist2 <= 0.0 {
@@ -57,7 +67,7 @@ fn glossy_vertex_light(
     let dist = dist2.sqrt();
     let wi = to_light / dist;
     let cos_l = -Vec3::from(light.normal).dot(wi);
-    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, wo, wi);
+    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, front, wo, wi);
     if cos_l <= 0.0 || f_cos == Vec3::ZERO {
         return None;
     }
@@ -129,7 +139,7 @@ impl ChainTracker {
     /// material has one.
     pub fn after_bounce(&mut self, material: &GpuMaterial, at: &GlossyVertex, dir: Vec3) {
         self.bounce_pdf = bsdf::chain_samples_lights(material)
-            .then(|| bsdf::glossy_lobe(material, at.facing, at.wo, dir).1);
+            .then(|| bsdf::glossy_lobe(material, at.facing, at.front, at.wo, dir).1);
     }
 
     /// The path's light samples, and the weight of the emission at `hit`, where it stops

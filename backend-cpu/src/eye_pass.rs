@@ -180,6 +180,7 @@ fn trace_eye_path(
         let at = GlossyVertex {
             position,
             facing,
+            front,
             wo: -dir,
             depth,
         };

@@ -8,13 +8,13 @@ use ppm_core::layout::material_kind;
 /// Allowed difference of a direction's components and of relative weights and densities.
 const TOLERANCE: f32 = 2e-5;
 
-/// The allowance for a case: a rough conductor's or coat's density and value are steep in
-/// the half vector, by about `1 / alpha`, so a last-place difference in a direction grows by
-/// as much.
+/// The allowance for a case: a rough conductor's, coat's or glass's density and value are
+/// steep in the half vector, by about `1 / alpha`, so a last-place difference in a direction
+/// grows by as much.
 fn tolerance(case: &BsdfCase) -> f32 {
     let glossy = matches!(
         case.material.kind,
-        material_kind::CONDUCTOR | material_kind::COATED
+        material_kind::CONDUCTOR | material_kind::COATED | material_kind::GLASS
     );
     match glossy && case.material.alpha > 0.0 {
         true => TOLERANCE / case.material.alpha,

@@ -143,7 +143,7 @@ pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -
     }
     if !features.glossy {
         out.push(
-            "light samples at glossy eye bounces (16 bytes a slot): no rough metal or rough coat"
+            "light samples at glossy eye bounces (16 bytes a slot): no rough metal, coat or glass"
                 .to_owned(),
         );
     }

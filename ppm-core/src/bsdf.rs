@@ -91,24 +91,38 @@ pub fn samples_lights(material: &GpuMaterial) -> bool {
 
 /// Whether an eye path that continues through the material does so by a glossy lobe with a
 /// density ([`glossy_lobe`]), so that the eye pass samples the lights there: a rough
-/// conductor, a rough coat's reflection. Not rough glass, whose lobe depends on the side
-/// ([`samples_lights`]): light through it is found by the path's own bounce.
+/// conductor, a rough coat's reflection, rough glass.
 #[inline]
 pub fn chain_samples_lights(material: &GpuMaterial) -> bool {
     match material.kind {
-        material_kind::CONDUCTOR => !is_delta(material),
+        material_kind::CONDUCTOR | material_kind::GLASS => !is_delta(material),
         material_kind::COATED => !coat::is_smooth(material),
         _ => false,
     }
 }
 
-/// The lobe an eye path continues by at a surface where [`chain_samples_lights`]: `f cos` at
-/// `wi` over the chance of taking that lobe (a coat's reflection; one elsewhere), and the
-/// density with which [`sample`] draws `wi` within it, for weighing a light sample against
-/// the path's own bounce. Zero below the surface and on every other material.
-pub fn glossy_lobe(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
-    if cos_o <= 0.0 || cos_i <= 0.0 || !chain_samples_lights(material) {
+/// The lobe an eye path continues by at a surface where [`chain_samples_lights`], arriving
+/// from `wo` on the side of `facing` (`front`: the outside): `f cos` at `wi` over the chance
+/// of taking that lobe (a coat's reflection; one elsewhere), and the density with which
+/// [`sample`] draws `wi` within it, for weighing a light sample against the path's own
+/// bounce. `wi` may lie below the surface only at rough glass (a refraction, whose value
+/// carries the radiance's `eta^2`, [`rough_glass::eval_cos_pdf`]). Zero where the lobe
+/// cannot reach `wi` and on every other material.
+pub fn glossy_lobe(
+    material: &GpuMaterial,
+    facing: Vec3,
+    front: bool,
+    wo: Vec3,
+    wi: Vec3,
+) -> (Vec3, f32) {
+    if !chain_samples_lights(material) {
+        return (Vec3::ZERO, 0.0);
+    }
+    if material.kind == material_kind::GLASS {
+        let (f_cos, pdf) = rough_glass::eval_cos_pdf(material, facing, front, wo, wi);
+        return (Vec3::splat(f_cos), pdf);
+    }
+    if facing.dot(wo) <= 0.0 || facing.dot(wi) <= 0.0 {
         return (Vec3::ZERO, 0.0);
     }
     match material.kind {
@@ -626,7 +640,8 @@ impl BsdfCase {
             (self.u_lobe, (self.u_dir[0], self.u_dir[1])),
             transport,
         );
-        let (glossy_f_cos, glossy_pdf) = glossy_lobe(&self.material, facing, wo, s.dir);
+        let front = self.front != 0;
+        let (glossy_f_cos, glossy_pdf) = glossy_lobe(&self.material, facing, front, wo, s.dir);
         BsdfOutcome {
             dir: s.dir.into(),
             pdf: s.pdf,
@@ -1112,15 +1127,26 @@ mod tests {
     /// of bounces kept (else the weights do not sum to one).
     #[test]
     fn the_glossy_lobe_is_what_an_eye_path_s_bounce_samples() {
+        let glass = |ior, alpha| GpuMaterial {
+            kind: material_kind::GLASS,
+            ior,
+            alpha,
+            ..Zeroable::zeroed()
+        };
         let materials = [
             conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.3),
             conductor([0.15, 0.4, 1.4], [3.6, 2.5, 1.9], 0.05),
             coated([0.3, 0.9, 0.6], 1.6, 0.3, true),
             coated([0.8; 3], 1.5, 0.1, false),
+            glass(1.5, 0.3),
+            glass(1.33, 0.1),
         ];
         const N: u32 = 1 << 16;
         for material in materials {
-            for cos_o in [0.95f32, 0.5, 0.15] {
+            for (front, cos_o) in [true, false]
+                .into_iter()
+                .flat_map(|f| [0.95f32, 0.5, 0.15].map(|c| (f, c)))
+            {
                 let wo = Vec3::new((1.0 - cos_o * cos_o).sqrt(), cos_o, 0.0);
                 let (mut kept, mut integral) = (0u32, 0.0f64);
                 for i in 0..N {
@@ -1128,26 +1154,38 @@ mod tests {
                         (i as f32 + 0.5) / N as f32,
                         ((i.wrapping_mul(40503)) % N) as f32 / N as f32,
                     );
-                    // Below any coat's chance of reflecting: the lobe the eye path continues by.
-                    let s = sample(&material, -wo, Vec3::Y, true, (0.0, u), Transport::Radiance);
+                    // Below any coat's chance of reflecting, so that the path continues; glass
+                    // picks reflection or refraction over all numbers.
+                    let u_lobe = match material.kind {
+                        material_kind::GLASS => ((i.wrapping_mul(7919)) % N) as f32 / N as f32,
+                        _ => 0.0,
+                    };
+                    let s = sample(
+                        &material,
+                        -wo,
+                        Vec3::Y,
+                        front,
+                        (u_lobe, u),
+                        Transport::Radiance,
+                    );
                     if s.weight.x > 0.0 {
                         kept += 1;
-                        let (f_cos, pdf) = glossy_lobe(&material, Vec3::Y, wo, s.dir);
+                        let (f_cos, pdf) = glossy_lobe(&material, Vec3::Y, front, wo, s.dir);
                         let w = f_cos / pdf;
                         assert!(
                             (w - s.weight).abs().max_element() <= 1e-3 * s.weight.max_element(),
-                            "{material:?} cos_o {cos_o}: {w} against {}",
+                            "{material:?} front {front} cos_o {cos_o}: {w} against {}",
                             s.weight
                         );
                     }
                     let wi = crate::sampling::uniform_cone(u.1, u.0, -1.0);
-                    integral += f64::from(glossy_lobe(&material, Vec3::Y, wo, wi).1);
+                    integral += f64::from(glossy_lobe(&material, Vec3::Y, front, wo, wi).1);
                 }
                 let integral = integral * 4.0 * std::f64::consts::PI / f64::from(N);
                 let share = f64::from(kept) / f64::from(N);
                 assert!(
                     (integral - share).abs() < 0.02,
-                    "{material:?} cos_o {cos_o}: density integrates to {integral}, kept {share}"
+                    "{material:?} front {front} cos_o {cos_o}: density integrates to {integral}, kept {share}"
                 );
             }
         }

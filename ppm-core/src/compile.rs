@@ -26,7 +26,8 @@ pub struct SceneFeatures {
     #[serde(default)]
     pub coated: bool,
     /// Some surface is glossy where eye paths continue (a rough conductor, a rough coat's
-    /// reflection): the eye pass samples the lights there ([`crate::bsdf::chain_samples_lights`]).
+    /// reflection, rough glass): the eye pass samples the lights there
+    /// ([`crate::bsdf::chain_samples_lights`]).
     #[serde(default)]
     pub glossy: bool,
     /// Some material's colour comes from an image texture.

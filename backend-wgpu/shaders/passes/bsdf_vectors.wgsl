@@ -38,6 +38,6 @@ fn bsdf_vectors_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     let s = bsdf_sample(c.material, c.incoming, c.facing, c.front != 0u, c.u_lobe, c.u_dir, c.transport);
     let wo = -c.incoming;
     let f_cos = bsdf_eval_cos(c.material, c.facing, wo, s.dir);
-    let glossy = bsdf_glossy_lobe(c.material, c.facing, wo, s.dir);
+    let glossy = bsdf_glossy_lobe(c.material, c.facing, c.front != 0u, wo, s.dir);
     results[i] = BsdfOutcome(s.dir, s.pdf, s.weight, select(0u, 1u, s.transmitted), f_cos, bsdf_pdf(c.material, c.facing, wo, s.dir), glossy.xyz, glossy.w);
 }

@@ -20,7 +20,7 @@ override SPECULAR: bool = true;
 // The light sample at a glossy bounce at `depth` (backend-cpu's chain_light.rs): f cos Le /
 // p_light weighed against the bounce's density in xyz, before the path's throughput; w one
 // when a shadow ray was traced.
-fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<f32>, wo: vec3<f32>, key: StreamKey, depth: u32) -> vec4<f32> {
+fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<f32>, front: bool, wo: vec3<f32>, key: StreamKey, depth: u32) -> vec4<f32> {
     if scene.light_count == 0u {
         return vec4<f32>(0.0);
     }
@@ -28,7 +28,9 @@ fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<
     let light = scene_light(sample_light(stream_uniform(key, first)));
     let b = uniform_triangle(stream_uniform(key, first + 1u), stream_uniform(key, first + 2u));
     let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
-    let origin = position + facing * params.ray_epsilon;
+    // The shadow ray leaves from the light's side (the far one through rough glass).
+    let side = select(-facing, facing, dot(facing, y - position) >= 0.0);
+    let origin = position + side * params.ray_epsilon;
     let to_light = y - origin;
     let dist2 = dot(to_light, to_light);
     if dist2 <= 0.0 {
@@ -37,7 +39,7 @@ fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<
     let dist = sqrt(dist2);
     let wi = to_light / dist;
     let cos_l = -dot(light.normal, wi);
-    let lobe = bsdf_glossy_lobe(material, facing, wo, wi);
+    let lobe = bsdf_glossy_lobe(material, facing, front, wo, wi);
     if cos_l <= 0.0 || all(lobe.xyz == vec3<f32>(0.0)) {
         return vec4<f32>(0.0);
     }
@@ -160,7 +162,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         out.flags |= HIT_EYE_CHAINED;
         let glossy_lobe = sample_lights && bsdf_chain_samples_lights(material);
         if glossy_lobe {
-            let light = glossy_vertex_light(material, position, facing, -dir, key, depth);
+            let light = glossy_vertex_light(material, position, facing, front, -dir, key, depth);
             chain.radiance += throughput * light.xyz;
             shadow_rays += u32(light.w);
         }
@@ -174,7 +176,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         bounce_pdf = -1.0;
         if glossy_lobe {
-            bounce_pdf = bsdf_glossy_lobe(material, facing, -dir, bounce.dir).w;
+            bounce_pdf = bsdf_glossy_lobe(material, facing, front, -dir, bounce.dir).w;
         }
         throughput *= bounce.weight;
         dir = bounce.dir;

@@ -275,18 +275,73 @@ fn bsdf_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
 }
 
 // Whether an eye path continuing through the material samples the lights there: a rough
-// conductor, a rough coat's reflection (ppm_core::bsdf::chain_samples_lights).
+// conductor, a rough coat's reflection, rough glass (ppm_core::bsdf::chain_samples_lights).
 fn bsdf_chain_samples_lights(material: GpuMaterial) -> bool {
-    return (material.kind == MATERIAL_CONDUCTOR && !bsdf_is_delta(material))
+    return ((material.kind == MATERIAL_CONDUCTOR || material.kind == MATERIAL_GLASS) && !bsdf_is_delta(material))
         || (material.kind == MATERIAL_COATED && !coat_is_smooth(material));
 }
 
-// The lobe an eye path continues by at such a surface: f cos over the lobe's chance in xyz,
-// the density of wi within it in w (ppm_core::bsdf::glossy_lobe).
-fn bsdf_glossy_lobe(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
+// A rough dielectric's f cos_i (x) and the density of wi (y) for an eye path that arrived
+// from wo, on either side: reflection above the surface, refraction below it, the densities
+// those of the sampler (ppm_core::bsdf::rough_glass::eval_cos_pdf).
+fn rough_glass_eval_cos_pdf(material: GpuMaterial, facing: vec3<f32>, front: bool, wo: vec3<f32>, wi: vec3<f32>) -> vec2<f32> {
+    let alpha = material.alpha;
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, wi);
-    if cos_o <= 0.0 || cos_i <= 0.0 || !bsdf_chain_samples_lights(material) {
+    if cos_o <= 0.0 || cos_i == 0.0 {
+        return vec2<f32>(0.0);
+    }
+    let eta = select(material.ior, 1.0 / material.ior, front);
+    if cos_i > 0.0 {
+        let h = half_vector(wo, wi);
+        let lobe = ggx_reflection_cos(alpha, facing, wo, wi);
+        let fresnel = fresnel_refract(-wo, h, eta).reflectance;
+        return vec2<f32>(fresnel * lobe, fresnel * ggx_pdf(alpha, facing, wo, wi));
+    }
+    // The microfacet normal that refracts -wo into wi, turned to wo's side.
+    let sum = wo * eta + wi;
+    var h = normalize(sum / max(abs(sum.x), max(abs(sum.y), abs(sum.z))));
+    if dot(facing, h) < 0.0 {
+        h = -h;
+    }
+    let o_h = dot(wo, h);
+    let i_h = dot(wi, h);
+    let denom = eta * o_h + i_h;
+    let denom2 = denom * denom;
+    // `!(denom2 > 0.0)` also refuses a NaN.
+    if o_h <= 0.0 || i_h >= 0.0 || !(denom2 > 0.0) {
+        return vec2<f32>(0.0);
+    }
+    let fresnel = fresnel_refract(-wo, h, eta);
+    if !fresnel.refracts {
+        return vec2<f32>(0.0);
+    }
+    let basis = orthonormal_basis(facing);
+    let d = ggx_d(alpha, vec3<f32>(dot(basis.tangent, h), dot(basis.bitangent, h), dot(facing, h)));
+    let abs_i = -cos_i;
+    let root_o = smith_root(alpha, cos_o);
+    let root_i = smith_root(alpha, abs_i);
+    let jacobian = -i_h / denom2;
+    let pdf = (1.0 - fresnel.reflectance) * d * 2.0 * o_h / (cos_o + root_o) * jacobian;
+    let g2 = 2.0 * cos_o * abs_i / (abs_i * root_o + cos_o * root_i);
+    let f_cos = eta * eta * (1.0 - fresnel.reflectance) * d * g2 * o_h * jacobian / cos_o;
+    return vec2<f32>(f_cos, pdf);
+}
+
+// The lobe an eye path continues by at such a surface, arriving from wo on the side of
+// facing (front: the outside): f cos over the lobe's chance in xyz, the density of wi within
+// it in w; wi below the surface only at rough glass (ppm_core::bsdf::glossy_lobe).
+fn bsdf_glossy_lobe(material: GpuMaterial, facing: vec3<f32>, front: bool, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
+    if !bsdf_chain_samples_lights(material) {
+        return vec4<f32>(0.0);
+    }
+    if material.kind == MATERIAL_GLASS {
+        let glass = rough_glass_eval_cos_pdf(material, facing, front, wo, wi);
+        return vec4<f32>(vec3<f32>(glass.x), glass.y);
+    }
+    let cos_o = dot(facing, wo);
+    let cos_i = dot(facing, wi);
+    if cos_o <= 0.0 || cos_i <= 0.0 {
         return vec4<f32>(0.0);
     }
     if material.kind == MATERIAL_COATED {

@@ -178,9 +178,9 @@ pub fn eye_path(
                 params,
                 scene,
                 material,
-                (position, facing, -dir),
-                &key,
-                depth,
+                (position, facing, front),
+                -dir,
+                (&key, depth),
             );
             chain.radiance = (Vec3::from(chain.radiance) + throughput * light).into();
             shadow_rays += u64::from(traced);
@@ -190,7 +190,7 @@ pub fn eye_path(
         if bounce.weight == Vec3::ZERO {
             return (u64::from(depth) + 1 + shadow_rays, chain);
         }
-        bounce_pdf = glossy.then(|| bsdf::glossy_lobe(material, facing, -dir, bounce.dir).1);
+        bounce_pdf = glossy.then(|| bsdf::glossy_lobe(material, facing, front, -dir, bounce.dir).1);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
@@ -200,23 +200,28 @@ pub fn eye_path(
 }
 
 /// The light sample at a glossy bounce at `depth` (`position`, the normal on the path's
-/// side, the direction back along the path): a light by power and a point on it by area
-/// from the eye stream's light dimensions ([`StreamKey::eye_light`]), its `f cos Le /
-/// p_light` from the lobe the path continues by, weighed against that lobe's density. Returns
-/// it and whether a shadow ray was traced.
+/// side and whether that is the outside; `wo` the direction back along the path): a light
+/// by power and a point on it by area from the eye stream's light dimensions
+/// ([`StreamKey::eye_light`]), its `f cos Le / p_light` from the lobe the path continues by,
+/// weighed against that lobe's density. Returns it and whether a shadow ray was traced.
 fn glossy_light(
     params: &EyePassParams,
     scene: &Scene,
     material: &GpuMaterial,
-    (position, facing, wo): (Vec3, Vec3, Vec3),
-    key: &StreamKey,
-    depth: u32,
+    (position, facing, front): (Vec3, Vec3, bool),
+    wo: Vec3,
+    (key, depth): (&StreamKey, u32),
 ) -> (Vec3, bool) {
     let (choice, (u1, u2)) = key.eye_light(depth);
     let light = &scene.lights[sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice)];
     let (b1, b2) = uniform_triangle(u1, u2);
     let y = Vec3::from(light.v0) + Vec3::from(light.e1) * b1 + Vec3::from(light.e2) * b2;
-    let origin = position + facing * params.ray_epsilon;
+    // The shadow ray leaves from the light's side (the far one through rough glass).
+    let side = match facing.dot(y - position) >= 0.0 {
+        true => facing,
+        false => -facing,
+    };
+    let origin = position + side * params.ray_epsilon;
     let to_light = y - origin;
     let dist2 = to_light.length_squared();
     if dist2 <= 0.0 {
@@ -225,7 +230,7 @@ fn glossy_light(
     let dist = dist2.sqrt();
     let wi = to_light / dist;
     let cos_l = -Vec3::from(light.normal).dot(wi);
-    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, wo, wi);
+    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, front, wo, wi);
     if cos_l <= 0.0 || f_cos == Vec3::ZERO {
         return (Vec3::ZERO, false);
     }

@@ -182,6 +182,7 @@ pub(super) fn eye_path(
         let at = GlossyVertex {
             position,
             facing,
+            front,
             wo: -dir,
             depth,
         };

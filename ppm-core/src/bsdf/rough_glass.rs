@@ -1,10 +1,11 @@
 //! A rough dielectric's value and density for a pair of directions, on either side of the
-//! surface: what the reference path tracer needs to take light samples at rough glass and
-//! weigh them against the bounce that [`sample`](super::sample) draws there.
+//! surface: what the reference path tracer and the eye pass ([`super::glossy_lobe`]) need to
+//! take light samples at rough glass and weigh them against the bounce that
+//! [`sample`](super::sample) draws there; bsdf.wgsl's `rough_glass_eval_cos_pdf` is the twin.
 //!
 //! [`eval_cos`](super::eval_cos) and [`pdf`](super::pdf) leave rough glass out: its Fresnel
-//! term depends on which side the path arrives from, which they do not take, and the passes
-//! never need it (no visible point lies on glass). Here the side comes in as `front`, and
+//! term depends on which side the path arrives from, which they do not take (no visible
+//! point lies on glass). Here the side comes in as `front`, and
 //! the densities are those of the sampler: a microfacet normal drawn from the normals visible
 //! from `wo`, then reflection with the chance `F` or refraction with `1 - F` (Walter et al.
 //! 2007, sections 4-5; Heitz 2018).
