@@ -1,9 +1,9 @@
 //! Direct light at an eye path's glossy bounces (docs/algorithm.md 1.2): where the path
-//! continues off a rough metal or a rough coat's reflection, it also takes a light sample,
-//! weighed by the power heuristic against its own bounce, which in turn weighs the emission it
-//! meets next. A small light in a glossy surface is then found by both strategies, not by
-//! the bounce alone. What the samples add rides apart from the slot ([`ChainLight`]) to the
-//! direct-light pass, which adds it to the slot's direct sum.
+//! continues off a rough metal, a rough coat's reflection or rough glass, it also takes a
+//! light sample, weighed by the power heuristic against its own bounce, which in turn weighs
+//! the emission it meets next. A small light in a glossy surface is then found by both
+//! strategies, not by the bounce alone. What the samples add rides apart from the slot
+//! ([`ChainLight`]) to the direct-light pass, which adds it to the slot's direct sum.
 
 use crate::trace::{Hit, SceneData};
 use glam::Vec3;
@@ -81,7 +81,8 @@ fn glossy_vertex_light(
 
 /// The weight of the emission an eye path meets at `hit` (travelling `dir`) after a glossy
 /// bounce that drew `dir` with density `bounce_pdf`, against the light sample taken there:
-/// one off a light's front or where no light sample was taken (`bounce_pdf` `None`).
+/// one where `hit` is not on a light's front or no light sample was taken (`bounce_pdf`
+/// `None`).
 fn emission_weight(scene: &SceneData, hit: &Hit, dir: Vec3, bounce_pdf: Option<f32>) -> f32 {
     let tri = &scene.triangles[hit.triangle as usize];
     let cos_l = -Vec3::from(tri.normal).dot(dir);
