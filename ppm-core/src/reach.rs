@@ -5,10 +5,6 @@
 
 use glam::Vec3;
 
-/// Pieces the segments between two boxes are cut into along their length: the box around
-/// each piece is tested, so the test is as tight as a piece is short.
-const PIECES: u32 = 16;
-
 /// An axis-aligned box by its corners (`lo > hi` on some axis: the box of nothing).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
@@ -42,6 +38,11 @@ impl Aabb {
             && other.lo.cmple(self.hi).all()
     }
 
+    /// Whether every point of `other` lies in the box.
+    pub fn contains(&self, other: &Aabb) -> bool {
+        self.lo.cmple(other.lo).all() && other.hi.cmple(self.hi).all()
+    }
+
     /// The smallest box holding both.
     pub fn union(&self, other: &Aabb) -> Aabb {
         Aabb::new(self.lo.min(other.lo), self.hi.max(other.hi))
@@ -60,23 +61,45 @@ impl Aabb {
 
 /// Whether some segment from a point of `from` to a point of `to` may meet `target`.
 ///
-/// A point `(1 - s) p + s q` of such a segment lies, for `s` in `[s0, s1]`, in the box
-/// spanned by the boxes `(1 - s0) from + s0 to` and `(1 - s1) from + s1 to` (the set is
-/// linear in `s`, so its extremes sit at the ends). The test checks that box for each of
-/// `PIECES` (16) pieces of `[0, 1]`: never a wrong no, and a yes only within a piece's reach.
+/// The point `(1 - s) p + s q` of such a segment lies in the box `B(s)` between
+/// `(1 - s) from.lo + s to.lo` and `(1 - s) from.hi + s to.hi`, so a segment can meet
+/// `target` at `s` only where `B(s)` overlaps it. On each axis the overlap holds on an
+/// interval of `s` (both bounds of `B(s)` are linear in `s`); the test asks whether the
+/// three intervals share an `s` in `[0, 1]`, each widened a little for rounding: never a
+/// wrong no, and a few divisions whatever the boxes (a local move asks it of every slot).
 pub fn segments_may_meet(from: &Aabb, to: &Aabb, target: &Aabb) -> bool {
     if from.is_empty() || to.is_empty() || target.is_empty() {
         return false;
     }
-    if !from.union(to).overlaps(target) {
-        return false;
+    let (mut first, mut last) = (0.0_f32, 1.0_f32);
+    for k in 0..3 {
+        // B(s).lo <= target.hi, and B(s).hi >= target.lo.
+        let (a, b) = at_most(from.lo[k], to.lo[k], target.hi[k]);
+        let (c, d) = at_most(-from.hi[k], -to.hi[k], -target.lo[k]);
+        first = first.max(a).max(c);
+        last = last.min(b).min(d);
     }
-    let at = |s: f32| Aabb::new(from.lo.lerp(to.lo, s), from.hi.lerp(to.hi, s));
-    (0..PIECES).any(|k| {
-        let s0 = k as f32 / PIECES as f32;
-        let s1 = (k + 1) as f32 / PIECES as f32;
-        at(s0).union(&at(s1)).overlaps(target)
-    })
+    first <= last
+}
+
+/// How much each bound of the target is widened, relative to the largest coordinate in play,
+/// so that the rounding of an interval's ends never turns a meeting into a miss (f32 rounds at
+/// about 6e-8 of it).
+const WIDEN: f32 = 1e-5;
+
+/// The interval of `s` in `[0, 1]` where `(1 - s) at0 + s at1 <= bound`, widened by
+/// [`WIDEN`] (empty: first > last). Infinite or NaN inputs answer all of `[0, 1]`.
+fn at_most(at0: f32, at1: f32, bound: f32) -> (f32, f32) {
+    let bound = bound + WIDEN * bound.abs().max(at0.abs()).max(at1.abs());
+    let slope = at1 - at0;
+    if !(slope.is_finite() && bound.is_finite()) {
+        return (0.0, 1.0);
+    }
+    if slope == 0.0 {
+        return if at0 <= bound { (0.0, 1.0) } else { (1.0, 0.0) };
+    }
+    let s = (bound - at0) / slope;
+    if slope > 0.0 { (0.0, s) } else { (s, 1.0) }
 }
 
 #[cfg(test)]
@@ -90,12 +113,33 @@ mod tests {
         Aabb::new(lo, lo + Vec3::ONE)
     }
 
+    /// A point of the unit cube from dimensions `d` to `d + 2` of `k`.
+    fn random_point(k: &StreamKey, d: u32) -> Vec3 {
+        Vec3::new(k.uniform(d), k.uniform(d + 1), k.uniform(d + 2))
+    }
+
+    /// Three random boxes within `[0, 13]^3`, from the stream of `path` (dimensions 0-17),
+    /// and the stream.
+    fn random_boxes(seed: u32, path: u32) -> (StreamKey, [Aabb; 3]) {
+        let k = StreamKey {
+            seed,
+            kind: PassKind::Photon,
+            pass_index: 0,
+            path,
+        };
+        let boxed = |d: u32| {
+            let lo = random_point(&k, d) * 10.0;
+            Aabb::new(lo, lo + random_point(&k, d + 3) * 3.0)
+        };
+        (k, [boxed(0), boxed(6), boxed(12)])
+    }
+
     #[test]
     fn a_box_between_two_others_is_met_and_one_beside_them_is_not() {
         let (a, b) = (unit([0.0, 0.0, 0.0]), unit([10.0, 0.0, 0.0]));
         assert!(segments_may_meet(&a, &b, &unit([5.0, 0.0, 0.0])));
         assert!(!segments_may_meet(&a, &b, &unit([5.0, 3.0, 0.0])));
-        // Inside the box around both, but off every segment: the pieces tell it apart.
+        // Inside the box around both, but off every segment: the sweep tells it apart.
         assert!(!segments_may_meet(
             &unit([0.0, 0.0, 0.0]),
             &unit([10.0, 10.0, 0.0]),
@@ -114,24 +158,10 @@ mod tests {
     /// target (exactly, by the slab test) are always answered yes.
     #[test]
     fn every_segment_that_meets_the_target_is_answered_yes() {
-        let key = |path| StreamKey {
-            seed: 11,
-            kind: PassKind::Photon,
-            pass_index: 0,
-            path,
-        };
         let mut met = 0;
         for path in 0..20_000 {
-            let k = key(path);
-            let v = |d: u32| Vec3::new(k.uniform(d), k.uniform(d + 1), k.uniform(d + 2)) * 10.0;
-            let boxed = |d: u32| {
-                let (a, b) = (v(d), v(d + 3) * 0.3);
-                Aabb::new(a, a + b)
-            };
-            let (from, to, target) = (boxed(0), boxed(6), boxed(12));
-            let inside = |b: &Aabb, d: u32| {
-                b.lo + (b.hi - b.lo) * Vec3::new(k.uniform(d), k.uniform(d + 1), k.uniform(d + 2))
-            };
+            let (k, [from, to, target]) = random_boxes(11, path);
+            let inside = |b: &Aabb, d: u32| b.lo + (b.hi - b.lo) * random_point(&k, d);
             let (p, q) = (inside(&from, 18), inside(&to, 21));
             let len = (q - p).length();
             if len > 0.0 && segment_meets_box(p, (q - p) / len, len, target.lo, target.hi) {
@@ -143,6 +173,38 @@ mod tests {
             }
         }
         assert!(met > 300, "only {met} segments met their target");
+    }
+
+    /// And a yes only where a box of the sweep between the two boxes comes near the target:
+    /// over random boxes, every target that no swept box `B(s)` (sampled densely) comes within
+    /// 0.01 of is answered no, and the test answers no often.
+    #[test]
+    fn a_target_away_from_every_swept_box_is_answered_no() {
+        let mut no = 0;
+        for path in 0..5_000 {
+            let (_, [from, to, target]) = random_boxes(12, path);
+            let grown = Aabb::new(target.lo - 0.01, target.hi + 0.01);
+            let swept_near = (0..=4096).any(|i| {
+                let s = i as f32 / 4096.0;
+                Aabb::new(from.lo.lerp(to.lo, s), from.hi.lerp(to.hi, s)).overlaps(&grown)
+            });
+            if !swept_near {
+                no += 1;
+                assert!(
+                    !segments_may_meet(&from, &to, &target),
+                    "{from:?} {to:?} {target:?}"
+                );
+            }
+        }
+        assert!(no > 2_500, "only {no} targets away from the sweep");
+    }
+
+    #[test]
+    fn a_box_contains_itself_and_smaller_boxes_only() {
+        let b = unit([0.0; 3]);
+        assert!(b.contains(&b));
+        assert!(b.contains(&Aabb::new(Vec3::splat(0.2), Vec3::splat(0.8))));
+        assert!(!b.contains(&unit([0.5, 0.0, 0.0])));
     }
 
     #[test]

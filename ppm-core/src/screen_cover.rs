@@ -12,33 +12,51 @@ use glam::{Mat3, Vec2, Vec3};
 /// Widens each pixel's square, in pixels, beyond the rounding of projection and eye rays.
 const MARGIN: f32 = 0.05;
 
-/// Image coordinates of `p` in pixels, the inverse of [`camera_ray`](crate::compile::camera_ray): `None` unless `p`
-/// lies in front of the eye (a positive distance along the view direction).
-pub fn project(camera: &GpuCamera, p: Vec3) -> Option<Vec2> {
-    // p - eye = z (forward + sx right + sy up): solve for (z, z sx, z sy).
-    let basis = Mat3::from_cols(camera.forward.into(), camera.right.into(), camera.up.into());
-    let v = basis.inverse() * (p - Vec3::from(camera.eye));
-    if v.x.is_nan() || v.x <= 0.0 {
-        return None;
+/// The camera's projection onto the image, the inverse of
+/// [`camera_ray`](crate::compile::camera_ray), its basis inverted once.
+pub struct Projection {
+    to_camera: Mat3,
+    eye: Vec3,
+    size: Vec2,
+}
+
+impl Projection {
+    /// The projection of `camera`.
+    pub fn new(camera: &GpuCamera) -> Self {
+        let basis = Mat3::from_cols(camera.forward.into(), camera.right.into(), camera.up.into());
+        Self {
+            to_camera: basis.inverse(),
+            eye: camera.eye.into(),
+            size: Vec2::new(camera.width as f32, camera.height as f32),
+        }
     }
-    let (sx, sy) = (v.y / v.x, v.z / v.x);
-    let size = Vec2::new(camera.width as f32, camera.height as f32);
-    let image = Vec2::new((sx + 1.0) * 0.5, (1.0 - sy) * 0.5) * size;
-    image.is_finite().then_some(image)
+
+    /// Image coordinates of `p` in pixels: `None` unless `p` lies in front of the eye (a
+    /// positive distance along the view direction).
+    pub fn project(&self, p: Vec3) -> Option<Vec2> {
+        // p - eye = z (forward + sx right + sy up): solve for (z, z sx, z sy).
+        let v = self.to_camera * (p - self.eye);
+        if v.x.is_nan() || v.x <= 0.0 {
+            return None;
+        }
+        let (sx, sy) = (v.y / v.x, v.z / v.x);
+        let image = Vec2::new((sx + 1.0) * 0.5, (1.0 - sy) * 0.5) * self.size;
+        image.is_finite().then_some(image)
+    }
 }
 
 /// One flag per pixel (row-major), set where some eye ray of the pixel may meet one of
 /// `triangles`. A triangle reaching behind the eye marks every pixel.
 pub fn covered_pixels(camera: &GpuCamera, triangles: &[[Vec3; 3]]) -> Vec<bool> {
     let (width, height) = (camera.width as usize, camera.height as usize);
+    let projection = Projection::new(camera);
     let mut covered = vec![false; width * height];
     for t in triangles {
-        let projected: Option<Vec<Vec2>> = t.iter().map(|&v| project(camera, v)).collect();
-        let Some(p) = projected else {
+        let [Some(a), Some(b), Some(c)] = t.map(|v| projection.project(v)) else {
             covered.fill(true);
             return covered;
         };
-        mark_triangle(&mut covered, width, height, [p[0], p[1], p[2]]);
+        mark_triangle(&mut covered, width, height, [a, b, c]);
     }
     covered
 }
@@ -117,13 +135,13 @@ mod tests {
         for (px, py) in [(0.0, 0.0), (31.5, 20.25), (63.9, 47.9), (10.0, 40.0)] {
             for distance in [0.5, 3.0, 40.0] {
                 let p = Vec3::from(cam.eye) + camera_ray(&cam, px, py) * distance;
-                let image = project(&cam, p).unwrap();
+                let image = Projection::new(&cam).project(p).unwrap();
                 approx::assert_abs_diff_eq!(image.x, px, epsilon = 1e-3);
                 approx::assert_abs_diff_eq!(image.y, py, epsilon = 1e-3);
             }
         }
         let behind = Vec3::from(cam.eye) - Vec3::from(cam.forward);
-        assert_eq!(project(&cam, behind), None);
+        assert_eq!(Projection::new(&cam).project(behind), None);
     }
 
     /// Every jittered eye ray that meets a triangle lands in a marked pixel, and the marks

@@ -43,7 +43,7 @@
 //!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
-use super::direct_change::{MOST_SAMPLES, Samples, direct_changes, direct_samples_for};
+use super::direct_change::{MOST_SAMPLES, Reach, Samples, direct_changes, direct_samples_for};
 use super::moves::{Compensation, MoveReport};
 use super::probe::{self, HostPose, ProbeSettings};
 use super::{Renderer, dynamic, pass_params};
@@ -52,7 +52,7 @@ use ppm_core::compile::{mover_boxes, object_group};
 use ppm_core::layout::{HitPoint, SlotBounds, gather_kind, hit_flags};
 use ppm_core::params::Estimator;
 use ppm_core::passes::BackendError;
-use ppm_core::reach::{Aabb, segments_may_meet};
+use ppm_core::reach::Aabb;
 use ppm_core::refit::recompile_moved;
 use ppm_core::scene::{MaterialKind, Scene};
 use ppm_core::screen_cover::covered_pixels;
@@ -107,6 +107,13 @@ struct Moved {
     before: Vec<Aabb>,
     /// Their boxes in pose B.
     after: Vec<Aabb>,
+}
+
+impl Moved {
+    /// Their boxes in both poses.
+    fn both(&self) -> Vec<Aabb> {
+        self.before.iter().chain(&self.after).copied().collect()
+    }
 }
 
 impl Renderer<'_> {
@@ -190,7 +197,9 @@ impl Renderer<'_> {
         let after = HostPose::new(&compiled);
         let resets = self.reset_near(&mut slots, &next, &after, changed, &moved, &size)?;
         if resets.direct_corrected > 0 {
-            self.correct_direct(&mut slots, &after, size.direct_samples);
+            let before = HostPose::reusing(&self.compiled, self.host_copy.take());
+            let poses = (&before, &after);
+            self.correct_direct(&mut slots, poses, &moved, size.direct_samples);
         }
         self.backend.write_hit_points(&slots)?;
         report.updated = resets.reset;
@@ -205,7 +214,9 @@ impl Renderer<'_> {
         self.compensate(&size.photons, gather_kind::REGION_NEGATIVE)?;
         dynamic(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
+        let copy = after.into_copy();
         self.adopt(next, compiled);
+        self.host_copy = copy;
         self.counters.frame += 1;
         let positive = self.compensate(&size.photons, gather_kind::REGION_POSITIVE)?;
         if positive.emitted > 0 {
@@ -230,13 +241,20 @@ impl Renderer<'_> {
     }
 
     /// Corrects the direct sums of the kept `slots` flagged `DIRECT_MAY_CHANGE` by their
-    /// change from the current pose to `next` ([`direct_changes`]), each weighed against its
+    /// change from pose `before` to `after` of the `moved` objects ([`direct_changes`]),
+    /// each weighed against its
     /// history (docs/algorithm.md 3c): against the slot's corrected mean `D` over `N`
     /// iterations (relative noise about `1 / N`), a change known to a variance `V` leaves
     /// the history worth `N' = N / (1 + N V / lum(D)^2)` iterations ([`history_kept`]), and
     /// the sum keeps its mean at that count. An unchanged slot keeps all of it. Channels the
     /// change drives below zero are clamped there. `samples` pairs per slot.
-    fn correct_direct(&self, slots: &mut [HitPoint], next: &HostPose, samples: u32) {
+    fn correct_direct(
+        &self,
+        slots: &mut [HitPoint],
+        (before, after): (&HostPose, &HostPose),
+        moved: &Moved,
+        samples: u32,
+    ) {
         let corrected: Vec<bool> = slots
             .iter()
             .map(|hp| hp.flags & hit_flags::DIRECT_MAY_CHANGE != 0 && hp.iterations > 0)
@@ -246,13 +264,19 @@ impl Renderer<'_> {
             first: self.counters.difference_pass.wrapping_mul(MOST_SAMPLES),
             count: samples,
         };
+        let (lights, boxes) = (self.light_boxes(), moved.both());
+        let reach = Reach {
+            lights: &lights,
+            moved: &boxes,
+        };
         let changes = direct_changes(
-            &HostPose::new(&self.compiled),
-            next,
+            before,
+            after,
             slots,
             &corrected,
             &samples,
             &self.probe_settings(),
+            &reach,
         );
         slots.par_iter_mut().zip(changes).for_each(|(hp, change)| {
             // No pair changed: the sum stays as it is, bit for bit.
@@ -319,11 +343,10 @@ impl Renderer<'_> {
             .collect();
         let met_in_b = self.probe(after, slots, &undecided, moved.groups);
         let lights = self.light_boxes();
-        let boxes: Vec<Aabb> = moved.before.iter().chain(&moved.after).copied().collect();
-        let direct_may_change = |b: &Aabb| {
-            lights
-                .iter()
-                .any(|l| boxes.iter().any(|m| segments_may_meet(b, l, m)))
+        let boxes = moved.both();
+        let reach = Reach {
+            lights: &lights,
+            moved: &boxes,
         };
         let r2_initial = self.params.initial_radius * self.params.initial_radius;
         let (reset, corrected) = slots
@@ -342,7 +365,7 @@ impl Renderer<'_> {
                 hp.flags &=
                     !(hit_flags::UPDATED | hit_flags::RESTING | hit_flags::DIRECT_MAY_CHANGE);
                 hp.correction_r2 = correction_r2(hp.position.into(), &boxes, size);
-                if direct_may_change(&reached(i)) {
+                if reach.direct_may_change(&reached(i)) {
                     hp.flags |= hit_flags::DIRECT_MAY_CHANGE;
                     return (0, 1);
                 }
@@ -366,16 +389,17 @@ impl Renderer<'_> {
         }
     }
 
-    /// The boxes the direct-light test reaches for: each light's, or one around all of them.
+    /// The boxes the direct-light test reaches for: each light's (a box inside another
+    /// counted once: a quad's two triangles share theirs), or one around all of them.
     fn light_boxes(&self) -> Vec<Aabb> {
-        let boxes: Vec<Aabb> = self
-            .lights
-            .iter()
-            .map(|l| {
-                let v0 = Vec3::from(l.v0);
-                Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)])
-            })
-            .collect();
+        let mut boxes: Vec<Aabb> = Vec::new();
+        for l in &self.lights {
+            let v0 = Vec3::from(l.v0);
+            let b = Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)]);
+            if !boxes.iter().any(|kept| kept.contains(&b)) {
+                boxes.push(b);
+            }
+        }
         if boxes.len() <= LIGHT_BOXES {
             return boxes;
         }
@@ -453,6 +477,38 @@ mod tests {
             widest: CORRECTION_WIDEST.min(share),
             direct_samples: direct_samples_for(share),
         }
+    }
+
+    /// A drag copies each pose once: the copy a local move keeps for the next is the pose
+    /// the render now holds (triangles, tree and materials, byte for byte), after every move
+    /// of a drag; a restart drops it.
+    #[test]
+    fn the_pose_kept_for_the_next_move_is_the_pose_rendered() {
+        use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+        use ppm_core::scene::Move;
+        let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+        let mut params = RenderParams::for_scene(&scene);
+        (params.width, params.height, params.photons_per_pass) = (24, 24, 2000);
+        let step = Move {
+            translation: Vec3::new(-2.0, 0.0, 1.0),
+            rotation: glam::Quat::from_rotation_y(0.05),
+            ..scene.moves[0]
+        };
+        let mut backend = backend_cpu::CpuBackend::new();
+        let mut r = Renderer::start(&mut backend, scene, &params, &MoveParams::default()).unwrap();
+        fn bytes<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
+            bytemuck::cast_slice(v)
+        }
+        for _ in 0..3 {
+            r.iteration().unwrap();
+            r.move_objects(&[step], MoveMode::Local).unwrap();
+            let copy = r.host_copy.as_ref().expect("the move kept its pose B");
+            assert_eq!(copy.triangles, r.compiled.triangles);
+            assert_eq!(bytes(&copy.bvh.nodes), bytes(&r.compiled.bvh.nodes));
+            assert_eq!(copy.materials, r.compiled.materials);
+        }
+        r.move_objects(&[step], MoveMode::Restart).unwrap();
+        assert!(r.host_copy.is_none());
     }
 
     /// Near the move a slot keeps the floor disc; it widens with the distance at

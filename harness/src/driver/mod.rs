@@ -26,6 +26,7 @@ pub use schedule::{
 };
 
 use crate::report::{RenderReport, left_out};
+use backend_cpu::trace::SceneData;
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
@@ -76,6 +77,9 @@ pub struct Renderer<'a> {
     /// The current pose as the backend holds it: a local move uploads it again with the
     /// moved objects' boxes.
     compiled: CompiledScene,
+    /// A copy of the current pose for the host's traces ([`probe::HostPose`]): the last
+    /// local move's pose B, kept so that a drag copies each pose once, not twice.
+    host_copy: Option<SceneData>,
     counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,
@@ -115,6 +119,7 @@ impl<'a> Renderer<'a> {
             materials: compiled.materials.clone(),
             extent: compiled.extent,
             compiled,
+            host_copy: None,
             counters: Counters {
                 fresh: true,
                 ..Counters::default()
@@ -164,6 +169,7 @@ impl<'a> Renderer<'a> {
         self.materials = compiled.materials.clone();
         self.extent = compiled.extent;
         self.compiled = compiled;
+        self.host_copy = None;
     }
 
     /// One iteration: for `sppm` an eye pass and direct light, then for both estimators one

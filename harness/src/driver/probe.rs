@@ -10,7 +10,9 @@ use backend_cpu::trace::SceneData;
 use glam::Vec3;
 use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::{CompiledScene, camera_ray};
+use ppm_core::geometry::segment_meets_box;
 use ppm_core::layout::{ChainLight, HitPoint, hit_flags};
+use ppm_core::reach::Aabb;
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
 use std::cell::OnceCell;
@@ -42,11 +44,35 @@ impl<'a> HostPose<'a> {
         }
     }
 
+    /// The pose `compiled` with `copy`, a copy made of it earlier, if there is one: its
+    /// triangles, tree and materials must be `compiled`'s; its movers' boxes are renewed.
+    pub fn reusing(compiled: &'a CompiledScene, copy: Option<SceneData>) -> Self {
+        let scene = OnceCell::new();
+        if let Some(mut copy) = copy {
+            copy.movers.clone_from(&compiled.movers);
+            let _ = scene.set(copy);
+        }
+        Self { compiled, scene }
+    }
+
+    /// Its copy, if one was made.
+    pub fn into_copy(self) -> Option<SceneData> {
+        self.scene.into_inner()
+    }
+
     /// Its scene for ray queries, copied on the first call.
     pub fn scene(&self) -> &SceneData {
         self.scene.get_or_init(|| SceneData::new(self.compiled))
     }
+
+    /// The pose as threads share it, copied if it is not yet.
+    pub fn traced(&self) -> Traced<'_> {
+        (self.scene(), self.compiled)
+    }
 }
+
+/// A pose copied for ray queries, and as compiled.
+pub(super) type Traced<'a> = (&'a SceneData, &'a CompiledScene);
 
 /// How the probe's paths are traced: the render's seed, depth and ray offset, and whether
 /// they take the light samples the eye pass takes at glossy bounces (for their direct light).
@@ -96,13 +122,35 @@ fn meets(
         pass_index: path,
         path: pixel,
     };
-    eye_path(scene, pose, pixel, (jx, jy), &key, groups, settings).met
+    let watch = Watch { groups, boxes: &[] };
+    eye_path(scene, pose, pixel, (jx, jy), &key, &watch, settings).met
+}
+
+/// What an eye path traced on the host watches for: surfaces of some object groups (bits of
+/// [`ppm_core::compile::object_group`]), where it stops, and boxes its segments may cross.
+pub(super) struct Watch<'a> {
+    pub groups: u32,
+    pub boxes: &'a [Aabb],
+}
+
+impl Watch<'_> {
+    /// Whether the segment from `origin` along the unit `dir` for `t_max` meets a box.
+    fn crossed(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        self.boxes
+            .iter()
+            .any(|b| segment_meets_box(origin, dir, t_max, b.lo, b.hi))
+    }
 }
 
 /// One eye path traced on the host, as the eye pass traces it.
 pub(super) struct EyePath {
     /// Whether it met one of the groups asked about, up to and including its visible point.
     pub met: bool,
+    /// Whether one of its segments, up to where it stopped (escaping: without end), crossed
+    /// one of the boxes asked about.
+    pub crossed: bool,
+    /// Whether it bounced off a mirror, glass or glossy surface on its way.
+    pub bounced: bool,
     /// Its visible point (position, facing normal, material, throughput and `VALID` and
     /// `FRONT` flags, as the eye pass writes them), if it reached one before meeting a group.
     pub visible: Option<HitPoint>,
@@ -117,14 +165,14 @@ const DIM_GLOSSY: u32 = 1 << 16;
 
 /// Traces the eye path through point `(jx, jy)` of `pixel` in `pose` (`scene`) to its first
 /// diffuse surface, glass choices and glossy bounces drawn from `key`; it stops at the first
-/// surface of one of `groups`.
+/// surface of one of `watch`'s groups.
 pub(super) fn eye_path(
     scene: &SceneData,
     pose: &CompiledScene,
     pixel: u32,
     (jx, jy): (f32, f32),
     key: &StreamKey,
-    groups: u32,
+    watch: &Watch,
     settings: &ProbeSettings,
 ) -> EyePath {
     let camera = &pose.camera;
@@ -134,19 +182,26 @@ pub(super) fn eye_path(
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
     let mut chain = ChainTracker::default();
-    let nothing = |chain: &ChainTracker| EyePath {
+    let mut crossed = false;
+    let nothing = |chain: &ChainTracker, crossed, depth| EyePath {
         met: false,
+        crossed,
+        bounced: depth > 0,
         visible: None,
         chain: chain.finish(scene, None),
     };
     for depth in 0..=settings.max_depth {
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
-            return nothing(&chain);
+            crossed |= watch.crossed(origin, dir, f32::INFINITY);
+            return nothing(&chain, crossed, depth);
         };
+        crossed |= watch.crossed(origin, dir, hit.t);
         let tri = &scene.triangles[hit.triangle as usize];
-        if tri.group & groups != 0 {
+        if tri.group & watch.groups != 0 {
             return EyePath {
                 met: true,
+                crossed,
+                bounced: depth > 0,
                 visible: None,
                 chain: ChainLight::NONE,
             };
@@ -168,6 +223,8 @@ pub(super) fn eye_path(
             let front = if front { hit_flags::FRONT } else { 0 };
             return EyePath {
                 met: false,
+                crossed,
+                bounced: depth > 0,
                 visible: Some(HitPoint {
                     position: position.into(),
                     normal: facing.into(),
@@ -191,7 +248,7 @@ pub(super) fn eye_path(
         }
         let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
-            return nothing(&chain);
+            return nothing(&chain, crossed, depth + 1);
         }
         if settings.sample_lights {
             chain.after_bounce(material, &at, bounce.dir);
@@ -201,5 +258,5 @@ pub(super) fn eye_path(
         let side = if bounce.transmitted { -facing } else { facing };
         origin = position + side * settings.ray_epsilon;
     }
-    nothing(&chain)
+    nothing(&chain, crossed, settings.max_depth + 1)
 }
