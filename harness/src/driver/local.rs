@@ -245,12 +245,12 @@ impl Renderer<'_> {
 
     /// Corrects the direct sums of the kept `slots` flagged `DIRECT_MAY_CHANGE` by their
     /// change from pose `before` to `after` of the `moved` objects ([`direct_changes`]),
-    /// each weighed against its
-    /// history (docs/algorithm.md 3c): against the slot's corrected mean `D` over `N`
-    /// iterations (relative noise about `1 / N`), a change known to a variance `V` leaves
-    /// the history worth `N' = N / (1 + N V / lum(D)^2)` iterations ([`history_kept`]), and
-    /// the sum keeps its mean at that count. An unchanged slot keeps all of it. Channels the
-    /// change drives below zero are clamped there. `samples` pairs per slot.
+    /// each weighed against its history (docs/algorithm.md 3c): against the slot's
+    /// corrected mean `D` over `N` iterations (relative noise about `1 / N`), a change known
+    /// to a variance `V` leaves the history worth `N' = N / (1 + N V / lum(D)^2)` iterations
+    /// ([`history_kept`]), and the sum keeps its mean at that count. An unchanged slot keeps
+    /// all of it. Channels the change drives below zero are clamped there. `samples` pairs
+    /// per slot.
     fn correct_direct(
         &self,
         slots: &mut [HitPoint],
