@@ -7,7 +7,7 @@
 
 use crate::trace::{Hit, SceneData};
 use glam::Vec3;
-use ppm_core::bsdf;
+use ppm_core::bsdf::{self, BsdfSample, Transport};
 use ppm_core::layout::{ChainLight, GpuMaterial, NO_MATERIAL};
 use ppm_core::rng::StreamKey;
 use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
@@ -96,51 +96,61 @@ fn emission_weight(scene: &SceneData, hit: &Hit, dir: Vec3, bounce_pdf: Option<f
 }
 
 /// Follows one eye path's glossy bounces: the light samples taken at them, and the density
-/// of the last bounce, which weighs the emission met next.
+/// of the last bounce, which weighs the emission met next. The CPU eye pass and the host's
+/// eye paths of local mode (`harness::driver::probe`) bounce through it alike.
 #[derive(Clone, Copy, Debug)]
 pub struct ChainTracker {
+    /// The path's key and ray offset, when it samples the lights at its glossy bounces.
+    lights: Option<(StreamKey, f32)>,
     radiance: Vec3,
     bounce_pdf: Option<f32>,
     rays: u64,
 }
 
-impl Default for ChainTracker {
-    fn default() -> Self {
+impl ChainTracker {
+    /// A path's tracker; `lights`: its key and ray offset when it samples the lights.
+    pub fn new(lights: Option<(StreamKey, f32)>) -> Self {
         Self {
+            lights,
             radiance: Vec3::ZERO,
             bounce_pdf: None,
             rays: 0,
         }
     }
-}
 
-impl ChainTracker {
-    /// Where the path continues through `material` at `at` with `throughput` so far: takes
-    /// the light sample if the material has a glossy lobe there.
-    pub fn before_bounce(
+    /// The path's bounce through `material` at `at` with `throughput` so far, drawn from
+    /// `u` ([`bsdf::sample`]). Where the material has a glossy lobe and the path samples the
+    /// lights, it takes the light sample first, then notes the drawn direction's density
+    /// within the lobe.
+    pub fn bounce(
         &mut self,
         scene: &SceneData,
         material: &GpuMaterial,
         at: &GlossyVertex,
         throughput: Vec3,
-        key: &StreamKey,
-        ray_epsilon: f32,
-    ) {
+        u: (f32, (f32, f32)),
+    ) -> BsdfSample {
         self.bounce_pdf = None;
-        if !bsdf::chain_samples_lights(material) {
-            return;
-        }
-        if let Some(light) = glossy_vertex_light(scene, material, at, key, ray_epsilon) {
+        let sampled = self.lights.filter(|_| bsdf::chain_samples_lights(material));
+        if let Some((key, ray_epsilon)) = sampled
+            && let Some(light) = glossy_vertex_light(scene, material, at, &key, ray_epsilon)
+        {
             self.radiance += throughput * light;
             self.rays += 1;
         }
-    }
-
-    /// After the bounce at `at` drew `dir`: its density within the glossy lobe, if the
-    /// material has one.
-    pub fn after_bounce(&mut self, material: &GpuMaterial, at: &GlossyVertex, dir: Vec3) {
-        self.bounce_pdf = bsdf::chain_samples_lights(material)
-            .then(|| bsdf::glossy_lobe(material, at.facing, at.front, at.wo, dir).1);
+        let bounce = bsdf::sample(
+            material,
+            -at.wo,
+            at.facing,
+            at.front,
+            u,
+            Transport::Radiance,
+        );
+        if sampled.is_some() && bounce.weight != Vec3::ZERO {
+            self.bounce_pdf =
+                Some(bsdf::glossy_lobe(material, at.facing, at.front, at.wo, bounce.dir).1);
+        }
+        bounce
     }
 
     /// The path's light samples, and the weight of the emission at `hit`, where it stops

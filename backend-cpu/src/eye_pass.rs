@@ -4,7 +4,7 @@
 use crate::chain_light::{ChainTracker, GlossyVertex};
 use crate::trace::SceneData;
 use glam::Vec3;
-use ppm_core::bsdf::{self, Transport};
+use ppm_core::bsdf;
 use ppm_core::compile::camera_ray;
 use ppm_core::layout::{
     ChainLight, EyePassParams, GpuCamera, HitPoint, NO_MATERIAL, SlotBounds, eye_flags, hit_flags,
@@ -141,8 +141,8 @@ fn trace_eye_path(
     let mut dir = camera_ray(camera, px, py);
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
-    let mut chain = ChainTracker::default();
     let sample_lights = params.flags & eye_flags::SAMPLE_LIGHTS != 0;
+    let mut chain = ChainTracker::new(sample_lights.then_some((key, params.ray_epsilon)));
     let end = |depth: u32, chain: &ChainTracker, stop| {
         let rays = u64::from(depth) + 1 + chain.rays();
         (rays, Some(chain.finish(scene, stop)))
@@ -184,17 +184,10 @@ fn trace_eye_path(
             wo: -dir,
             depth,
         };
-        if sample_lights {
-            chain.before_bounce(scene, material, &at, throughput, &key, params.ray_epsilon);
-        }
-        let u = key.eye_bounce(depth);
-        let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
+        let bounce = chain.bounce(scene, material, &at, throughput, key.eye_bounce(depth));
         if bounce.weight == Vec3::ZERO {
             // A glossy direction below the surface: the path ends without a visible point.
             return end(depth, &chain, None);
-        }
-        if sample_lights {
-            chain.after_bounce(material, &at, bounce.dir);
         }
         throughput *= bounce.weight;
         dir = bounce.dir;

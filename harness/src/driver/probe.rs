@@ -8,7 +8,7 @@
 use backend_cpu::chain_light::{ChainTracker, GlossyVertex};
 use backend_cpu::trace::SceneData;
 use glam::Vec3;
-use ppm_core::bsdf::{self, Transport};
+use ppm_core::bsdf;
 use ppm_core::compile::{CompiledScene, camera_ray};
 use ppm_core::geometry::segment_meets_box;
 use ppm_core::layout::{ChainLight, HitPoint, hit_flags};
@@ -181,7 +181,10 @@ pub(super) fn eye_path(
     let mut dir = camera_ray(camera, px, py);
     let mut origin = Vec3::from(camera.eye);
     let mut throughput = Vec3::ONE;
-    let mut chain = ChainTracker::default();
+    let lights = settings
+        .sample_lights
+        .then_some((*key, settings.ray_epsilon));
+    let mut chain = ChainTracker::new(lights);
     let mut crossed = false;
     let nothing = |chain: &ChainTracker, crossed, depth| EyePath {
         met: false,
@@ -243,15 +246,9 @@ pub(super) fn eye_path(
             wo: -dir,
             depth,
         };
-        if settings.sample_lights {
-            chain.before_bounce(scene, material, &at, throughput, key, settings.ray_epsilon);
-        }
-        let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
+        let bounce = chain.bounce(scene, material, &at, throughput, u);
         if bounce.weight == Vec3::ZERO {
             return nothing(&chain, crossed, depth + 1);
-        }
-        if settings.sample_lights {
-            chain.after_bounce(material, &at, bounce.dir);
         }
         throughput *= bounce.weight;
         dir = bounce.dir;
