@@ -8,19 +8,20 @@
 use crate::trace::{Hit, SceneData};
 use glam::Vec3;
 use ppm_core::bsdf::{self, BsdfSample, Transport};
+use ppm_core::geometry::Frame;
 use ppm_core::layout::{ChainLight, GpuMaterial, NO_MATERIAL};
 use ppm_core::rng::StreamKey;
 use ppm_core::sampling::{light_pdf, power_heuristic, sample_cdf, uniform_triangle};
 
-/// A glossy bounce of an eye path: where, the normal on the path's side and whether that is
-/// the outside, towards where the path came from, and its depth (which keys the light
-/// sample's numbers).
+/// A glossy bounce of an eye path: where, the surface's frame on the path's side and whether
+/// that is the outside, towards where the path came from, and its depth (which keys the
+/// light sample's numbers).
 #[derive(Clone, Copy)]
 pub struct GlossyVertex {
     /// The bounce's position.
     pub position: Vec3,
-    /// The unit normal on the side the path arrived from.
-    pub facing: Vec3,
+    /// The lobe's frame, its normal on the side the path arrived from.
+    pub frame: Frame,
     /// The path arrived from the surface's front (outside, for glass).
     pub front: bool,
     /// The unit direction back along the path.
@@ -40,11 +41,12 @@ fn glossy_vertex_light(
 ) -> Option<Vec3> {
     let GlossyVertex {
         position,
-        facing,
+        frame,
         front,
         wo,
         depth,
     } = *at;
+    let facing = frame.normal;
     if scene.lights.is_empty() {
         return None;
     }
@@ -67,7 +69,7 @@ fn glossy_vertex_light(
     let dist = dist2.sqrt();
     let wi = to_light / dist;
     let cos_l = -Vec3::from(light.normal).dot(wi);
-    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, front, wo, wi);
+    let (f_cos, pb) = bsdf::glossy_lobe(material, &frame, front, wo, wi);
     if cos_l <= 0.0 || f_cos == Vec3::ZERO {
         return None;
     }
@@ -141,14 +143,14 @@ impl ChainTracker {
         let bounce = bsdf::sample(
             material,
             -at.wo,
-            at.facing,
+            &at.frame,
             at.front,
             u,
             Transport::Radiance,
         );
         if sampled.is_some() && bounce.weight != Vec3::ZERO {
             self.bounce_pdf =
-                Some(bsdf::glossy_lobe(material, at.facing, at.front, at.wo, bounce.dir).1);
+                Some(bsdf::glossy_lobe(material, &at.frame, at.front, at.wo, bounce.dir).1);
         }
         bounce
     }

@@ -179,7 +179,7 @@ fn trace_eye_path(
         out.flags |= hit_flags::EYE_CHAINED;
         let at = GlossyVertex {
             position,
-            facing,
+            frame: scene.frame(&hit, material, facing),
             front,
             wo: -dir,
             depth,

@@ -178,7 +178,8 @@ fn trace_photon(
             });
         }
         let u = (key.uniform(d), (key.uniform(d + 1), key.uniform(d + 2)));
-        let Some(scattered) = bsdf::photon_bounce(material, dir, facing, front, u) else {
+        let frame = scene.frame(&hit, material, facing);
+        let Some(scattered) = bsdf::photon_bounce(material, dir, &frame, front, u) else {
             break;
         };
         power *= scattered.weight;

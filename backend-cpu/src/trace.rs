@@ -6,7 +6,7 @@ use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use ppm_core::compile::CompiledScene;
-use ppm_core::geometry::{intersect_triangle, segment_meets_box};
+use ppm_core::geometry::{Frame, intersect_triangle, segment_meets_box};
 use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL};
 use ppm_core::textures::SurfaceTextures;
 
@@ -100,6 +100,14 @@ impl SceneData {
         let tri = &self.triangles[hit.triangle as usize];
         let material = &self.materials[tri.material as usize];
         self.textures.shaded(material, hit.triangle, tri, position)
+    }
+
+    /// The frame of `material`'s lobe at `hit`, seen from the side of `facing`
+    /// ([`SurfaceTextures::frame`](ppm_core::textures::SurfaceTextures::frame)).
+    #[inline]
+    pub fn frame(&self, hit: &Hit, material: &GpuMaterial, facing: Vec3) -> Frame {
+        let tri = &self.triangles[hit.triangle as usize];
+        self.textures.frame(material, hit.triangle, tri, facing)
     }
 
     /// Whether anything lies between `origin` and `origin + dir * tmax`.

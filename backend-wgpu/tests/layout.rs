@@ -101,7 +101,7 @@ fn buffer_elements_match_their_wgsl_twins() {
         coat_internal,
         coat_nonlinear,
         coat_specular_weight,
-        _pad,
+        alpha_v,
         coat_transmittance
     });
     same_layout!(GpuTexture {
@@ -185,8 +185,9 @@ fn the_bsdf_s_test_structs_match_their_wgsl_twins() {
         front,
         facing,
         u_lobe,
-        u_dir,
+        u_direction,
         transport,
+        u_dir,
         _pad
     });
     same_layout!(BsdfOutcome {

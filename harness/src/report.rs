@@ -136,8 +136,16 @@ pub fn left_out(features: &SceneFeatures, params: &RenderParams, moving: bool) -
         out.push("Fresnel sampling and refraction: no glass".to_owned());
     }
     if !features.textured {
+        let what = if features.anisotropic {
+            "texture images and lookups"
+        } else {
+            "texture coordinates, images and lookups"
+        };
+        out.push(format!("{what}: no texture (one word tested a hit)"));
+    }
+    if !features.anisotropic {
         out.push(
-            "texture coordinates, images and lookups: no texture (one word tested a hit)"
+            "tangent frames of anisotropic lobes: no anisotropic roughness (one comparison a glossy hit)"
                 .to_owned(),
         );
     }

@@ -15,8 +15,9 @@
 //! "Materials", says why.
 //!
 //! Directions follow the passes: `incoming` is the unit direction a path travels (towards
-//! the surface), `facing` the unit normal on its side, and every sampled direction leaves
-//! the surface.
+//! the surface), `facing` the unit normal on its side (a glossy lobe's [`Frame`], whose
+//! tangent orients an anisotropic roughness, holds it as `normal`), and every sampled
+//! direction leaves the surface.
 
 mod coat;
 pub mod rough_glass;
@@ -26,11 +27,11 @@ pub use coat::{
     transmittance as coat_transmittance,
 };
 
-use crate::geometry::{fresnel_refract, orthonormal_basis, reflect, to_world};
+use crate::geometry::{Frame, fresnel_refract, reflect, to_world};
 use crate::layout::{GpuMaterial, material_kind};
 use crate::sampling::cosine_hemisphere;
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// GGX roughness below which a conductor is smooth: a narrower lobe renders as a delta one,
@@ -75,8 +76,46 @@ pub struct BsdfSample {
 pub fn is_delta(material: &GpuMaterial) -> bool {
     match material.kind {
         material_kind::MIRROR => true,
-        material_kind::GLASS | material_kind::CONDUCTOR => material.alpha < SMOOTH_ALPHA,
+        material_kind::GLASS | material_kind::CONDUCTOR => {
+            material.alpha.max(material.alpha_v) < SMOOTH_ALPHA
+        }
         _ => false,
+    }
+}
+
+/// The GGX roughness of a compiled material along and across its tangent.
+#[inline]
+fn roughness(material: &GpuMaterial) -> Vec2 {
+    Vec2::new(material.alpha, material.alpha_v)
+}
+
+/// Whether the material's lobe depends on the tangent: a rough conductor or glass whose two
+/// roughnesses differ. Only then does a pass need the surface's tangent ([`Frame`]).
+#[inline]
+pub fn is_anisotropic(material: &GpuMaterial) -> bool {
+    material.alpha != material.alpha_v && !is_delta(material)
+}
+
+/// A material's roughness along and across its tangent as the compiled record holds it:
+/// both as given where the surface is smooth (both below [`SMOOTH_ALPHA`]) or isotropic,
+/// else each at least 1e-4, so that a lobe smooth in one direction only keeps a finite
+/// density (pbrt-v4's `TrowbridgeReitzDistribution` does the same).
+pub fn roughness_pair(alpha: f32, alpha_v: f32) -> (f32, f32) {
+    if alpha.max(alpha_v) < SMOOTH_ALPHA || alpha == alpha_v {
+        return (alpha, alpha_v);
+    }
+    (alpha.max(1e-4), alpha_v.max(1e-4))
+}
+
+/// The frame `material`'s lobe is evaluated in on a surface facing `facing`:
+/// [`Frame::around`] it, but where the material is anisotropic, whose tangent follows the
+/// surface's `u_direction` (asked only then: [`SurfaceTextures::frame`](crate::textures::SurfaceTextures::frame)).
+#[inline]
+pub fn frame(material: &GpuMaterial, facing: Vec3, u_direction: impl FnOnce() -> Vec3) -> Frame {
+    if is_anisotropic(material) {
+        Frame::with_tangent(facing, u_direction())
+    } else {
+        Frame::around(facing)
     }
 }
 
@@ -102,7 +141,7 @@ pub fn chain_samples_lights(material: &GpuMaterial) -> bool {
 }
 
 /// The lobe an eye path continues by at a surface where [`chain_samples_lights`], arriving
-/// from `wo` on the side of `facing` (`front`: the outside): `f cos` at `wi` over the chance
+/// from `wo` on the side of `frame.normal` (`front`: the outside): `f cos` at `wi` over the chance
 /// of taking that lobe (a coat's reflection; one elsewhere), and the density with which
 /// [`sample`] draws `wi` within it, for weighing a light sample against the path's own
 /// bounce. `wi` may lie below the surface only at rough glass (a refraction, whose value
@@ -110,7 +149,7 @@ pub fn chain_samples_lights(material: &GpuMaterial) -> bool {
 /// cannot reach `wi` and on every other material.
 pub fn glossy_lobe(
     material: &GpuMaterial,
-    facing: Vec3,
+    frame: &Frame,
     front: bool,
     wo: Vec3,
     wi: Vec3,
@@ -119,17 +158,17 @@ pub fn glossy_lobe(
         return (Vec3::ZERO, 0.0);
     }
     if material.kind == material_kind::GLASS {
-        let (f_cos, pdf) = rough_glass::eval_cos_pdf(material, facing, front, wo, wi);
+        let (f_cos, pdf) = rough_glass::eval_cos_pdf(material, frame, front, wo, wi);
         return (Vec3::splat(f_cos), pdf);
     }
-    if facing.dot(wo) <= 0.0 || facing.dot(wi) <= 0.0 {
+    if frame.normal.dot(wo) <= 0.0 || frame.normal.dot(wi) <= 0.0 {
         return (Vec3::ZERO, 0.0);
     }
     match material.kind {
-        material_kind::COATED => coat::reflection_lobe(material, facing, wo, wi),
+        material_kind::COATED => coat::reflection_lobe(material, frame, wo, wi),
         _ => (
-            eval_cos(material, facing, wo, wi),
-            pdf(material, facing, wo, wi),
+            eval_cos(material, frame, wo, wi),
+            pdf(material, frame, wo, wi),
         ),
     }
 }
@@ -190,67 +229,68 @@ pub fn visible_point_pdf(facing: Vec3, wi: Vec3) -> f32 {
 
 /// The BSDF times the cosine at `wi`, `f(wo, wi) cos_i`, of a non-delta surface: `wo` towards
 /// where the path came from and `wi` towards where light comes from, both unit and on the
-/// side of `facing` (zero otherwise); zero for delta materials. With the cosine, since `f`
-/// alone of a rough lobe exceeds f32 between two grazing directions where the product does
-/// not.
-pub fn eval_cos(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+/// side of `frame.normal` (zero otherwise); zero for delta materials. With the cosine, since
+/// `f` alone of a rough lobe exceeds f32 between two grazing directions where the product
+/// does not.
+pub fn eval_cos(material: &GpuMaterial, frame: &Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+    let (cos_o, cos_i) = (frame.normal.dot(wo), frame.normal.dot(wi));
     if cos_o <= 0.0 || cos_i <= 0.0 || !samples_lights(material) {
         return Vec3::ZERO;
     }
     match material.kind {
         material_kind::CONDUCTOR => {
-            let (lobe, h) = ggx_reflection_cos(material.alpha, facing, wo, wi);
+            let (lobe, h) = ggx_reflection_cos(roughness(material), frame, wo, wi);
             Vec3::from(material.albedo) * conductor_fresnel(material, wo.dot(h)) * lobe
         }
-        material_kind::COATED => coat::eval_cos(material, facing, wo, wi),
+        material_kind::COATED => coat::eval_cos(material, frame, wo, wi),
         _ => visible_point_f(material) * cos_i,
     }
 }
 
 /// The GGX reflection lobe without its Fresnel term, `D G2 / (4 cos_o cos_i)` times
 /// `cos_i`, and the half vector, for `wo` and `wi` above the surface.
-fn ggx_reflection_cos(alpha: f32, facing: Vec3, wo: Vec3, wi: Vec3) -> (f32, Vec3) {
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+fn ggx_reflection_cos(alpha: Vec2, frame: &Frame, wo: Vec3, wi: Vec3) -> (f32, Vec3) {
+    let (local_o, local_i) = (frame.to_local(wo), frame.to_local(wi));
+    let (cos_o, cos_i) = (local_o.z, local_i.z);
     let h = half_vector(wo, wi);
-    let d = ggx_d(alpha, local_half(facing, wo, wi));
+    let d = ggx_d(alpha, frame.to_local(h));
     // G2 / (4 cos_o cos_i) times cos_i, with cos_i cancelled.
-    let (root_o, root_i) = (smith_root(alpha, cos_o), smith_root(alpha, cos_i));
+    let (root_o, root_i) = (smith_root(alpha, local_o), smith_root(alpha, local_i));
     let visibility_cos = 0.5 * cos_i / (cos_i * root_o + cos_o * root_i);
     (d * visibility_cos, h)
 }
 
 /// Solid-angle density with which [`sample`] draws `wi` given `wo` at a non-delta surface
 /// ([`eval_cos`]'s conventions); zero for delta materials.
-pub fn pdf(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+pub fn pdf(material: &GpuMaterial, frame: &Frame, wo: Vec3, wi: Vec3) -> f32 {
+    let (cos_o, cos_i) = (frame.normal.dot(wo), frame.normal.dot(wi));
     if cos_o <= 0.0 || cos_i <= 0.0 || !samples_lights(material) {
         return 0.0;
     }
     match material.kind {
-        material_kind::CONDUCTOR => ggx_pdf(material.alpha, facing, wo, wi),
-        material_kind::COATED => coat::pdf(material, facing, wo, wi),
-        _ => visible_point_pdf(facing, wi),
+        material_kind::CONDUCTOR => ggx_pdf(roughness(material), frame, wo, wi),
+        material_kind::COATED => coat::pdf(material, frame, wo, wi),
+        _ => visible_point_pdf(frame.normal, wi),
     }
 }
 
 /// The density of `wi` drawn by [`visible_normal`] from `wo`, both above the surface.
-fn ggx_pdf(alpha: f32, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+fn ggx_pdf(alpha: Vec2, frame: &Frame, wo: Vec3, wi: Vec3) -> f32 {
     ggx_reflection_pdf(
         alpha,
-        facing.dot(wo),
-        ggx_d(alpha, local_half(facing, wo, wi)),
+        frame.to_local(wo),
+        ggx_d(alpha, frame.to_local(half_vector(wo, wi))),
     )
 }
 
 /// The GGX distribution of normals `D(m)` of the microfacet normal `m` in the surface's local
-/// frame, `1 / (pi a^2 ((x^2 + y^2) / a^2 + z^2)^2)`: from the tangential components rather
-/// than `1 - cos^2`, which loses a narrow lobe's width to rounding in f32.
+/// frame, `1 / (pi a_u a_v ((x / a_u)^2 + (y / a_v)^2 + z^2)^2)`: from the tangential
+/// components rather than `1 - cos^2`, which loses a narrow lobe's width to rounding in f32.
 #[inline]
-fn ggx_d(alpha: f32, m: Vec3) -> f32 {
-    let a2 = alpha * alpha;
-    let d = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-    1.0 / (PI * a2 * d * d)
+fn ggx_d(alpha: Vec2, m: Vec3) -> f32 {
+    let (sx, sy) = (m.x / alpha.x, m.y / alpha.y);
+    let d = sx * sx + sy * sy + m.z * m.z;
+    1.0 / (PI * alpha.x * alpha.y * d * d)
 }
 
 /// The unit half vector of `wo` and `wi`, both above the surface: their sum scaled to its
@@ -262,30 +302,24 @@ fn half_vector(wo: Vec3, wi: Vec3) -> Vec3 {
     (sum / sum.abs().max_element()).normalize()
 }
 
-/// The half vector of `wo` and `wi` in the local frame of `facing`.
+/// `cos sqrt(1 + alpha^2 tan^2)` of the unit direction `w` in the local frame, the root of
+/// Smith's masking for GGX, with `alpha^2 sin^2 = (a_u w_x)^2 + (a_v w_y)^2` the roughness
+/// along `w`'s azimuth: written without dividing by `cos`, so finite at grazing angles,
+/// where `tan` overflows. Smith's height-correlated masking and shadowing is `G2 = 2 cos_o
+/// cos_i / (cos_i root_o + cos_o root_i)`, its one-direction masking `G1 = 2 cos / (cos +
+/// root)`.
 #[inline]
-fn local_half(facing: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
-    let h = half_vector(wo, wi);
-    let (t, b) = orthonormal_basis(facing);
-    Vec3::new(t.dot(h), b.dot(h), facing.dot(h))
+fn smith_root(alpha: Vec2, w: Vec3) -> f32 {
+    let (x, y) = (alpha.x * w.x, alpha.y * w.y);
+    (w.z * w.z + x * x + y * y).sqrt()
 }
 
-/// `cos sqrt(1 + alpha^2 tan^2)`, the root of Smith's masking for GGX, written without
-/// dividing by `cos`: finite at grazing angles, where `tan` overflows. Smith's
-/// height-correlated masking and shadowing is `G2 = 2 cos_o cos_i / (cos_i root_o + cos_o
-/// root_i)`, its one-direction masking `G1 = 2 cos / (cos + root)`.
+/// The density of a reflection drawn from the visible normals for `local_o`: `D_wo(m) =
+/// G1(wo) (wo.m) D(m) / cos_o` times the reflection's Jacobian `1 / (4 wo.m)`; with Smith's
+/// masking `G1 = 2 cos_o / (cos_o + root_o)` that is `D / (2 (cos_o + root_o))`.
 #[inline]
-fn smith_root(alpha: f32, cos: f32) -> f32 {
-    let a2 = alpha * alpha;
-    (a2 + (1.0 - a2) * cos * cos).sqrt()
-}
-
-/// The density of a reflection drawn from the visible normals: `D_wo(m) = G1(wo) (wo.m) D(m)
-/// / cos_o` times the reflection's Jacobian `1 / (4 wo.m)`; with Smith's masking
-/// `G1 = 2 cos_o / (cos_o + root_o)` that is `D / (2 (cos_o + root_o))`.
-#[inline]
-fn ggx_reflection_pdf(alpha: f32, cos_o: f32, d: f32) -> f32 {
-    d / (2.0 * (cos_o + smith_root(alpha, cos_o)))
+fn ggx_reflection_pdf(alpha: Vec2, local_o: Vec3, d: f32) -> f32 {
+    d / (2.0 * (local_o.z + smith_root(alpha, local_o)))
 }
 
 /// Fresnel reflectance of a conductor of complex index `eta + i k` (per channel) for
@@ -320,16 +354,20 @@ fn complex_fresnel(cos_i: f32, eta: f32, k: f32) -> f32 {
     (0.5 * (rs + rp)).clamp(0.0, 1.0)
 }
 
-/// A microfacet normal drawn from GGX's normals visible from `wo` (Heitz 2018), in the local
-/// frame of `facing` and in world space: the hemisphere of the stretched view direction, its
+/// The stretched view direction's cosine from which [`visible_normal`] takes a fixed frame.
+const NEAR_NORMAL: f32 = 0.99999;
+
+/// A microfacet normal drawn from GGX's normals visible from `wo` (Heitz 2018), in `frame`'s
+/// coordinates and in world space: the hemisphere of the stretched view direction, its
 /// projected disc warped to the visible part, then unstretched.
-fn visible_normal(alpha: f32, facing: Vec3, wo: Vec3, u: (f32, f32)) -> (Vec3, Vec3) {
-    let (t, b) = orthonormal_basis(facing);
-    let local_o = Vec3::new(t.dot(wo), b.dot(wo), facing.dot(wo));
-    let v = Vec3::new(alpha * local_o.x, alpha * local_o.y, local_o.z).normalize();
-    let len2 = v.x * v.x + v.y * v.y;
-    let t1 = if len2 > 0.0 {
-        Vec3::new(-v.y, v.x, 0.0) / len2.sqrt()
+fn visible_normal(alpha: Vec2, frame: &Frame, wo: Vec3, u: (f32, f32)) -> (Vec3, Vec3) {
+    let local_o = frame.to_local(wo);
+    let v = Vec3::new(alpha.x * local_o.x, alpha.y * local_o.y, local_o.z).normalize();
+    // Any frame about `v` will do, but one taken from tangential components that are
+    // rounding noise near normal incidence would differ between backends (pbrt-v4's
+    // bound).
+    let t1 = if v.z < NEAR_NORMAL {
+        Vec3::new(-v.y, v.x, 0.0) / (v.x * v.x + v.y * v.y).sqrt()
     } else {
         Vec3::X
     };
@@ -340,15 +378,17 @@ fn visible_normal(alpha: f32, facing: Vec3, wo: Vec3, u: (f32, f32)) -> (Vec3, V
     let s = 0.5 * (1.0 + v.z);
     let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
     let nh = t1 * p1 + t2 * p2 + v * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-    let m = Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize();
-    (m, to_world(m, facing))
+    let m = Vec3::new(alpha.x * nh.x, alpha.y * nh.y, nh.z.max(0.0)).normalize();
+    (m, frame.to_world(m))
 }
 
-/// Smith's `G2 / G1(wo)` for GGX, in the form that cancels `cos_o`: the weight of a
-/// reflection drawn from the visible normals, less its Fresnel term.
+/// Smith's `G2 / G1(wo)` for GGX at the local directions `local_o` and `local_i` (the latter
+/// on either side: its cosine's magnitude counts), in the form that cancels `cos_o`: the
+/// weight of a direction drawn from the visible normals, less its Fresnel term.
 #[inline]
-fn ggx_g2_over_g1(alpha: f32, cos_o: f32, cos_i: f32) -> f32 {
-    let (root_o, root_i) = (smith_root(alpha, cos_o), smith_root(alpha, cos_i));
+fn ggx_g2_over_g1(alpha: Vec2, local_o: Vec3, local_i: Vec3) -> f32 {
+    let (cos_o, cos_i) = (local_o.z, local_i.z.abs());
+    let (root_o, root_i) = (smith_root(alpha, local_o), smith_root(alpha, local_i));
     cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i)
 }
 
@@ -366,21 +406,21 @@ struct GgxReflection {
 }
 
 /// Draws a [`GgxReflection`] for `wo`.
-fn sample_ggx_reflection(alpha: f32, facing: Vec3, wo: Vec3, u: (f32, f32)) -> GgxReflection {
-    let (m, h) = visible_normal(alpha, facing, wo, u);
+fn sample_ggx_reflection(alpha: Vec2, frame: &Frame, wo: Vec3, u: (f32, f32)) -> GgxReflection {
+    let (m, h) = visible_normal(alpha, frame, wo, u);
     let dir = reflect(-wo, h);
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(dir));
-    let above = cos_o > 0.0 && cos_i > 0.0;
+    let (local_o, local_i) = (frame.to_local(wo), frame.to_local(dir));
+    let above = local_o.z > 0.0 && local_i.z > 0.0;
     GgxReflection {
         dir,
         h,
         g2_over_g1: if above {
-            ggx_g2_over_g1(alpha, cos_o, cos_i)
+            ggx_g2_over_g1(alpha, local_o, local_i)
         } else {
             0.0
         },
         pdf: if above {
-            ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m))
+            ggx_reflection_pdf(alpha, local_o, ggx_d(alpha, m))
         } else {
             0.0
         },
@@ -389,8 +429,8 @@ fn sample_ggx_reflection(alpha: f32, facing: Vec3, wo: Vec3, u: (f32, f32)) -> G
 
 /// Draws a direction from a rough conductor's visible normals for `wo` towards where the
 /// path came from; the weight is `albedo F G2 / G1(wo)`, zero below the surface.
-fn sample_conductor(material: &GpuMaterial, facing: Vec3, wo: Vec3, u: (f32, f32)) -> BsdfSample {
-    let r = sample_ggx_reflection(material.alpha, facing, wo, u);
+fn sample_conductor(material: &GpuMaterial, frame: &Frame, wo: Vec3, u: (f32, f32)) -> BsdfSample {
+    let r = sample_ggx_reflection(roughness(material), frame, wo, u);
     BsdfSample {
         dir: r.dir,
         weight: Vec3::from(material.albedo)
@@ -410,7 +450,7 @@ fn sample_conductor(material: &GpuMaterial, facing: Vec3, wo: Vec3, u: (f32, f32
 fn sample_rough_dielectric(
     material: &GpuMaterial,
     incoming: Vec3,
-    facing: Vec3,
+    frame: &Frame,
     front: bool,
     (u_lobe, u_dir): (f32, (f32, f32)),
     transport: Transport,
@@ -421,19 +461,20 @@ fn sample_rough_dielectric(
     } else {
         material.ior
     };
-    let (_, h) = visible_normal(material.alpha, facing, wo, u_dir);
+    let alpha = roughness(material);
+    let (_, h) = visible_normal(alpha, frame, wo, u_dir);
     let (dir, transmitted) = match fresnel_refract(incoming, h, eta) {
         (fresnel, Some(t)) if u_lobe >= fresnel => (t, true),
         _ => (reflect(incoming, h), false),
     };
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(dir));
+    let (local_o, local_i) = (frame.to_local(wo), frame.to_local(dir));
     let on_its_side = if transmitted {
-        cos_i < 0.0
+        local_i.z < 0.0
     } else {
-        cos_i > 0.0
+        local_i.z > 0.0
     };
-    let mut weight = if cos_o > 0.0 && on_its_side {
-        ggx_g2_over_g1(material.alpha, cos_o, cos_i.abs())
+    let mut weight = if local_o.z > 0.0 && on_its_side {
+        ggx_g2_over_g1(alpha, local_o, local_i)
     } else {
         0.0
     };
@@ -522,26 +563,21 @@ pub fn sample_delta(
 pub fn sample(
     material: &GpuMaterial,
     incoming: Vec3,
-    facing: Vec3,
+    frame: &Frame,
     front: bool,
     (u_lobe, u_dir): (f32, (f32, f32)),
     transport: Transport,
 ) -> BsdfSample {
     if is_delta(material) {
-        return sample_delta(material, incoming, facing, front, u_lobe, transport);
+        return sample_delta(material, incoming, frame.normal, front, u_lobe, transport);
     }
     match material.kind {
-        material_kind::CONDUCTOR => sample_conductor(material, facing, -incoming, u_dir),
-        material_kind::COATED => coat::sample(material, incoming, facing, u_lobe, u_dir),
-        material_kind::GLASS => sample_rough_dielectric(
-            material,
-            incoming,
-            facing,
-            front,
-            (u_lobe, u_dir),
-            transport,
-        ),
-        _ => sample_visible(material, facing, u_dir),
+        material_kind::CONDUCTOR => sample_conductor(material, frame, -incoming, u_dir),
+        material_kind::COATED => coat::sample(material, incoming, frame, u_lobe, u_dir),
+        material_kind::GLASS => {
+            sample_rough_dielectric(material, incoming, frame, front, (u_lobe, u_dir), transport)
+        }
+        _ => sample_visible(material, frame.normal, u_dir),
     }
 }
 
@@ -555,14 +591,14 @@ pub fn sample(
 pub fn photon_bounce(
     material: &GpuMaterial,
     incoming: Vec3,
-    facing: Vec3,
+    frame: &Frame,
     front: bool,
     u: (f32, (f32, f32)),
 ) -> Option<BsdfSample> {
-    let mut scattered = sample(material, incoming, facing, front, u, Transport::Importance);
+    let mut scattered = sample(material, incoming, frame, front, u, Transport::Importance);
     let roulette = match material.kind {
         material_kind::DIFFUSE => Some(u.0),
-        material_kind::COATED => coat::roulette_number(material, -incoming.dot(facing), u.0),
+        material_kind::COATED => coat::roulette_number(material, -incoming.dot(frame.normal), u.0),
         _ => None,
     };
     if let Some(u_roulette) = roulette {
@@ -577,7 +613,7 @@ pub fn photon_bounce(
     Some(scattered)
 }
 
-/// One input of the BSDF: a backend's twin must give [`BsdfCase::expected`]. 80 bytes, the
+/// One input of the BSDF: a backend's twin must give [`BsdfCase::expected`]. 192 bytes, the
 /// layout of `BsdfCase` in the wgpu backend's bsdf_vectors.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -592,12 +628,14 @@ pub struct BsdfCase {
     pub facing: [f32; 3],
     /// Number that picks at glass.
     pub u_lobe: f32,
-    /// Pair that draws a diffuse or glossy direction.
-    pub u_dir: [f32; 2],
+    /// The surface's `u` direction ([`frame`]'s).
+    pub u_direction: [f32; 3],
     /// [`Transport`] as `u32`.
     pub transport: u32,
+    /// Pair that draws a diffuse or glossy direction.
+    pub u_dir: [f32; 2],
     /// Padding.
-    pub _pad: u32,
+    pub _pad: [u32; 2],
 }
 
 /// What the BSDF gives for one [`BsdfCase`]: [`sample`], and at its direction [`eval_cos`],
@@ -630,25 +668,27 @@ impl BsdfCase {
             0 => Transport::Radiance,
             _ => Transport::Importance,
         };
-        let facing = Vec3::from(self.facing);
+        let frame = frame(&self.material, Vec3::from(self.facing), || {
+            Vec3::from(self.u_direction)
+        });
         let wo = -Vec3::from(self.incoming);
         let s = sample(
             &self.material,
             -wo,
-            facing,
+            &frame,
             self.front != 0,
             (self.u_lobe, (self.u_dir[0], self.u_dir[1])),
             transport,
         );
         let front = self.front != 0;
-        let (glossy_f_cos, glossy_pdf) = glossy_lobe(&self.material, facing, front, wo, s.dir);
+        let (glossy_f_cos, glossy_pdf) = glossy_lobe(&self.material, &frame, front, wo, s.dir);
         BsdfOutcome {
             dir: s.dir.into(),
             pdf: s.pdf,
             weight: s.weight.into(),
             transmitted: u32::from(s.transmitted),
-            f_cos: eval_cos(&self.material, facing, wo, s.dir).into(),
-            pdf_of_dir: pdf(&self.material, facing, wo, s.dir),
+            f_cos: eval_cos(&self.material, &frame, wo, s.dir).into(),
+            pdf_of_dir: pdf(&self.material, &frame, wo, s.dir),
             glossy_f_cos: glossy_f_cos.into(),
             glossy_pdf,
         }
@@ -662,6 +702,7 @@ pub fn conductor(eta: [f32; 3], k: [f32; 3], alpha: f32) -> GpuMaterial {
         kind: material_kind::CONDUCTOR,
         eta,
         alpha,
+        alpha_v: alpha,
         k,
         ..Zeroable::zeroed()
     }
@@ -676,6 +717,7 @@ pub fn coated(albedo: [f32; 3], ior: f32, alpha: f32, nonlinear: bool) -> GpuMat
         kind: material_kind::COATED,
         ior,
         alpha,
+        alpha_v: alpha,
         coat_internal: internal,
         coat_nonlinear: u32::from(nonlinear),
         // Mitsuba 3's weight: the coat's reflectance (one) against the base's mean.
@@ -723,12 +765,30 @@ pub fn test_cases() -> Vec<BsdfCase> {
             kind: material_kind::GLASS,
             ior: 1.5,
             alpha: 0.3,
+            alpha_v: 0.3,
             ..Zeroable::zeroed()
         },
         GpuMaterial {
             kind: material_kind::GLASS,
             ior: 1.8,
             alpha: 2.0 * SMOOTH_ALPHA,
+            alpha_v: 2.0 * SMOOTH_ALPHA,
+            ..Zeroable::zeroed()
+        },
+        // Anisotropic: wide along the tangent, narrow across it; smooth across it.
+        GpuMaterial {
+            alpha_v: 0.04,
+            ..conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.5)
+        },
+        GpuMaterial {
+            alpha: 1e-4,
+            ..conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.2)
+        },
+        GpuMaterial {
+            kind: material_kind::GLASS,
+            ior: 1.5,
+            alpha: 0.05,
+            alpha_v: 0.4,
             ..Zeroable::zeroed()
         },
         coated([0.8, 0.5, 0.1], 1.5, 0.0, false),
@@ -737,6 +797,8 @@ pub fn test_cases() -> Vec<BsdfCase> {
         coated([0.0; 3], 1.5, 0.05, false),
     ];
     let normals = [Vec3::Y, Vec3::new(0.3, -0.5, 0.8).normalize()];
+    // Off every frame's axes, so that anisotropic lobes see oblique directions.
+    let u_direction = Vec3::new(0.6, 0.7, -0.2);
     let mut cases = Vec::new();
     for material in materials {
         for n in normals {
@@ -756,9 +818,10 @@ pub fn test_cases() -> Vec<BsdfCase> {
                                 front: u32::from(front),
                                 facing: facing.into(),
                                 u_lobe,
-                                u_dir,
+                                u_direction: u_direction.into(),
                                 transport: transport as u32,
-                                _pad: 0,
+                                u_dir,
+                                _pad: [0; 2],
                             };
                             let eta = if front {
                                 1.0 / material.ior
@@ -769,7 +832,9 @@ pub fn test_cases() -> Vec<BsdfCase> {
                                 material_kind::GLASS if !is_delta(&material) => {
                                     let wo = -incoming;
                                     let u = (u_dir[0], u_dir[1]);
-                                    let (_, h) = visible_normal(material.alpha, facing, wo, u);
+                                    let frame = frame(&material, facing, || u_direction);
+                                    let alpha = roughness(&material);
+                                    let (_, h) = visible_normal(alpha, &frame, wo, u);
                                     fresnel_refract(incoming, h, eta).0
                                 }
                                 material_kind::GLASS => fresnel_refract(incoming, facing, eta).0,
@@ -847,7 +912,11 @@ mod tests {
                 assert_eq!(s.weight, Vec3::ONE);
                 assert!(s.dir.dot(n) >= 0.0);
                 assert_relative_eq!(s.pdf, visible_point_pdf(n, s.dir), epsilon = 1e-5);
-                assert_relative_eq!(s.pdf, pdf(&white, n, n, s.dir), epsilon = 1e-5);
+                assert_relative_eq!(
+                    s.pdf,
+                    pdf(&white, &Frame::around(n), n, s.dir),
+                    epsilon = 1e-5
+                );
                 // Uniform directions: (cos theta, phi) on a grid of the hemisphere.
                 let cos_t = (i as f32 + 0.5) / k as f32;
                 let phi = 2.0 * std::f32::consts::PI * (j as f32 + 0.5) / k as f32;
@@ -879,7 +948,7 @@ mod tests {
                 let s = sample(
                     &g,
                     incoming,
-                    n,
+                    &Frame::around(n),
                     true,
                     (u, (0.5, 0.5)),
                     Transport::Importance,
@@ -891,7 +960,7 @@ mod tests {
             assert_relative_eq!(reflected as f32 / k as f32, fresnel, epsilon = 1e-3);
         }
         assert!(is_delta(&g));
-        assert_eq!(pdf(&g, n, n, n), 0.0);
+        assert_eq!(pdf(&g, &Frame::around(n), n, n), 0.0);
     }
 
     /// A rough dielectric splits light by the Fresnel term at its microfacets and keeps all
@@ -903,14 +972,21 @@ mod tests {
     #[test]
     fn a_rough_dielectric_splits_by_fresnel_and_loses_only_what_single_scattering_cannot_return() {
         let n = Vec3::Y;
-        for (alpha, at_least) in [(0.02, 0.99), (0.3, 0.85), (1.0, 0.4)] {
+        for ((alpha, alpha_v), at_least) in [
+            ((0.02, 0.02), 0.99),
+            ((0.3, 0.3), 0.85),
+            ((1.0, 1.0), 0.4),
+            ((0.05, 0.5), 0.8),
+        ] {
             let rough = GpuMaterial {
                 alpha,
+                alpha_v,
                 ..glass(1.5)
             };
             assert!(!is_delta(&rough) && !samples_lights(&rough));
             for (front, cos) in [(true, 0.8f32), (true, 0.2), (false, 0.9)] {
                 let facing = if front { n } else { -n };
+                let frame = Frame::with_tangent(facing, Vec3::new(0.6, 0.3, 0.8));
                 let incoming = Vec3::new((1.0 - cos * cos).sqrt(), -cos, 0.0) * facing.y;
                 let eta = if front { 1.0 / 1.5 } else { 1.5 };
                 let k = 64;
@@ -921,9 +997,9 @@ mod tests {
                             let mid = |x: usize| (x as f32 + 0.5) / k as f32;
                             let u = (mid(l), (mid(i), mid(j)));
                             let photon =
-                                sample(&rough, incoming, facing, front, u, Transport::Importance);
+                                sample(&rough, incoming, &frame, front, u, Transport::Importance);
                             let eye =
-                                sample(&rough, incoming, facing, front, u, Transport::Radiance);
+                                sample(&rough, incoming, &frame, front, u, Transport::Radiance);
                             assert_eq!((photon.dir, photon.pdf), (eye.dir, 0.0));
                             assert!(photon.weight.x <= 1.0 + 1e-5, "{photon:?}");
                             let scale = if eye.transmitted { eta * eta } else { 1.0 };
@@ -957,37 +1033,48 @@ mod tests {
     #[test]
     fn a_rough_conductor_s_samples_match_its_density_and_conserve_energy() {
         let n = Vec3::new(0.2, 0.9, -0.1).normalize();
-        let (t, _) = orthonormal_basis(n);
-        for (alpha, at_least) in [(0.02, 0.985), (0.3, 0.8), (1.0, 0.3)] {
+        // Anisotropic lobes are oriented off `orthonormal_basis`'s tangent, and seen from an
+        // azimuth between their two axes.
+        let frame = Frame::with_tangent(n, Vec3::new(0.3, -0.4, 0.9));
+        let azimuth = (frame.tangent + 2.0 * frame.bitangent).normalize();
+        for ((alpha, alpha_v), at_least) in [
+            ((0.02, 0.02), 0.985),
+            ((0.3, 0.3), 0.8),
+            ((1.0, 1.0), 0.3),
+            ((0.4, 0.05), 0.8),
+            ((0.1, 0.8), 0.5),
+        ] {
             // A lossless metal (F = 1) with reflectance factor one.
             let metal = GpuMaterial {
                 albedo: [1.0; 3],
+                alpha_v,
                 ..conductor([0.0; 3], [1.0; 3], alpha)
             };
             for cos_o in [1.0f32, 0.95, 0.5, 0.15] {
-                let wo = (t * (1.0 - cos_o * cos_o).sqrt() + n * cos_o).normalize();
+                let wo = (azimuth * (1.0 - cos_o * cos_o).sqrt() + n * cos_o).normalize();
                 let k = 256;
                 let (mut mean_weight, mut valid) = (0.0f64, 0.0f64);
                 for i in 0..k {
                     for j in 0..k {
                         let u = ((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
-                        let s = sample(&metal, -wo, n, true, (0.5, u), Transport::Radiance);
+                        let s = sample(&metal, -wo, &frame, true, (0.5, u), Transport::Radiance);
                         if s.weight == Vec3::ZERO {
                             continue;
                         }
                         valid += 1.0;
                         mean_weight += f64::from(s.weight.x);
-                        let f_cos = eval_cos(&metal, n, wo, s.dir);
+                        let f_cos = eval_cos(&metal, &frame, wo, s.dir);
                         // A narrow lobe's density is steep in the half vector, which the
                         // evaluation recomputes from the two directions in f32.
-                        let tol = (1e-4 / alpha).max(1e-3);
-                        assert_relative_eq!(s.pdf, pdf(&metal, n, wo, s.dir), max_relative = tol);
+                        let tol = (1e-4 / alpha.min(alpha_v)).max(1e-3);
+                        let density = pdf(&metal, &frame, wo, s.dir);
+                        assert_relative_eq!(s.pdf, density, max_relative = tol);
                         assert_relative_eq!(s.weight.x, f_cos.x / s.pdf, max_relative = 2.0 * tol);
                         assert!(s.weight.x <= 1.0 + 1e-5);
                     }
                 }
                 let total = f64::from(k * k);
-                if cos_o == 1.0 {
+                if cos_o == 1.0 && alpha == alpha_v {
                     // Seen from straight above, the reflection stays above the surface where
                     // the microfacet leans less than 45 degrees, whose share of visible normals
                     // is 1 / (1 + alpha^2).
@@ -1010,11 +1097,11 @@ mod tests {
                         let wi =
                             to_world(Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t), n);
                         let w = 2.0 * std::f64::consts::PI / f64::from(m * m);
-                        by_eval += f64::from(eval_cos(&metal, n, wo, wi).x) * w;
-                        density += f64::from(pdf(&metal, n, wo, wi)) * w;
+                        by_eval += f64::from(eval_cos(&metal, &frame, wo, wi).x) * w;
+                        density += f64::from(pdf(&metal, &frame, wo, wi)) * w;
                     }
                 }
-                if alpha >= 0.3 {
+                if alpha.min(alpha_v) >= 0.3 {
                     // A narrow lobe needs a finer grid than this one to integrate.
                     assert_relative_eq!(by_eval, albedo, max_relative = 0.02);
                     assert_relative_eq!(density, valid / total, max_relative = 0.02);
@@ -1028,20 +1115,30 @@ mod tests {
     #[test]
     fn a_rough_conductor_stays_finite_at_grazing_angles() {
         let n = Vec3::Z;
-        for alpha in [2.0 * SMOOTH_ALPHA, 0.3, 1.0] {
-            let metal = conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], alpha);
+        let frame = Frame::with_tangent(n, Vec3::new(1.0, 1.0, 0.0));
+        for (alpha, alpha_v) in [
+            (2.0 * SMOOTH_ALPHA, 2.0 * SMOOTH_ALPHA),
+            (0.3, 0.3),
+            (1.0, 1.0),
+            (1e-4, 0.5),
+        ] {
+            let metal = GpuMaterial {
+                alpha_v,
+                ..conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], alpha)
+            };
             for cos in [1e-3f32, 1e-12, 1e-30, f32::MIN_POSITIVE] {
                 let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
                 let wi = Vec3::new(-(1.0 - cos * cos).sqrt(), 0.0, cos);
                 for (o, i) in [(wo, wi), (wo, Vec3::Z), (Vec3::Z, wi)] {
                     assert!(
-                        eval_cos(&metal, n, o, i).is_finite(),
+                        eval_cos(&metal, &frame, o, i).is_finite(),
                         "alpha {alpha} cos {cos}"
                     );
-                    assert!(pdf(&metal, n, o, i).is_finite(), "alpha {alpha} cos {cos}");
+                    let density = pdf(&metal, &frame, o, i);
+                    assert!(density.is_finite(), "alpha {alpha} cos {cos}");
                 }
                 for u in [(0.01, 0.2), (0.5, 0.5), (0.99, 0.9)] {
-                    let s = sample(&metal, -wo, n, true, (0.5, u), Transport::Radiance);
+                    let s = sample(&metal, -wo, &frame, true, (0.5, u), Transport::Radiance);
                     assert!(s.weight.is_finite() && s.pdf.is_finite(), "{s:?}");
                     assert!(s.weight.max_element() <= 1.0, "{s:?}");
                 }
@@ -1100,7 +1197,7 @@ mod tests {
         let (mut power, mut survivors) = (Vec3::ZERO, 0);
         for i in 0..k {
             let u = ((i as f32 + 0.5) / k as f32, (0.3, 0.7));
-            if let Some(s) = photon_bounce(&red, -Vec3::Z, Vec3::Z, true, u) {
+            if let Some(s) = photon_bounce(&red, -Vec3::Z, &Frame::around(Vec3::Z), true, u) {
                 power += s.weight;
                 survivors += 1;
             }
@@ -1117,8 +1214,46 @@ mod tests {
             kind: material_kind::MIRROR,
             ..Zeroable::zeroed()
         };
-        let kept = photon_bounce(&mirror, -Vec3::Z, Vec3::Z, true, (0.99, (0.5, 0.5)));
+        let up = Frame::around(Vec3::Z);
+        let kept = photon_bounce(&mirror, -Vec3::Z, &up, true, (0.99, (0.5, 0.5)));
         assert_eq!(kept.map(|s| s.weight), Some(Vec3::splat(0.9)));
+    }
+
+    /// An anisotropic lobe follows its frame: roughness `(a, b)` about a tangent is
+    /// roughness `(b, a)` about the bitangent (the frame turned a quarter), for value and
+    /// density alike, and the lobe reaches further along the rougher direction.
+    #[test]
+    fn an_anisotropic_lobe_turns_with_its_tangent() {
+        let n = Vec3::new(0.2, 0.9, -0.1).normalize();
+        let frame = Frame::with_tangent(n, Vec3::new(0.3, -0.4, 0.9));
+        let turned = Frame::with_tangent(n, frame.bitangent);
+        let metal = |alpha, alpha_v| GpuMaterial {
+            alpha_v,
+            ..conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], alpha)
+        };
+        let (wide_along, wide_across) = (metal(0.5, 0.08), metal(0.08, 0.5));
+        let wo = (n * 0.8 + (frame.tangent + frame.bitangent) * 0.4).normalize();
+        let mirror = reflect(-wo, n);
+        for (i, j) in [(0.1f32, 0.0f32), (0.0, 0.1), (0.3, -0.2), (-0.25, 0.4)] {
+            let wi = (mirror + frame.tangent * i + frame.bitangent * j).normalize();
+            let (a, b) = (
+                eval_cos(&wide_along, &frame, wo, wi),
+                eval_cos(&wide_across, &turned, wo, wi),
+            );
+            assert!(
+                (a - b).abs().max_element() <= 1e-4 * a.max_element(),
+                "{a} {b}"
+            );
+            let (a, b) = (
+                pdf(&wide_along, &frame, wo, wi),
+                pdf(&wide_across, &turned, wo, wi),
+            );
+            assert_relative_eq!(a, b, max_relative = 1e-4);
+        }
+        let off = |d: Vec3| (mirror + d * 0.3).normalize();
+        let along = pdf(&wide_along, &frame, wo, off(frame.tangent));
+        let across = pdf(&wide_along, &frame, wo, off(frame.bitangent));
+        assert!(along > 10.0 * across, "along {along}, across {across}");
     }
 
     /// The eye pass weighs a light sample at a glossy bounce against the bounce with
@@ -1127,20 +1262,28 @@ mod tests {
     /// of bounces kept (else the weights do not sum to one).
     #[test]
     fn the_glossy_lobe_is_what_an_eye_path_s_bounce_samples() {
-        let glass = |ior, alpha| GpuMaterial {
+        let glass = |ior, alpha, alpha_v| GpuMaterial {
             kind: material_kind::GLASS,
             ior,
             alpha,
+            alpha_v,
             ..Zeroable::zeroed()
         };
         let materials = [
             conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.3),
             conductor([0.15, 0.4, 1.4], [3.6, 2.5, 1.9], 0.05),
+            GpuMaterial {
+                alpha_v: 0.05,
+                ..conductor([0.2, 0.9, 1.1], [3.9, 2.4, 1.8], 0.4)
+            },
             coated([0.3, 0.9, 0.6], 1.6, 0.3, true),
             coated([0.8; 3], 1.5, 0.1, false),
-            glass(1.5, 0.3),
-            glass(1.33, 0.1),
+            glass(1.5, 0.3, 0.3),
+            glass(1.33, 0.1, 0.1),
+            glass(1.5, 0.4, 0.08),
         ];
+        // Off orthonormal_basis(+y)'s axes, so that anisotropic lobes are seen obliquely.
+        let frame = Frame::with_tangent(Vec3::Y, Vec3::new(1.0, 0.0, 1.0));
         const N: u32 = 1 << 16;
         for material in materials {
             for (front, cos_o) in [true, false]
@@ -1163,14 +1306,14 @@ mod tests {
                     let s = sample(
                         &material,
                         -wo,
-                        Vec3::Y,
+                        &frame,
                         front,
                         (u_lobe, u),
                         Transport::Radiance,
                     );
                     if s.weight.x > 0.0 {
                         kept += 1;
-                        let (f_cos, pdf) = glossy_lobe(&material, Vec3::Y, front, wo, s.dir);
+                        let (f_cos, pdf) = glossy_lobe(&material, &frame, front, wo, s.dir);
                         let w = f_cos / pdf;
                         assert!(
                             (w - s.weight).abs().max_element() <= 1e-3 * s.weight.max_element(),
@@ -1179,7 +1322,7 @@ mod tests {
                         );
                     }
                     let wi = crate::sampling::uniform_cone(u.1, u.0, -1.0);
-                    integral += f64::from(glossy_lobe(&material, Vec3::Y, front, wo, wi).1);
+                    integral += f64::from(glossy_lobe(&material, &frame, front, wo, wi).1);
                 }
                 let integral = integral * 4.0 * std::f64::consts::PI / f64::from(N);
                 let share = f64::from(kept) / f64::from(N);

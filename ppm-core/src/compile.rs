@@ -33,6 +33,10 @@ pub struct SceneFeatures {
     /// Some material's colour comes from an image texture.
     #[serde(default)]
     pub textured: bool,
+    /// Some rough conductor or glass is anisotropic: its lobe follows the surface's texture
+    /// coordinates ([`crate::bsdf::is_anisotropic`]).
+    #[serde(default)]
+    pub anisotropic: bool,
     /// Some object moves between frames.
     pub moving_objects: bool,
 }
@@ -163,6 +167,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let (lo, hi) = bounds(&triangles);
     let extent = (hi - lo).length();
     let glossy = materials.iter().any(crate::bsdf::chain_samples_lights);
+    let anisotropic = materials.iter().any(crate::bsdf::is_anisotropic);
     CompiledScene {
         camera: gpu_camera(&scene.camera, width, height),
         triangles,
@@ -189,6 +194,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
                 .any(|m| matches!(m.kind, MaterialKind::Coated { .. })),
             glossy,
             textured: !textures.is_empty(),
+            anisotropic,
             moving_objects: !scene.moves.is_empty(),
         },
         extent,
@@ -287,26 +293,39 @@ fn gpu_material(kind: &MaterialKind) -> GpuMaterial {
             kind: material_kind::MIRROR,
             ..Default::default()
         },
-        MaterialKind::Glass { ior, alpha } => GpuMaterial {
-            albedo: [1.0; 3],
-            kind: material_kind::GLASS,
+        MaterialKind::Glass {
             ior,
             alpha,
-            ..Default::default()
-        },
+            alpha_v,
+        } => {
+            let (alpha, alpha_v) = bsdf::roughness_pair(alpha, alpha_v);
+            GpuMaterial {
+                albedo: [1.0; 3],
+                kind: material_kind::GLASS,
+                ior,
+                alpha,
+                alpha_v,
+                ..Default::default()
+            }
+        }
         MaterialKind::Conductor {
             eta,
             k,
             reflectance,
             alpha,
-        } => GpuMaterial {
-            albedo: reflectance.into(),
-            kind: material_kind::CONDUCTOR,
-            eta: eta.into(),
-            alpha,
-            k: k.into(),
-            ..Default::default()
-        },
+            alpha_v,
+        } => {
+            let (alpha, alpha_v) = bsdf::roughness_pair(alpha, alpha_v);
+            GpuMaterial {
+                albedo: reflectance.into(),
+                kind: material_kind::CONDUCTOR,
+                eta: eta.into(),
+                alpha,
+                alpha_v,
+                k: k.into(),
+                ..Default::default()
+            }
+        }
         MaterialKind::Coated {
             albedo,
             ior,

@@ -55,6 +55,71 @@ pub fn to_world(local: Vec3, n: Vec3) -> Vec3 {
     t * local.x + b * local.y + n * local.z
 }
 
+/// The frame a BSDF works in at a surface point: the unit normal on the path's side and a
+/// tangent. Isotropic lobes take any tangent ([`Frame::around`]); an anisotropic one is
+/// oriented by the surface's texture coordinates ([`Frame::with_tangent`], docs/materials.md,
+/// "Anisotropic roughness").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// Unit tangent, along which a lobe's roughness is `alpha`.
+    pub tangent: Vec3,
+    /// `normal x tangent`, along which it is `alpha_v`.
+    pub bitangent: Vec3,
+    /// Unit normal on the side the path is on.
+    pub normal: Vec3,
+}
+
+impl Frame {
+    /// The frame [`orthonormal_basis`] completes about `normal`.
+    #[inline]
+    pub fn around(normal: Vec3) -> Self {
+        let (tangent, bitangent) = orthonormal_basis(normal);
+        Self {
+            tangent,
+            bitangent,
+            normal,
+        }
+    }
+
+    /// The frame about `normal` whose tangent is `direction` less its part along the normal;
+    /// [`Frame::around`] where nothing is left of it (a degenerate or non-finite direction).
+    #[inline]
+    pub fn with_tangent(normal: Vec3, direction: Vec3) -> Self {
+        let scale = direction.abs().max_element();
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Self::around(normal);
+        }
+        let d = direction / scale;
+        let tangent = d - normal * normal.dot(d);
+        // Parallel to the normal within rounding: no direction in the plane.
+        if tangent.length_squared() <= 1e-12 {
+            return Self::around(normal);
+        }
+        let tangent = tangent.normalize();
+        Self {
+            tangent,
+            bitangent: normal.cross(tangent),
+            normal,
+        }
+    }
+
+    /// `v` in this frame's coordinates: along the tangent, the bitangent and the normal.
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(
+            self.tangent.dot(v),
+            self.bitangent.dot(v),
+            self.normal.dot(v),
+        )
+    }
+
+    /// `local` back in world coordinates.
+    #[inline]
+    pub fn to_world(&self, local: Vec3) -> Vec3 {
+        self.tangent * local.x + self.bitangent * local.y + self.normal * local.z
+    }
+}
+
 /// Mirror direction of `d` about the normal `n`.
 #[inline]
 pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
@@ -167,6 +232,24 @@ mod tests {
             e2: (c - a).into(),
             normal: (b - a).cross(c - a).normalize_or_zero().into(),
             ..Default::default()
+        }
+    }
+
+    /// A frame with a given tangent is orthonormal and right-handed about its normal, its
+    /// tangent the direction's part in the plane; a direction along the normal, zero or not
+    /// finite falls back on the basis about the normal.
+    #[test]
+    fn a_frame_keeps_the_part_of_its_tangent_in_the_plane() {
+        let n = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let d = Vec3::new(2.0, 1.0, -0.5);
+        let f = Frame::with_tangent(n, d);
+        let in_plane = (d - n * n.dot(d)).normalize();
+        assert!((f.tangent - in_plane).length() < 1e-6);
+        assert!((f.bitangent - n.cross(f.tangent)).length() < 1e-6);
+        let v = Vec3::new(0.1, 0.7, -0.3);
+        assert!((f.to_world(f.to_local(v)) - v).length() < 1e-6);
+        for degenerate in [n * 3.0, Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::INFINITY] {
+            assert_eq!(Frame::with_tangent(n, degenerate), Frame::around(n));
         }
     }
 

@@ -231,7 +231,8 @@ pub struct GpuMaterial {
     pub ior: f32,
     /// Real part of a conductor's complex index of refraction, per channel.
     pub eta: [f32; 3],
-    /// GGX roughness `alpha` of a conductor's microfacets (0: smooth).
+    /// GGX roughness `alpha` of a conductor's, glass's or coat's microfacets along the
+    /// surface's tangent (0: smooth; [`Frame`](crate::geometry::Frame)).
     pub alpha: f32,
     /// Imaginary part (absorption) of a conductor's index, per channel.
     pub k: [f32; 3],
@@ -247,8 +248,8 @@ pub struct GpuMaterial {
     /// The share of a rough coat's samples spent on its reflection where the two lobes are
     /// equally likely to matter (Mitsuba 3's `specular_sampling_weight`).
     pub coat_specular_weight: f32,
-    /// Padding.
-    pub _pad: u32,
+    /// GGX roughness across the tangent: `alpha` but where the material is anisotropic.
+    pub alpha_v: f32,
     /// A rough coat's transmittance `1 - R(mu)` (`R` its directional reflectance) at
     /// `mu = (i / 11)^2`, `i = 0 ..= 11`: dense where it changes fast, at grazing angles.
     pub coat_transmittance: [f32; 12],

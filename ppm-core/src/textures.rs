@@ -6,18 +6,23 @@
 //! the factor goes into the slot's throughput instead, so a slot keeps its material's index
 //! and size while the gather and the direct-light pass, which read `f` from the material,
 //! still weigh by the textured colour: a diffuse `f` is the colour over pi, linear in it.
+//!
+//! The same coordinates orient an anisotropic lobe: its tangent is the direction in which
+//! `u` grows across the triangle ([`SurfaceTextures::frame`]), as in pbrt-v4 and Mitsuba 3.
 
-use crate::bsdf::visible_point_f;
+use crate::bsdf::{self, is_anisotropic, visible_point_f};
+use crate::geometry::Frame;
 use crate::layout::{GpuMaterial, GpuTexture, GpuTriangle, GpuTriangleUv, material_kind};
 use crate::scene::{Scene, Texture, sample};
 use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
 /// Texture coordinates, headers and texels of a scene, as the backends bind them; all empty
-/// for an untextured scene, which then pays for none of it.
+/// for a scene without textures or anisotropic materials, which then pays for none of it.
 #[derive(Clone, Debug, Default)]
 pub struct SurfaceTextures {
-    /// Per triangle, in the triangle buffer's order.
+    /// Per triangle, in the triangle buffer's order; where the scene has a texture or an
+    /// anisotropic material (zero on the triangles of any other material).
     pub uvs: Vec<GpuTriangleUv>,
     /// One per distinct texture; [`GpuMaterial::texture`] is one plus an index here.
     pub headers: Vec<GpuTexture>,
@@ -50,6 +55,22 @@ impl SurfaceTextures {
             &self.texels,
             uv,
         )
+    }
+
+    /// The frame of `material`'s lobe on triangle `index` (`tri`) seen from the side of
+    /// `facing` ([`bsdf::frame`]): an anisotropic lobe's tangent is the triangle's
+    /// [`u_direction`].
+    #[inline]
+    pub fn frame(
+        &self,
+        material: &GpuMaterial,
+        index: u32,
+        tri: &GpuTriangle,
+        facing: Vec3,
+    ) -> Frame {
+        bsdf::frame(material, facing, || {
+            u_direction(&self.uvs[index as usize], tri)
+        })
     }
 
     /// `material` with its colour scaled by its texture at the point, and the factor that
@@ -97,6 +118,22 @@ pub fn surface_uv(uv: &GpuTriangleUv, tri: &GpuTriangle, position: Vec3) -> Vec2
     uv0 + (Vec2::from(uv.uv1) - uv0) * b1 + (Vec2::from(uv.uv2) - uv0) * b2
 }
 
+/// The direction in which `u` grows across `tri` (pbrt-v4's `dpdu`, up to its length): from
+/// `p = v0 + e1 s + e2 t` and `uv = uv0 + du1 s + du2 t`, the direction along which `v`
+/// stays put is `du2.y e1 - du1.y e2`, turned to point where `u` grows. The first edge where
+/// the coordinates give no direction (two vertices with the same `v` are enough for one).
+#[inline]
+pub fn u_direction(uv: &GpuTriangleUv, tri: &GpuTriangle) -> Vec3 {
+    let (e1, e2) = (Vec3::from(tri.e1), Vec3::from(tri.e2));
+    let uv0 = Vec2::from(uv.uv0);
+    let (du1, du2) = (Vec2::from(uv.uv1) - uv0, Vec2::from(uv.uv2) - uv0);
+    let det = du1.x * du2.y - du1.y * du2.x;
+    if det == 0.0 || !det.is_finite() {
+        return e1;
+    }
+    (e1 * du2.y - e2 * du1.y) * det.signum()
+}
+
 /// pbrt-v4's coordinates for a triangle given none.
 const DEFAULT_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::ONE];
 
@@ -121,7 +158,8 @@ pub(crate) fn compile_textures(
         };
         gpu.texture = index as u32 + 1;
     }
-    if distinct.is_empty() {
+    let anisotropic = materials.iter().any(is_anisotropic);
+    if distinct.is_empty() && !anisotropic {
         return SurfaceTextures::default();
     }
     let mut headers = Vec::with_capacity(distinct.len());
@@ -133,15 +171,15 @@ pub(crate) fn compile_textures(
         });
         texels.extend_from_slice(&t.texels);
     }
-    // Coordinates on an untextured material are never read: zero, so that two scenes that
-    // differ only there compile alike.
+    // Coordinates on a material neither textured nor anisotropic are never read: zero, so
+    // that two scenes that differ only there compile alike.
     let numbered: Vec<GpuTriangleUv> = scene
         .objects
         .iter()
         .flat_map(|o| {
-            let textured = scene.materials[o.material].texture.is_some();
-            (0..o.triangles.len())
-                .map(move |i| textured.then(|| o.uvs.get(i).unwrap_or(&DEFAULT_UVS)))
+            let read = scene.materials[o.material].texture.is_some()
+                || is_anisotropic(&materials[o.material]);
+            (0..o.triangles.len()).map(move |i| read.then(|| o.uvs.get(i).unwrap_or(&DEFAULT_UVS)))
         })
         .map(|uv| match uv {
             Some(uv) => GpuTriangleUv {
@@ -227,6 +265,40 @@ mod tests {
 
     fn assert_relative_eq_uv(uv: Vec2, p: Vec3) {
         assert!((uv - Vec2::new(p.x, p.y)).length() < 1e-6, "{uv} at {p}");
+    }
+
+    /// The tangent is where `u` grows: for coordinates that project the triangle's points
+    /// on any direction of its plane, that direction; for pbrt-v4's default coordinates, or
+    /// coordinates that give none, the first edge.
+    #[test]
+    fn the_u_direction_is_where_u_grows() {
+        let (a, b, c) = (
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(1.4, -0.2, 0.5),
+            Vec3::new(0.3, 1.1, -0.4),
+        );
+        let tri = crate::compile::gpu_triangle(&[a, b, c], 0, 0);
+        let n = Vec3::from(tri.normal);
+        let uvs = |f: &dyn Fn(Vec3) -> Vec2| GpuTriangleUv {
+            uv0: f(a).into(),
+            uv1: f(b).into(),
+            uv2: f(c).into(),
+            _pad: [0; 2],
+        };
+        for s in [Vec3::X, Vec3::Y, Vec3::new(0.5, -2.0, 1.0)] {
+            let s = (s - n * n.dot(s)).normalize();
+            let t = n.cross(s);
+            for flip in [1.0, -1.0] {
+                // v along -t as well: the tangent does not depend on v's orientation.
+                let uv = uvs(&|p: Vec3| Vec2::new(p.dot(s) + 3.0, flip * p.dot(t)));
+                let d = u_direction(&uv, &tri).normalize();
+                assert!((d - s).length() < 1e-5, "{d} against {s}");
+            }
+        }
+        let default = uvs(&|p: Vec3| DEFAULT_UVS[[a, b, c].iter().position(|&q| q == p).unwrap()]);
+        let e1 = Vec3::from(tri.e1);
+        assert!((u_direction(&default, &tri).normalize() - e1.normalize()).length() < 1e-6);
+        assert_eq!(u_direction(&uvs(&|_| Vec2::ONE), &tri), e1);
     }
 
     #[test]

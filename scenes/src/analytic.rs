@@ -119,6 +119,7 @@ pub fn specular_furnace(albedo: Vec3, le: f32) -> Scene {
         kind: MaterialKind::Glass {
             ior: 1.5,
             alpha: 0.0,
+            alpha_v: 0.0,
         },
         texture: None,
     });
@@ -213,7 +214,11 @@ pub fn water_furnace(albedo: Vec3, le: f32, ior: f32) -> Scene {
         glow("glow-under-water", ior * ior * le),
         Material {
             name: "water".into(),
-            kind: MaterialKind::Glass { ior, alpha: 0.0 },
+            kind: MaterialKind::Glass {
+                ior,
+                alpha: 0.0,
+                alpha_v: 0.0,
+            },
             texture: None,
         },
         Material {

@@ -76,6 +76,11 @@ pub const BUILTIN: &[BuiltinScene] = &[
         build: material_scenes::cornell_coated,
     },
     BuiltinScene {
+        name: "cornell-brushed",
+        description: "cornell-box with anisotropic blocks: brushed gold (GGX alpha 0.4 along, 0.05 across) and frosted glass (0.05, 0.3)",
+        build: material_scenes::cornell_brushed,
+    },
+    BuiltinScene {
         name: "cornell-textured",
         description: "cornell-box with a checkered floor and a back wall painted with coloured rings (image textures)",
         build: material_scenes::cornell_textured,

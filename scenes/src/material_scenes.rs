@@ -38,6 +38,7 @@ pub fn cornell_metal() -> Result<Scene, SceneError> {
                 k,
                 reflectance: Vec3::ONE,
                 alpha,
+                alpha_v: alpha,
             },
             texture: None,
         });
@@ -60,9 +61,14 @@ pub fn cornell_glass() -> Result<Scene, SceneError> {
         let object = scene
             .object_index(block)
             .expect("cornell-box has both blocks");
-        scene
-            .materials
-            .push(Material::new(name, MaterialKind::Glass { ior: 1.5, alpha }));
+        scene.materials.push(Material::new(
+            name,
+            MaterialKind::Glass {
+                ior: 1.5,
+                alpha,
+                alpha_v: alpha,
+            },
+        ));
         scene.objects[object].material = scene.materials.len() - 1;
         for v in scene.objects[object].triangles.iter_mut().flatten() {
             v.y += 1.0;
@@ -108,6 +114,68 @@ pub fn cornell_coated() -> Result<Scene, SceneError> {
         scene.objects[object].material = scene.materials.len() - 1;
     }
     Ok(scene)
+}
+
+/// `cornell-brushed`: cornell-box with anisotropic blocks, their texture coordinate `u`
+/// running up each side (and along z on top), so that the lobes are oriented alike on every
+/// face and across the basis an isotropic lobe takes about the normal (horizontal there): a
+/// tall block of brushed gold (GGX alpha 0.4 along the brushing, 0.05 across) and a short
+/// block of anisotropically frosted glass (0.05 and 0.3), raised 1 mm as cornell-glass's
+/// are.
+pub fn cornell_brushed() -> Result<Scene, SceneError> {
+    let mut scene = crate::cornell_box_file()?;
+    scene.name = "cornell-brushed".into();
+    let (eta, k) = GOLD;
+    for (block, name, kind) in [
+        (
+            "tall-block",
+            "brushed-gold",
+            MaterialKind::Conductor {
+                eta,
+                k,
+                reflectance: Vec3::ONE,
+                alpha: 0.4,
+                alpha_v: 0.05,
+            },
+        ),
+        (
+            "short-block",
+            "brushed-frost",
+            MaterialKind::Glass {
+                ior: 1.5,
+                alpha: 0.05,
+                alpha_v: 0.3,
+            },
+        ),
+    ] {
+        let index = scene
+            .object_index(block)
+            .expect("cornell-box has both blocks");
+        scene.materials.push(Material::new(name, kind));
+        let object = &mut scene.objects[index];
+        object.material = scene.materials.len() - 1;
+        object.uvs = upward_uvs(&object.triangles);
+        if block == "short-block" {
+            for v in object.triangles.iter_mut().flatten() {
+                v.y += 1.0;
+            }
+        }
+    }
+    Ok(scene)
+}
+
+/// Texture coordinates whose `u` runs up each triangle's plane (along z where the triangle
+/// is horizontal), `v` across it: the brushing direction of [`cornell_brushed`]'s blocks.
+fn upward_uvs(triangles: &[[Vec3; 3]]) -> Vec<[Vec2; 3]> {
+    triangles
+        .iter()
+        .map(|t| {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+            let across = Vec3::Y.cross(n).try_normalize().unwrap_or(Vec3::X);
+            let up = n.cross(across);
+            t.map(|p| Vec2::new(p.dot(up), p.dot(across)))
+        })
+        .collect()
 }
 
 /// `cornell-textured`: cornell-box with a checkered floor (nearest texel, hard edges) and a

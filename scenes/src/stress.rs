@@ -243,17 +243,27 @@ pub const STRESS: &[StressCase] = &[
     StressCase {
         name: "conductor-alpha-0",
         stresses: "a smooth lossless conductor for the furnace's mirror: its Fresnel term is one at every angle",
-        build: || conductor_case(0.0),
+        build: || conductor_case((0.0, 0.0)),
     },
     StressCase {
         name: "conductor-alpha-1",
         stresses: "the roughest conductor: half its visible microfacets reflect below the surface, ending paths",
-        build: || conductor_case(1.0),
+        build: || conductor_case((1.0, 1.0)),
+    },
+    StressCase {
+        name: "conductor-alpha-1-0",
+        stresses: "a conductor roughest along its tangent and smooth across it: a lobe one ten-thousandth as wide one way as the other",
+        build: || conductor_case((1.0, 0.0)),
     },
     StressCase {
         name: "glass-alpha-1",
         stresses: "the roughest glass cube: refractions and reflections off microfacets that lean as far as they can, some leaving on the wrong side",
-        build: || rough_glass_case(1.0),
+        build: || rough_glass_case((1.0, 1.0)),
+    },
+    StressCase {
+        name: "glass-alpha-0-1",
+        stresses: "a glass cube smooth along its tangent and roughest across it",
+        build: || rough_glass_case((0.0, 1.0)),
     },
     StressCase {
         name: "coat-alpha-0",
@@ -625,9 +635,10 @@ fn specular_case(ior: f32) -> StressSetup {
 }
 
 /// The specular furnace with a lossless conductor (`eta = 0`, `k = 1`) of roughness `alpha`
-/// for its mirror: every pixel is 2 when it is smooth; a rough one loses what single
-/// scattering cannot return, so only finiteness is asked.
-fn conductor_case(alpha: f32) -> StressSetup {
+/// along its tangent and `alpha_v` across it for its mirror: every pixel is 2 when it is
+/// smooth; a rough one loses what single scattering cannot return, so only finiteness is
+/// asked.
+fn conductor_case((alpha, alpha_v): (f32, f32)) -> StressSetup {
     let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
     for m in &mut scene.materials {
         if let MaterialKind::Mirror { .. } = m.kind {
@@ -636,23 +647,30 @@ fn conductor_case(alpha: f32) -> StressSetup {
                 k: Vec3::ONE,
                 reflectance: Vec3::ONE,
                 alpha,
+                alpha_v,
             };
         }
     }
     let mut setup = radiance_two(scene, None);
-    if alpha > 0.0 {
+    if alpha.max(alpha_v) > 0.0 {
         setup.expected = Expected::Finite;
     }
     setup
 }
 
-/// The specular furnace with its glass cube of roughness `alpha`: a rough dielectric loses
-/// what single scattering on its microfacets cannot return, so only finiteness is asked.
-fn rough_glass_case(alpha: f32) -> StressSetup {
+/// The specular furnace with its glass cube of roughness `alpha` along its tangent and
+/// `alpha_v` across it: a rough dielectric loses what single scattering on its microfacets
+/// cannot return, so only finiteness is asked.
+fn rough_glass_case((alpha, alpha_v): (f32, f32)) -> StressSetup {
     let mut scene = specular_furnace(Vec3::splat(0.5), 1.0);
     for m in &mut scene.materials {
-        if let MaterialKind::Glass { alpha: a, .. } = &mut m.kind {
-            *a = alpha;
+        if let MaterialKind::Glass {
+            alpha: a,
+            alpha_v: a_v,
+            ..
+        } = &mut m.kind
+        {
+            (*a, *a_v) = (alpha, alpha_v);
         }
     }
     let mut setup = radiance_two(scene, None);

@@ -175,7 +175,11 @@ fn glass_scene(tall_alpha: f32) -> Scene {
     for (block, ior, alpha) in [("tall-block", 1.5, tall_alpha), ("short-block", 1.33, 0.0)] {
         scene.materials.push(Material::new(
             format!("{block}-glass"),
-            MaterialKind::Glass { ior, alpha },
+            MaterialKind::Glass {
+                ior,
+                alpha,
+                alpha_v: alpha,
+            },
         ));
         let object = scene.object_index(block).unwrap();
         scene.objects[object].material = scene.materials.len() - 1;
@@ -255,4 +259,127 @@ fn glass_round_trips_through_pbrt_with_every_field() {
         assert_eq!(surfaces(&back), surfaces(&scene), "{tall_alpha}");
         assert_eq!(compiled_materials(&back), compiled_materials(&scene));
     }
+}
+
+/// The tangent that orients each anisotropic triangle's lobe, by object and triangle
+/// (`ppm_core::textures::u_direction` of the compiled scene, made a unit vector), with the
+/// triangle's first vertex to pair them up across files, which may reorder triangles.
+fn tangents(scene: &Scene) -> Vec<([u32; 3], Vec3)> {
+    let c = compile_scene(scene, scene.camera.width, scene.camera.height);
+    let mut out: Vec<([u32; 3], Vec3)> = c
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| ppm_core::bsdf::is_anisotropic(&c.materials[t.material as usize]))
+        .map(|(i, t)| {
+            let d = ppm_core::textures::u_direction(&c.textures.uvs[i], t).normalize();
+            // The lobe is the same along d and -d.
+            let d = if d.max_element() + d.min_element() < 0.0 {
+                -d
+            } else {
+                d
+            };
+            let centre = Vec3::from(t.v0) + (Vec3::from(t.e1) + Vec3::from(t.e2)) / 3.0;
+            (centre.to_array().map(|x| (x * 16.0).round() as u32), d)
+        })
+        .collect();
+    out.sort_by_key(|(k, _)| *k);
+    out
+}
+
+/// cornell-brushed (anisotropic gold and glass, their coordinates brushing them upwards)
+/// and the same with the blocks' coordinates dropped (each triangle's first edge then
+/// orients it, pbrt-v4's default): through Mitsuba 3 and pbrt-v4, `alpha_u`/`alpha_v` and
+/// `uroughness`/`vroughness` come back as written, and every anisotropic triangle keeps
+/// its tangent, since the meshes carry coordinates that give it to either renderer.
+#[test]
+fn anisotropic_lobes_round_trip_with_their_orientation() {
+    let brushed = scenes::builtin("cornell-brushed").unwrap().load().unwrap();
+    let mut unmapped = brushed.clone();
+    for o in &mut unmapped.objects {
+        o.uvs.clear();
+    }
+    for (name, mut scene) in [("brushed", brushed), ("unmapped", unmapped)] {
+        scene.moves.clear();
+        let mitsuba = mitsuba::export_mitsuba(&scene, &ExportOptions::default());
+        assert!(
+            mitsuba
+                .text
+                .contains("<float name=\"alpha_u\" value=\"0.4\"/>")
+        );
+        assert!(
+            mitsuba
+                .text
+                .contains("<float name=\"alpha_v\" value=\"0.05\"/>")
+        );
+        let pbrt = pbrt::export_pbrt(&scene, &ExportOptions::default());
+        assert!(
+            pbrt.text
+                .contains("\"float uroughness\" [ 0.05 ] \"float vroughness\" [ 0.3 ]")
+        );
+        let expected = tangents(&scene);
+        assert_eq!(expected.len(), 2 * 10, "{name}: both blocks' five faces");
+        for (export, format) in [(mitsuba, "mitsuba"), (pbrt, "pbrt")] {
+            let back = round_trip(&export, &format!("{format}-anisotropic-{name}"));
+            let kinds = |s: &Scene| -> Vec<MaterialKind> {
+                s.objects
+                    .iter()
+                    .map(|o| s.materials[o.material].kind.clone())
+                    .filter(MaterialKind::is_anisotropic)
+                    .collect()
+            };
+            assert_eq!(kinds(&back), kinds(&scene), "{format} {name}");
+            let got = tangents(&back);
+            assert_eq!(got.len(), expected.len());
+            for ((ka, a), (kb, b)) in expected.iter().zip(&got) {
+                assert_eq!(ka, kb, "{format} {name}: triangles pair up");
+                assert!((*a - *b).length() < 1e-4, "{format} {name}: {a} became {b}");
+            }
+        }
+    }
+}
+
+/// cornell-textured with its textured floor a rough conductor and its painted back wall a
+/// mirror, each texture scaling the reflectance: Mitsuba 3 takes both as a
+/// `specular_reflectance` bitmap and gives them back texel for texel; pbrt-v4, which reads a
+/// conductor's textured reflectance as an index per point, gets neither, and the notes say so.
+#[test]
+fn textured_reflectances_round_trip_through_mitsuba_and_are_noted_for_pbrt() {
+    let mut scene = scenes::builtin("cornell-textured").unwrap().load().unwrap();
+    scene.moves.clear();
+    for m in &mut scene.materials {
+        m.kind = match m.name.as_str() {
+            "checkers" => MaterialKind::Conductor {
+                eta: Vec3::new(0.2, 0.9, 1.1),
+                k: Vec3::new(3.9, 2.4, 2.1),
+                reflectance: Vec3::ONE,
+                alpha: 0.2,
+                alpha_v: 0.2,
+            },
+            "rings" => MaterialKind::Mirror {
+                reflectance: Vec3::ONE,
+            },
+            _ => continue,
+        };
+        assert!(m.texture.is_some());
+    }
+    let export = mitsuba::export_mitsuba(&scene, &ExportOptions::default());
+    assert_eq!(
+        export
+            .text
+            .matches("<texture type=\"bitmap\" name=\"specular_reflectance\">")
+            .count(),
+        2
+    );
+    let back = round_trip(&export, "mitsuba-textured-specular");
+    assert_eq!(surfaces(&back), surfaces(&scene));
+    assert_eq!(compiled_materials(&back), compiled_materials(&scene));
+    let pbrt = pbrt::export_pbrt(&scene, &ExportOptions::default());
+    assert!(pbrt.textures.is_empty());
+    let noted = pbrt
+        .notes
+        .iter()
+        .filter(|n| n.contains("pbrt-v4 reads a conductor's as an index per point"))
+        .count();
+    assert_eq!(noted, 2, "{:?}", pbrt.notes);
 }

@@ -250,8 +250,37 @@ fn mitsuba_rough_conductors_read_with_their_index_and_ggx_roughness() {
             k: Vec3::new(4.0, 2.4, 1.6),
             reflectance: Vec3::new(1.0, 0.9, 0.8),
             alpha: 0.2,
+            alpha_v: 0.2,
         }
     );
+    // Anisotropic: alpha_u along the surface's dp_du, alpha_v across it, each 0.1 unless
+    // given (alpha sets both).
+    let brushed = |u: &str, v: &str| {
+        format!(
+            r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/>{u}{v}
+            <rgb name="eta" value="0.1, 0.4, 1.4"/><rgb name="k" value="4, 2.4, 1.6"/></bsdf>"#
+        )
+    };
+    for (u, v, expected) in [
+        (
+            r#"<float name="alpha_u" value="0.05"/>"#,
+            r#"<float name="alpha_v" value="0.4"/>"#,
+            (0.05, 0.4),
+        ),
+        (r#"<float name="alpha_v" value="0.4"/>"#, "", (0.1, 0.4)),
+        (
+            r#"<float name="alpha_u" value="0.05"/>"#,
+            r#"<float name="alpha" value="0.3"/>"#,
+            (0.3, 0.3),
+        ),
+    ] {
+        let MaterialKind::Conductor { alpha, alpha_v, .. } =
+            first_material(conductor(&brushed(u, v)))
+        else {
+            panic!("not a conductor");
+        };
+        assert_eq!((alpha, alpha_v), expected, "{u} {v}");
+    }
     // Mitsuba's material "none" (its default): a lossless metal, Fresnel factor one.
     let none = r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/>
         <float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.3"/></bsdf>"#;
@@ -273,10 +302,6 @@ fn mitsuba_rough_conductors_read_with_their_index_and_ggx_roughness() {
         (
             r#"<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>"#,
             "Beckmann",
-        ),
-        (
-            r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
-            "anisotropic",
         ),
         (
             r#"<bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="1.5"/></bsdf>"#,
@@ -307,8 +332,34 @@ fn pbrt_conductors_read_with_pbrt_s_roughness_and_reflectance_rules() {
             k: Vec3::new(4.0, 2.4, 1.6),
             reflectance: Vec3::ONE,
             alpha: 0.2,
+            alpha_v: 0.2,
         }
     );
+    // uroughness and vroughness, each roughness where not given, remapped alike.
+    for (params, expected) in [
+        (
+            "\"float uroughness\" [ 0.01 ] \"float vroughness\" [ 0.16 ]",
+            (0.1, 0.4),
+        ),
+        (
+            "\"float roughness\" [ 0.04 ] \"float vroughness\" [ 0.16 ]",
+            (0.2, 0.4),
+        ),
+        (
+            "\"float uroughness\" [ 0.16 ] \"float roughness\" [ 0.04 ]",
+            (0.4, 0.2),
+        ),
+    ] {
+        let MaterialKind::Conductor { alpha, alpha_v, .. } = first_material(conductor(&format!(
+            "\"rgb eta\" [ 0.1 0.4 1.4 ] \"rgb k\" [ 4 2.4 1.6 ] {params}"
+        ))) else {
+            panic!("not a conductor");
+        };
+        assert!(
+            (alpha - expected.0).abs() < 1e-6 && (alpha_v - expected.1).abs() < 1e-6,
+            "{params}: {alpha} {alpha_v}"
+        );
+    }
     let raw = format!("{gold} \"bool remaproughness\" false");
     assert!(matches!(
         first_material(conductor(&raw)),
@@ -347,10 +398,6 @@ fn pbrt_conductors_read_with_pbrt_s_roughness_and_reflectance_rules() {
         (
             "\"spectrum eta\" [ 400 1.2 700 0.4 ] \"spectrum k\" \"metal-Au-k\"",
             "sampled spectrum",
-        ),
-        (
-            "\"rgb eta\" [ 0.1 0.4 1.4 ] \"float uroughness\" [ 0.1 ] \"float vroughness\" [ 0.2 ]",
-            "anisotropic",
         ),
         ("\"rgb eta\" [ 0.1 0.4 1.4 ]", "together"),
     ] {
@@ -441,6 +488,15 @@ fn pbrt_textures_are_read_or_refused_by_line() {
     );
     let err = pbrt_error(&textured("", "nowhere"));
     assert!(err.contains("no Texture \"nowhere\""), "{err}");
+    // pbrt-v4 turns a conductor's textured reflectance into an index per point.
+    let metal = pbrt_with_floor(&format!(
+        "{checks}\nMaterial \"conductor\" \"texture reflectance\" \"c\""
+    ));
+    let err = pbrt_error(&metal);
+    assert!(
+        err.contains("test.pbrt:6") && err.contains("a textured conductor reflectance"),
+        "{err}"
+    );
     let odd = "Texture \"i\" \"spectrum\" \"imagemap\" \"string filename\" \"i.png\" \"string filter\" \"cubic\"";
     let err = pbrt_error(&textured(odd, "i"));
     assert!(
@@ -608,7 +664,7 @@ fn pbrt_coated_diffuse_reads_with_pbrt_s_roughness_rules() {
     for (params, says) in [
         (
             "\"float uroughness\" [ 0.1 ] \"float vroughness\" [ 0.2 ]",
-            "\"float vroughness\": anisotropic roughness",
+            "anisotropic roughness",
         ),
         (
             "\"rgb albedo\" [ 0.5 0.5 0.5 ]",
@@ -651,6 +707,7 @@ fn mitsuba_rough_dielectrics_read_as_rough_glass_with_mitsuba_s_defaults() {
         MaterialKind::Glass {
             ior: bk7_in_air,
             alpha: 0.0,
+            alpha_v: 0.0,
         }
     );
     assert_eq!(
@@ -660,6 +717,7 @@ fn mitsuba_rough_dielectrics_read_as_rough_glass_with_mitsuba_s_defaults() {
         MaterialKind::Glass {
             ior: bk7_in_air,
             alpha: 0.1,
+            alpha_v: 0.1,
         }
     );
     let water = r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
@@ -671,6 +729,7 @@ fn mitsuba_rough_dielectrics_read_as_rough_glass_with_mitsuba_s_defaults() {
         MaterialKind::Glass {
             ior: 1.333,
             alpha: 0.25,
+            alpha_v: 0.25,
         }
     );
     let equal_uv = r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
@@ -682,6 +741,17 @@ fn mitsuba_rough_dielectrics_read_as_rough_glass_with_mitsuba_s_defaults() {
         MaterialKind::Glass {
             ior: 1.6,
             alpha: 0.3,
+            alpha_v: 0.3,
+        }
+    );
+    let frosted = r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
+        <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#;
+    assert_eq!(
+        first_material(dielectric(frosted)),
+        MaterialKind::Glass {
+            ior: bk7_in_air,
+            alpha: 0.1,
+            alpha_v: 0.3,
         }
     );
     for (inner, says) in [
@@ -692,10 +762,6 @@ fn mitsuba_rough_dielectrics_read_as_rough_glass_with_mitsuba_s_defaults() {
         (
             r#"<bsdf type="roughdielectric"><string name="distribution" value="beckmann"/></bsdf>"#,
             "test.xml:13: <string name=\"distribution\" value=\"beckmann\">: the beckmann distribution",
-        ),
-        (
-            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
-            "<float name=\"alpha_v\" value=\"0.3\">: anisotropic roughness",
         ),
         (
             r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="1.5"/></bsdf>"#,
@@ -741,6 +807,7 @@ fn pbrt_dielectrics_read_with_pbrt_s_roughness_rules() {
         MaterialKind::Glass {
             ior: 1.5,
             alpha: 0.0,
+            alpha_v: 0.0,
         }
     );
     // remaproughness (on by default) turns roughness 0.04 into alpha sqrt(0.04) = 0.2.
@@ -751,6 +818,7 @@ fn pbrt_dielectrics_read_with_pbrt_s_roughness_rules() {
         MaterialKind::Glass {
             ior: 1.33,
             alpha: 0.2,
+            alpha_v: 0.2,
         }
     );
     assert_eq!(
@@ -760,6 +828,7 @@ fn pbrt_dielectrics_read_with_pbrt_s_roughness_rules() {
         MaterialKind::Glass {
             ior: 1.5,
             alpha: 0.2,
+            alpha_v: 0.2,
         }
     );
     assert_eq!(
@@ -769,6 +838,7 @@ fn pbrt_dielectrics_read_with_pbrt_s_roughness_rules() {
         MaterialKind::Glass {
             ior: 1.5,
             alpha: 0.04,
+            alpha_v: 0.04,
         }
     );
     let equal_uv = "\"float uroughness\" [ 0.09 ] \"float vroughness\" [ 0.09 ]";
@@ -782,11 +852,17 @@ fn pbrt_dielectrics_read_with_pbrt_s_roughness_rules() {
         )),
         MaterialKind::Glass { alpha: 0.09, .. }
     ));
+    assert_eq!(
+        first_material(dielectric(
+            "\"float uroughness\" [ 0.1 ] \"float vroughness\" [ 0.2 ] \"bool remaproughness\" false"
+        )),
+        MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.1,
+            alpha_v: 0.2,
+        }
+    );
     for (params, says) in [
-        (
-            "\"float uroughness\" [ 0.1 ] \"float vroughness\" [ 0.2 ]",
-            "\"float vroughness\": anisotropic roughness",
-        ),
         (
             "\"float roughness\" [ 1.5 ]",
             "\"float roughness\": must be in [0, 1]",

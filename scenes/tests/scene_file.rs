@@ -131,8 +131,9 @@ triangles = [[[0.0, 2.0, -1.0], [1.0, 2.0, -1.0], [0.0, 2.0, 0.0]]]
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A coated material takes a texture on its base as a diffuse one does: the albedo is then 1
-/// unless given (a factor on the image), and an image that is not there names the field.
+/// A coated material takes a texture on its base as a diffuse one does, and a mirror or a
+/// conductor on its reflectance: the colour is then 1 unless given (a factor on the image),
+/// and an image that is not there names the field.
 #[test]
 fn a_textured_coated_material_reads_its_image_as_a_diffuse_one() {
     use ppm_core::scene::MaterialKind;
@@ -184,6 +185,38 @@ triangles = [[[0.0, 2.0, -1.0], [1.0, 2.0, -1.0], [0.0, 2.0, 0.0]]]
     let err = load("texture = \"gone.png\"").unwrap_err().to_string();
     assert!(
         err.contains("materials.paint.texture") && err.contains("gone.png"),
+        "{err}"
+    );
+    // A texture scales a mirror's or conductor's reflectance too (then 1 unless given).
+    let specular = |paint: &str| {
+        let text = scene("").replace("paint = { type = \"coated\",  }", paint);
+        scenes::file::parse_scene(&text, "metal.toml", &dir)
+    };
+    let mirror = specular("paint = { type = \"mirror\", texture = \"grey.png\" }").unwrap();
+    let m = &mirror.materials[mirror.objects[0].material];
+    assert_eq!(
+        (m.texture.as_ref().map(|t| t.width), &m.kind),
+        (
+            Some(2),
+            &MaterialKind::Mirror {
+                reflectance: Vec3::ONE
+            }
+        )
+    );
+    let metal = specular(
+        "paint = { type = \"conductor\", eta = [0.2, 0.9, 1.1], k = [3.9, 2.4, 2.1], reflectance = [0.5, 0.5, 0.5], texture = \"grey.png\", alpha = 0.3 }",
+    )
+    .unwrap();
+    let m = &metal.materials[metal.objects[0].material];
+    assert!(m.texture.is_some());
+    assert!(
+        matches!(m.kind, MaterialKind::Conductor { reflectance, .. } if reflectance == Vec3::splat(0.5))
+    );
+    let err = specular("paint = { type = \"mirror\" }")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("materials.paint.reflectance = missing: a mirror material needs its reflectance or a texture"),
         "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

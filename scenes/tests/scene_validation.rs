@@ -217,6 +217,7 @@ fn a_conductor_loads_with_its_defaults() {
             k: glam::Vec3::new(3.9, 2.4, 2.1),
             reflectance: glam::Vec3::ONE,
             alpha: 0.0,
+            alpha_v: 0.0,
         }
     );
 }
@@ -277,7 +278,7 @@ fn coated_values_that_cannot_be_are_refused_by_field() {
         ),
         (
             "ior = 1.5",
-            "materials.paint.albedo = missing: a coated material needs an albedo or a texture",
+            "materials.paint.albedo = missing: a coated material needs its albedo or a texture",
         ),
     ] {
         let e = error_for(
@@ -339,14 +340,34 @@ fn glass_rougher_than_one() {
 #[test]
 fn glass_roughness_that_cannot_be_is_refused_by_field() {
     for (alpha, says) in [
-        ("nan", "materials.glass.alpha = NaN: must be in [0, 1]"),
-        ("inf", "materials.glass.alpha = inf: must be in [0, 1]"),
-        ("-0.1", "materials.glass.alpha = -0.1: must be in [0, 1]"),
-        ("1.01", "materials.glass.alpha = 1.01: must be in [0, 1]"),
+        (
+            "alpha = nan",
+            "materials.glass.alpha = NaN: must be in [0, 1]",
+        ),
+        (
+            "alpha = inf",
+            "materials.glass.alpha = inf: must be in [0, 1]",
+        ),
+        (
+            "alpha = -0.1",
+            "materials.glass.alpha = -0.1: must be in [0, 1]",
+        ),
+        (
+            "alpha = 1.01",
+            "materials.glass.alpha = 1.01: must be in [0, 1]",
+        ),
+        (
+            "alpha_v = 1.5",
+            "materials.glass.alpha_v = 1.5: must be in [0, 1]",
+        ),
+        (
+            "alpha = 0.2, alpha_v = nan",
+            "materials.glass.alpha_v = NaN: must be in [0, 1]",
+        ),
     ] {
         let e = error_for(
             "lamp = { type",
-            &format!("glass = {{ type = \"glass\", ior = 1.5, alpha = {alpha} }}\nlamp = {{ type"),
+            &format!("glass = {{ type = \"glass\", ior = 1.5, {alpha} }}\nlamp = {{ type"),
         );
         assert!(
             e.starts_with("probe.toml: ") && e.contains(says),
@@ -375,6 +396,7 @@ fn a_glass_loads_with_its_defaults() {
         ppm_core::scene::MaterialKind::Glass {
             ior: 1.5,
             alpha: 0.0,
+            alpha_v: 0.0,
         }
     );
     assert_eq!(
@@ -382,6 +404,15 @@ fn a_glass_loads_with_its_defaults() {
         ppm_core::scene::MaterialKind::Glass {
             ior: 1.33,
             alpha: 0.25,
+            alpha_v: 0.25,
+        }
+    );
+    assert_eq!(
+        glass("ior = 1.5, alpha = 0.1, alpha_v = 0.4"),
+        ppm_core::scene::MaterialKind::Glass {
+            ior: 1.5,
+            alpha: 0.1,
+            alpha_v: 0.4,
         }
     );
     assert_eq!(
@@ -389,6 +420,7 @@ fn a_glass_loads_with_its_defaults() {
         ppm_core::scene::MaterialKind::Glass {
             ior: 1.5,
             alpha: 1.0,
+            alpha_v: 1.0,
         }
     );
 }

@@ -103,6 +103,7 @@ fn a_lossless_smooth_conductor_keeps_the_furnace_radiance() {
         k: Vec3::ONE,
         reflectance: Vec3::ONE,
         alpha: 0.0,
+        alpha_v: 0.0,
     });
     converges(&scene, Vec3::splat(0.5), DirectMode::Explicit);
 }

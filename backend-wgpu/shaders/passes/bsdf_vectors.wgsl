@@ -8,9 +8,10 @@ struct BsdfCase {
     front: u32,
     facing: vec3<f32>,
     u_lobe: f32,
-    u_dir: vec2<f32>,
+    u_direction: vec3<f32>,
     transport: u32,
-    _pad: u32,
+    u_dir: vec2<f32>,
+    _pad: vec2<u32>,
 }
 
 // One output: ppm_core::bsdf::BsdfOutcome.
@@ -35,9 +36,10 @@ fn bsdf_vectors_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         return;
     }
     let c = cases[i];
-    let s = bsdf_sample(c.material, c.incoming, c.facing, c.front != 0u, c.u_lobe, c.u_dir, c.transport);
+    let frame = bsdf_frame(c.material, c.facing, c.u_direction);
+    let s = bsdf_sample(c.material, c.incoming, frame, c.front != 0u, c.u_lobe, c.u_dir, c.transport);
     let wo = -c.incoming;
-    let f_cos = bsdf_eval_cos(c.material, c.facing, wo, s.dir);
-    let glossy = bsdf_glossy_lobe(c.material, c.facing, c.front != 0u, wo, s.dir);
-    results[i] = BsdfOutcome(s.dir, s.pdf, s.weight, select(0u, 1u, s.transmitted), f_cos, bsdf_pdf(c.material, c.facing, wo, s.dir), glossy.xyz, glossy.w);
+    let f_cos = bsdf_eval_cos(c.material, frame, wo, s.dir);
+    let glossy = bsdf_glossy_lobe(c.material, frame, c.front != 0u, wo, s.dir);
+    results[i] = BsdfOutcome(s.dir, s.pdf, s.weight, select(0u, 1u, s.transmitted), f_cos, bsdf_pdf(c.material, frame, wo, s.dir), glossy.xyz, glossy.w);
 }

@@ -20,7 +20,7 @@ override SPECULAR: bool = true;
 // The light sample at a glossy bounce at `depth` (backend-cpu's chain_light.rs): f cos Le /
 // p_light weighed against the bounce's density in xyz, before the path's throughput; w one
 // when a shadow ray was traced.
-fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<f32>, front: bool, wo: vec3<f32>, key: StreamKey, depth: u32) -> vec4<f32> {
+fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, frame: Frame, front: bool, wo: vec3<f32>, key: StreamKey, depth: u32) -> vec4<f32> {
     if scene.light_count == 0u {
         return vec4<f32>(0.0);
     }
@@ -29,6 +29,7 @@ fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<
     let b = uniform_triangle(stream_uniform(key, first + 1u), stream_uniform(key, first + 2u));
     let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
     // The shadow ray leaves from the light's side (the far one through rough glass).
+    let facing = frame.normal;
     let side = select(-facing, facing, dot(facing, y - position) >= 0.0);
     let origin = position + side * params.ray_epsilon;
     let to_light = y - origin;
@@ -39,7 +40,7 @@ fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, facing: vec3<
     let dist = sqrt(dist2);
     let wi = to_light / dist;
     let cos_l = -dot(light.normal, wi);
-    let lobe = bsdf_glossy_lobe(material, facing, front, wo, wi);
+    let lobe = bsdf_glossy_lobe(material, frame, front, wo, wi);
     if cos_l <= 0.0 || all(lobe.xyz == vec3<f32>(0.0)) {
         return vec4<f32>(0.0);
     }
@@ -161,14 +162,15 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         out.flags |= HIT_EYE_CHAINED;
         let glossy_lobe = sample_lights && bsdf_chain_samples_lights(material);
+        let frame = surface_frame(material, hit.triangle, tri, facing);
         if glossy_lobe {
-            let light = glossy_vertex_light(material, position, facing, front, -dir, key, depth);
+            let light = glossy_vertex_light(material, position, frame, front, -dir, key, depth);
             chain.radiance += throughput * light.xyz;
             shadow_rays += u32(light.w);
         }
         let glossy = EYE_GLOSSY_DIM + 2u * depth;
         let u_dir = vec2<f32>(stream_uniform(key, glossy), stream_uniform(key, glossy + 1u));
-        let bounce = bsdf_sample(material, dir, facing, front, u, u_dir, TRANSPORT_RADIANCE);
+        let bounce = bsdf_sample(material, dir, frame, front, u, u_dir, TRANSPORT_RADIANCE);
         if all(bounce.weight == vec3<f32>(0.0)) {
             // A glossy direction below the surface: no visible point.
             rays = depth + 1u;
@@ -176,7 +178,7 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         }
         bounce_pdf = -1.0;
         if glossy_lobe {
-            bounce_pdf = bsdf_glossy_lobe(material, facing, front, -dir, bounce.dir).w;
+            bounce_pdf = bsdf_glossy_lobe(material, frame, front, -dir, bounce.dir).w;
         }
         throughput *= bounce.weight;
         dir = bounce.dir;

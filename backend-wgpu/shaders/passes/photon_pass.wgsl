@@ -156,7 +156,8 @@ fn trace_photon(path: u32) -> Traced {
             }
             power *= scattered.weight / survive;
         } else {
-            scattered = bsdf_photon_bounce(material, dir, facing, front, u, u_dir);
+            let frame = surface_frame(material, hit.triangle, tri, facing);
+            scattered = bsdf_photon_bounce(material, dir, frame, front, u, u_dir);
             if all(scattered.weight == vec3<f32>(0.0)) {
                 break;
             }

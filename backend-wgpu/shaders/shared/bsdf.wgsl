@@ -27,7 +27,27 @@ struct BsdfSample {
 
 fn bsdf_is_delta(material: GpuMaterial) -> bool {
     return material.kind == MATERIAL_MIRROR
-        || ((material.kind == MATERIAL_GLASS || material.kind == MATERIAL_CONDUCTOR) && material.alpha < SMOOTH_ALPHA);
+        || ((material.kind == MATERIAL_GLASS || material.kind == MATERIAL_CONDUCTOR)
+            && max(material.alpha, material.alpha_v) < SMOOTH_ALPHA);
+}
+
+// The GGX roughness along and across the tangent (ppm_core::bsdf::roughness).
+fn bsdf_roughness(material: GpuMaterial) -> vec2<f32> {
+    return vec2<f32>(material.alpha, material.alpha_v);
+}
+
+// ppm_core::bsdf::is_anisotropic.
+fn bsdf_is_anisotropic(material: GpuMaterial) -> bool {
+    return material.alpha != material.alpha_v && !bsdf_is_delta(material);
+}
+
+// The lobe's frame on a surface facing `facing` whose u grows along u_direction
+// (ppm_core::bsdf::frame).
+fn bsdf_frame(material: GpuMaterial, facing: vec3<f32>, u_direction: vec3<f32>) -> Frame {
+    if bsdf_is_anisotropic(material) {
+        return frame_with_tangent(facing, u_direction);
+    }
+    return frame_around(facing);
 }
 
 // Whether eval_cos and pdf describe the bounces: not at delta surfaces nor at a rough
@@ -145,10 +165,11 @@ fn visible_point_pdf(facing: vec3<f32>, wi: vec3<f32>) -> f32 {
 }
 
 // D(m) of a local microfacet normal, from its tangential components (ppm_core::bsdf::ggx_d).
-fn ggx_d(alpha: f32, m: vec3<f32>) -> f32 {
-    let a2 = alpha * alpha;
-    let d = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-    return 1.0 / (PI * a2 * d * d);
+fn ggx_d(alpha: vec2<f32>, m: vec3<f32>) -> f32 {
+    let sx = m.x / alpha.x;
+    let sy = m.y / alpha.y;
+    let d = sx * sx + sy * sy + m.z * m.z;
+    return 1.0 / (PI * alpha.x * alpha.y * d * d);
 }
 
 // The unit half vector, the sum scaled before normalising (ppm_core::bsdf::half_vector).
@@ -158,20 +179,16 @@ fn half_vector(wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     return normalize(sum / max(m.x, max(m.y, m.z)));
 }
 
-fn local_half(facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    let h = half_vector(wo, wi);
-    let basis = orthonormal_basis(facing);
-    return vec3<f32>(dot(basis.tangent, h), dot(basis.bitangent, h), dot(facing, h));
+// cos sqrt(1 + alpha^2 tan^2) of a local unit direction, the roughness along its azimuth,
+// without dividing by cos (ppm_core::bsdf::smith_root).
+fn smith_root(alpha: vec2<f32>, w: vec3<f32>) -> f32 {
+    let x = alpha.x * w.x;
+    let y = alpha.y * w.y;
+    return sqrt(w.z * w.z + x * x + y * y);
 }
 
-// cos sqrt(1 + alpha^2 tan^2) without dividing by cos (ppm_core::bsdf::smith_root).
-fn smith_root(alpha: f32, cos: f32) -> f32 {
-    let a2 = alpha * alpha;
-    return sqrt(a2 + (1.0 - a2) * cos * cos);
-}
-
-fn ggx_reflection_pdf(alpha: f32, cos_o: f32, d: f32) -> f32 {
-    return d / (2.0 * (cos_o + smith_root(alpha, cos_o)));
+fn ggx_reflection_pdf(alpha: vec2<f32>, local_o: vec3<f32>, d: f32) -> f32 {
+    return d / (2.0 * (local_o.z + smith_root(alpha, local_o)));
 }
 
 fn sq(x: f32) -> f32 {
@@ -204,21 +221,24 @@ fn conductor_fresnel(material: GpuMaterial, cos_i: f32) -> vec3<f32> {
 
 // The GGX reflection lobe without its Fresnel term, D G2 / (4 cos_o cos_i) times cos_i
 // (ppm_core::bsdf::ggx_reflection_cos).
-fn ggx_reflection_cos(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
-    let cos_o = dot(facing, wo);
-    let cos_i = dot(facing, wi);
-    let d = ggx_d(alpha, local_half(facing, wo, wi));
-    let root_o = smith_root(alpha, cos_o);
-    let root_i = smith_root(alpha, cos_i);
+fn ggx_reflection_cos(alpha: vec2<f32>, frame: Frame, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let local_o = frame_to_local(frame, wo);
+    let local_i = frame_to_local(frame, wi);
+    let cos_o = local_o.z;
+    let cos_i = local_i.z;
+    let d = ggx_d(alpha, frame_to_local(frame, half_vector(wo, wi)));
+    let root_o = smith_root(alpha, local_o);
+    let root_i = smith_root(alpha, local_i);
     return d * (0.5 * cos_i / (cos_i * root_o + cos_o * root_i));
 }
 
-fn ggx_pdf(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
-    return ggx_reflection_pdf(alpha, dot(facing, wo), ggx_d(alpha, local_half(facing, wo, wi)));
+fn ggx_pdf(alpha: vec2<f32>, frame: Frame, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    return ggx_reflection_pdf(alpha, frame_to_local(frame, wo), ggx_d(alpha, frame_to_local(frame, half_vector(wo, wi))));
 }
 
 // Both lobes of a coated surface (ppm_core::bsdf::coat::eval_cos).
-fn coat_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+fn coat_eval_cos(material: GpuMaterial, frame: Frame, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let facing = frame.normal;
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, wi);
     let diffuse = coat_base_f(material)
@@ -227,21 +247,23 @@ fn coat_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: ve
         return diffuse;
     }
     let h = half_vector(wo, wi);
-    let lobe = ggx_reflection_cos(material.alpha, facing, wo, wi);
+    let lobe = ggx_reflection_cos(bsdf_roughness(material), frame, wo, wi);
     return diffuse + vec3<f32>(dielectric_fresnel(dot(wo, h), 1.0 / material.ior) * lobe);
 }
 
-fn coat_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+fn coat_pdf(material: GpuMaterial, frame: Frame, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let facing = frame.normal;
     let p = coat_specular_probability(material, dot(facing, wo));
     let diffuse = (1.0 - p) * dot(facing, wi) * (1.0 / PI);
     if coat_is_smooth(material) {
         return diffuse;
     }
-    return diffuse + p * ggx_pdf(material.alpha, facing, wo, wi);
+    return diffuse + p * ggx_pdf(bsdf_roughness(material), frame, wo, wi);
 }
 
 // f(wo, wi) cos_i of a non-delta surface (ppm_core::bsdf::eval_cos).
-fn bsdf_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+fn bsdf_eval_cos(material: GpuMaterial, frame: Frame, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let facing = frame.normal;
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, wi);
     if cos_o <= 0.0 || cos_i <= 0.0 || !bsdf_samples_lights(material) {
@@ -249,27 +271,28 @@ fn bsdf_eval_cos(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: ve
     }
     if material.kind == MATERIAL_CONDUCTOR {
         let h = half_vector(wo, wi);
-        let lobe = ggx_reflection_cos(material.alpha, facing, wo, wi);
+        let lobe = ggx_reflection_cos(bsdf_roughness(material), frame, wo, wi);
         return material.albedo * conductor_fresnel(material, dot(wo, h)) * lobe;
     }
     if material.kind == MATERIAL_COATED {
-        return coat_eval_cos(material, facing, wo, wi);
+        return coat_eval_cos(material, frame, wo, wi);
     }
     return visible_point_f(material) * cos_i;
 }
 
 // Density of wi given wo (ppm_core::bsdf::pdf).
-fn bsdf_pdf(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+fn bsdf_pdf(material: GpuMaterial, frame: Frame, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let facing = frame.normal;
     let cos_o = dot(facing, wo);
     let cos_i = dot(facing, wi);
     if cos_o <= 0.0 || cos_i <= 0.0 || !bsdf_samples_lights(material) {
         return 0.0;
     }
     if material.kind == MATERIAL_CONDUCTOR {
-        return ggx_pdf(material.alpha, facing, wo, wi);
+        return ggx_pdf(bsdf_roughness(material), frame, wo, wi);
     }
     if material.kind == MATERIAL_COATED {
-        return coat_pdf(material, facing, wo, wi);
+        return coat_pdf(material, frame, wo, wi);
     }
     return visible_point_pdf(facing, wi);
 }
@@ -284,19 +307,22 @@ fn bsdf_chain_samples_lights(material: GpuMaterial) -> bool {
 // A rough dielectric's f cos_i (x) and the density of wi (y) for an eye path that arrived
 // from wo, on either side: reflection above the surface, refraction below it, the densities
 // those of the sampler (ppm_core::bsdf::rough_glass::eval_cos_pdf).
-fn rough_glass_eval_cos_pdf(material: GpuMaterial, facing: vec3<f32>, front: bool, wo: vec3<f32>, wi: vec3<f32>) -> vec2<f32> {
-    let alpha = material.alpha;
-    let cos_o = dot(facing, wo);
-    let cos_i = dot(facing, wi);
+fn rough_glass_eval_cos_pdf(material: GpuMaterial, frame: Frame, front: bool, wo: vec3<f32>, wi: vec3<f32>) -> vec2<f32> {
+    let alpha = bsdf_roughness(material);
+    let facing = frame.normal;
+    let local_o = frame_to_local(frame, wo);
+    let local_i = frame_to_local(frame, wi);
+    let cos_o = local_o.z;
+    let cos_i = local_i.z;
     if cos_o <= 0.0 || cos_i == 0.0 {
         return vec2<f32>(0.0);
     }
     let eta = select(material.ior, 1.0 / material.ior, front);
     if cos_i > 0.0 {
         let h = half_vector(wo, wi);
-        let lobe = ggx_reflection_cos(alpha, facing, wo, wi);
+        let lobe = ggx_reflection_cos(alpha, frame, wo, wi);
         let fresnel = fresnel_refract(-wo, h, eta).reflectance;
-        return vec2<f32>(fresnel * lobe, fresnel * ggx_pdf(alpha, facing, wo, wi));
+        return vec2<f32>(fresnel * lobe, fresnel * ggx_pdf(alpha, frame, wo, wi));
     }
     // The microfacet normal that refracts -wo into wi, turned to wo's side.
     let sum = wo * eta + wi;
@@ -316,11 +342,10 @@ fn rough_glass_eval_cos_pdf(material: GpuMaterial, facing: vec3<f32>, front: boo
     if !fresnel.refracts {
         return vec2<f32>(0.0);
     }
-    let basis = orthonormal_basis(facing);
-    let d = ggx_d(alpha, vec3<f32>(dot(basis.tangent, h), dot(basis.bitangent, h), dot(facing, h)));
+    let d = ggx_d(alpha, frame_to_local(frame, h));
     let abs_i = -cos_i;
-    let root_o = smith_root(alpha, cos_o);
-    let root_i = smith_root(alpha, abs_i);
+    let root_o = smith_root(alpha, local_o);
+    let root_i = smith_root(alpha, local_i);
     let jacobian = -i_h / denom2;
     let pdf = (1.0 - fresnel.reflectance) * d * 2.0 * o_h / (cos_o + root_o) * jacobian;
     let g2 = 2.0 * cos_o * abs_i / (abs_i * root_o + cos_o * root_i);
@@ -331,12 +356,13 @@ fn rough_glass_eval_cos_pdf(material: GpuMaterial, facing: vec3<f32>, front: boo
 // The lobe an eye path continues by at such a surface, arriving from wo on the side of
 // facing (front: the outside): f cos over the lobe's chance in xyz, the density of wi within
 // it in w; wi below the surface only at rough glass (ppm_core::bsdf::glossy_lobe).
-fn bsdf_glossy_lobe(material: GpuMaterial, facing: vec3<f32>, front: bool, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
+fn bsdf_glossy_lobe(material: GpuMaterial, frame: Frame, front: bool, wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
     if !bsdf_chain_samples_lights(material) {
         return vec4<f32>(0.0);
     }
+    let facing = frame.normal;
     if material.kind == MATERIAL_GLASS {
-        let glass = rough_glass_eval_cos_pdf(material, facing, front, wo, wi);
+        let glass = rough_glass_eval_cos_pdf(material, frame, front, wo, wi);
         return vec4<f32>(vec3<f32>(glass.x), glass.y);
     }
     let cos_o = dot(facing, wo);
@@ -350,11 +376,12 @@ fn bsdf_glossy_lobe(material: GpuMaterial, facing: vec3<f32>, front: bool, wo: v
             return vec4<f32>(0.0);
         }
         let h = half_vector(wo, wi);
-        let lobe = ggx_reflection_cos(material.alpha, facing, wo, wi);
+        let alpha = bsdf_roughness(material);
+        let lobe = ggx_reflection_cos(alpha, frame, wo, wi);
         let f_cos = dielectric_fresnel(dot(wo, h), 1.0 / material.ior) * lobe / p;
-        return vec4<f32>(vec3<f32>(f_cos), ggx_pdf(material.alpha, facing, wo, wi));
+        return vec4<f32>(vec3<f32>(f_cos), ggx_pdf(alpha, frame, wo, wi));
     }
-    return vec4<f32>(bsdf_eval_cos(material, facing, wo, wi), bsdf_pdf(material, facing, wo, wi));
+    return vec4<f32>(bsdf_eval_cos(material, frame, wo, wi), bsdf_pdf(material, frame, wo, wi));
 }
 
 // A reflection off a GGX microfacet drawn from the normals visible from wo (Heitz 2018;
@@ -372,14 +399,13 @@ struct VisibleNormal {
     h: vec3<f32>,
 }
 
-fn visible_normal(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> VisibleNormal {
-    let basis = orthonormal_basis(facing);
-    let local_o = vec3<f32>(dot(basis.tangent, wo), dot(basis.bitangent, wo), dot(facing, wo));
-    let v = normalize(vec3<f32>(alpha * local_o.x, alpha * local_o.y, local_o.z));
-    let len2 = v.x * v.x + v.y * v.y;
+fn visible_normal(alpha: vec2<f32>, frame: Frame, wo: vec3<f32>, u: vec2<f32>) -> VisibleNormal {
+    let local_o = frame_to_local(frame, wo);
+    let v = normalize(vec3<f32>(alpha.x * local_o.x, alpha.y * local_o.y, local_o.z));
+    // A fixed frame near normal incidence (ppm_core::bsdf::NEAR_NORMAL).
     var t1 = vec3<f32>(1.0, 0.0, 0.0);
-    if len2 > 0.0 {
-        t1 = vec3<f32>(-v.y, v.x, 0.0) / sqrt(len2);
+    if v.z < 0.99999 {
+        t1 = vec3<f32>(-v.y, v.x, 0.0) / sqrt(v.x * v.x + v.y * v.y);
     }
     let t2 = cross(v, t1);
     let r = sqrt(u.x);
@@ -388,33 +414,36 @@ fn visible_normal(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) ->
     let s = 0.5 * (1.0 + v.z);
     let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
     let nh = t1 * p1 + t2 * p2 + v * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
-    let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
-    return VisibleNormal(m, to_world(m, facing));
+    let m = normalize(vec3<f32>(alpha.x * nh.x, alpha.y * nh.y, max(nh.z, 0.0)));
+    return VisibleNormal(m, frame_to_world(frame, m));
 }
 
-// G2 / G1(wo) in the form that cancels cos_o (ppm_core::bsdf::ggx_g2_over_g1).
-fn ggx_g2_over_g1(alpha: f32, cos_o: f32, cos_i: f32) -> f32 {
-    let root_o = smith_root(alpha, cos_o);
-    let root_i = smith_root(alpha, cos_i);
+// G2 / G1(wo) at local directions, local_i on either side, in the form that cancels cos_o
+// (ppm_core::bsdf::ggx_g2_over_g1).
+fn ggx_g2_over_g1(alpha: vec2<f32>, local_o: vec3<f32>, local_i: vec3<f32>) -> f32 {
+    let cos_o = local_o.z;
+    let cos_i = abs(local_i.z);
+    let root_o = smith_root(alpha, local_o);
+    let root_i = smith_root(alpha, local_i);
     return cos_i * (cos_o + root_o) / (cos_i * root_o + cos_o * root_i);
 }
 
-fn sample_ggx_reflection(alpha: f32, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> GgxReflection {
-    let normal = visible_normal(alpha, facing, wo, u);
+fn sample_ggx_reflection(alpha: vec2<f32>, frame: Frame, wo: vec3<f32>, u: vec2<f32>) -> GgxReflection {
+    let normal = visible_normal(alpha, frame, wo, u);
     let m = normal.m;
     let h = normal.h;
     let dir = reflect(-wo, h);
-    let cos_o = dot(facing, wo);
-    let cos_i = dot(facing, dir);
-    if cos_o <= 0.0 || cos_i <= 0.0 {
+    let local_o = frame_to_local(frame, wo);
+    let local_i = frame_to_local(frame, dir);
+    if local_o.z <= 0.0 || local_i.z <= 0.0 {
         return GgxReflection(dir, h, 0.0, 0.0);
     }
-    return GgxReflection(dir, h, ggx_g2_over_g1(alpha, cos_o, cos_i), ggx_reflection_pdf(alpha, cos_o, ggx_d(alpha, m)));
+    return GgxReflection(dir, h, ggx_g2_over_g1(alpha, local_o, local_i), ggx_reflection_pdf(alpha, local_o, ggx_d(alpha, m)));
 }
 
 // A rough conductor's visible normals (ppm_core::bsdf::sample_conductor).
-fn bsdf_sample_conductor(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
-    let r = sample_ggx_reflection(material.alpha, facing, wo, u);
+fn bsdf_sample_conductor(material: GpuMaterial, frame: Frame, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    let r = sample_ggx_reflection(bsdf_roughness(material), frame, wo, u);
     let weight = material.albedo * conductor_fresnel(material, dot(wo, r.h)) * r.g2_over_g1;
     return BsdfSample(r.dir, weight, r.pdf, false);
 }
@@ -422,10 +451,11 @@ fn bsdf_sample_conductor(material: GpuMaterial, facing: vec3<f32>, wo: vec3<f32>
 // A rough dielectric: reflection with the Fresnel term at a visible microfacet as its
 // chance, else refraction through it; weight G2 / G1(wo), times (eta_i / eta_t)^2 for
 // radiance refracted; no density (ppm_core::bsdf::sample_rough_dielectric).
-fn bsdf_sample_rough_dielectric(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, u_dir: vec2<f32>, transport: u32) -> BsdfSample {
+fn bsdf_sample_rough_dielectric(material: GpuMaterial, incoming: vec3<f32>, frame: Frame, front: bool, u_lobe: f32, u_dir: vec2<f32>, transport: u32) -> BsdfSample {
     let wo = -incoming;
     let eta = select(material.ior, 1.0 / material.ior, front);
-    let h = visible_normal(material.alpha, facing, wo, u_dir).h;
+    let alpha = bsdf_roughness(material);
+    let h = visible_normal(alpha, frame, wo, u_dir).h;
     let fresnel = fresnel_refract(incoming, h, eta);
     var dir = reflect(incoming, h);
     var transmitted = false;
@@ -433,12 +463,12 @@ fn bsdf_sample_rough_dielectric(material: GpuMaterial, incoming: vec3<f32>, faci
         dir = fresnel.refracted;
         transmitted = true;
     }
-    let cos_o = dot(facing, wo);
-    let cos_i = dot(facing, dir);
-    let on_its_side = select(cos_i > 0.0, cos_i < 0.0, transmitted);
+    let local_o = frame_to_local(frame, wo);
+    let local_i = frame_to_local(frame, dir);
+    let on_its_side = select(local_i.z > 0.0, local_i.z < 0.0, transmitted);
     var weight = 0.0;
-    if cos_o > 0.0 && on_its_side {
-        weight = ggx_g2_over_g1(material.alpha, cos_o, abs(cos_i));
+    if local_o.z > 0.0 && on_its_side {
+        weight = ggx_g2_over_g1(alpha, local_o, local_i);
     }
     if transmitted && transport == TRANSPORT_RADIANCE {
         weight *= eta * eta;
@@ -459,8 +489,9 @@ fn bsdf_sample_visible(material: GpuMaterial, facing: vec3<f32>, u: vec2<f32>) -
 
 // One lobe of a coated surface, picked by u_lobe, its weight over its chance
 // (ppm_core::bsdf::coat::sample).
-fn coat_sample(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, u_lobe: f32, u_dir: vec2<f32>) -> BsdfSample {
+fn coat_sample(material: GpuMaterial, incoming: vec3<f32>, frame: Frame, u_lobe: f32, u_dir: vec2<f32>) -> BsdfSample {
     let wo = -incoming;
+    let facing = frame.normal;
     let cos_o = dot(facing, wo);
     let p = coat_specular_probability(material, cos_o);
     let eta = 1.0 / material.ior;
@@ -468,18 +499,18 @@ fn coat_sample(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, u_
         if coat_is_smooth(material) {
             return BsdfSample(reflect(incoming, facing), vec3<f32>(dielectric_fresnel(cos_o, eta) / p), 0.0, false);
         }
-        let r = sample_ggx_reflection(material.alpha, facing, wo, u_dir);
+        let r = sample_ggx_reflection(bsdf_roughness(material), frame, wo, u_dir);
         let weight = dielectric_fresnel(dot(wo, r.h), eta) * r.g2_over_g1 / p;
         var density = 0.0;
         if weight > 0.0 {
-            density = coat_pdf(material, facing, wo, r.dir);
+            density = coat_pdf(material, frame, wo, r.dir);
         }
         return BsdfSample(r.dir, vec3<f32>(weight), density, false);
     }
     let drawn = bsdf_sample_visible(material, facing, u_dir);
     let through = coat_transmittance(material, cos_o) * coat_transmittance(material, dot(facing, drawn.dir));
     let weight = coat_base_f(material) * (PI * through / (1.0 - p));
-    return BsdfSample(drawn.dir, weight, coat_pdf(material, facing, wo, drawn.dir), false);
+    return BsdfSample(drawn.dir, weight, coat_pdf(material, frame, wo, drawn.dir), false);
 }
 
 fn bsdf_sample_delta(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, transport: u32) -> BsdfSample {
@@ -500,27 +531,28 @@ fn bsdf_sample_delta(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f3
     return BsdfSample(reflected, vec3<f32>(1.0), 0.0, false);
 }
 
-fn bsdf_sample(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, u_dir: vec2<f32>, transport: u32) -> BsdfSample {
+fn bsdf_sample(material: GpuMaterial, incoming: vec3<f32>, frame: Frame, front: bool, u_lobe: f32, u_dir: vec2<f32>, transport: u32) -> BsdfSample {
     if bsdf_is_delta(material) {
-        return bsdf_sample_delta(material, incoming, facing, front, u_lobe, transport);
+        return bsdf_sample_delta(material, incoming, frame.normal, front, u_lobe, transport);
     }
     if material.kind == MATERIAL_CONDUCTOR {
-        return bsdf_sample_conductor(material, facing, -incoming, u_dir);
+        return bsdf_sample_conductor(material, frame, -incoming, u_dir);
     }
     if material.kind == MATERIAL_COATED {
-        return coat_sample(material, incoming, facing, u_lobe, u_dir);
+        return coat_sample(material, incoming, frame, u_lobe, u_dir);
     }
     if GLASS && material.kind == MATERIAL_GLASS {
-        return bsdf_sample_rough_dielectric(material, incoming, facing, front, u_lobe, u_dir, transport);
+        return bsdf_sample_rough_dielectric(material, incoming, frame, front, u_lobe, u_dir, transport);
     }
-    return bsdf_sample_visible(material, facing, u_dir);
+    return bsdf_sample_visible(material, frame.normal, u_dir);
 }
 
 // How a photon continues (ppm_core::bsdf::photon_bounce): u_lobe picks the lobe at a delta
 // or coated surface and plays roulette where the photon scatters diffusely (rescaled past
 // a coat's reflection); the weight is zero where the path ends.
-fn bsdf_photon_bounce(material: GpuMaterial, incoming: vec3<f32>, facing: vec3<f32>, front: bool, u_lobe: f32, u_dir: vec2<f32>) -> BsdfSample {
-    var scattered = bsdf_sample(material, incoming, facing, front, u_lobe, u_dir, TRANSPORT_IMPORTANCE);
+fn bsdf_photon_bounce(material: GpuMaterial, incoming: vec3<f32>, frame: Frame, front: bool, u_lobe: f32, u_dir: vec2<f32>) -> BsdfSample {
+    let facing = frame.normal;
+    var scattered = bsdf_sample(material, incoming, frame, front, u_lobe, u_dir, TRANSPORT_IMPORTANCE);
     var u_roulette = -1.0;
     if material.kind == MATERIAL_DIFFUSE {
         u_roulette = u_lobe;

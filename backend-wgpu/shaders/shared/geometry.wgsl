@@ -48,6 +48,44 @@ fn to_world(local: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return basis.tangent * local.x + basis.bitangent * local.y + n * local.z;
 }
 
+// A BSDF's frame at a surface point: the normal on the path's side and the tangent an
+// anisotropic lobe follows (ppm_core::geometry::Frame).
+struct Frame {
+    tangent: vec3<f32>,
+    bitangent: vec3<f32>,
+    normal: vec3<f32>,
+}
+
+fn frame_around(n: vec3<f32>) -> Frame {
+    let basis = orthonormal_basis(n);
+    return Frame(basis.tangent, basis.bitangent, n);
+}
+
+// The frame about n whose tangent is direction less its part along n; frame_around(n)
+// where nothing is left of it (ppm_core::geometry::Frame::with_tangent).
+fn frame_with_tangent(n: vec3<f32>, direction: vec3<f32>) -> Frame {
+    let m = abs(direction);
+    let scale = max(m.x, max(m.y, m.z));
+    if !(scale > 0.0 && is_finite_f32(scale)) {
+        return frame_around(n);
+    }
+    let d = direction / scale;
+    let t = d - n * dot(n, d);
+    if !(dot(t, t) > 1e-12) {
+        return frame_around(n);
+    }
+    let tangent = normalize(t);
+    return Frame(tangent, cross(n, tangent), n);
+}
+
+fn frame_to_local(frame: Frame, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(frame.tangent, v), dot(frame.bitangent, v), dot(frame.normal, v));
+}
+
+fn frame_to_world(frame: Frame, local: vec3<f32>) -> vec3<f32> {
+    return frame.tangent * local.x + frame.bitangent * local.y + frame.normal * local.z;
+}
+
 struct Fresnel {
     reflectance: f32,
     refracts: bool,

@@ -81,7 +81,7 @@ struct GpuMaterial {
     coat_internal: f32,
     coat_nonlinear: u32,
     coat_specular_weight: f32,
-    _pad: u32,
+    alpha_v: f32,
     coat_transmittance: array<vec4<f32>, 3>,
 }
 

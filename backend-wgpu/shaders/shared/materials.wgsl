@@ -11,7 +11,7 @@ fn scene_material(i: u32) -> GpuMaterial {
         bitcast<vec3<f32>>(b.xyz), bitcast<f32>(b.w),
         bitcast<vec3<f32>>(c.xyz), bitcast<f32>(c.w),
         bitcast<vec3<f32>>(d.xyz), d.w,
-        bitcast<f32>(e.x), e.y, bitcast<f32>(e.z), e.w,
+        bitcast<f32>(e.x), e.y, bitcast<f32>(e.z), bitcast<f32>(e.w),
         array<vec4<f32>, 3>(
             bitcast<vec4<f32>>(scene_texel(8u * i + 5u)),
             bitcast<vec4<f32>>(scene_texel(8u * i + 6u)),

@@ -90,6 +90,27 @@ fn surface_uv(uv: GpuTriangleUv, tri: GpuTriangle, position: vec3<f32>) -> vec2<
     return uv.uv0 + (uv.uv1 - uv.uv0) * b.x + (uv.uv2 - uv.uv0) * b.y;
 }
 
+// The direction in which u grows across tri, up to its length; the first edge where the
+// coordinates give none (ppm_core::textures::u_direction).
+fn u_direction(uv: GpuTriangleUv, tri: GpuTriangle) -> vec3<f32> {
+    let du1 = uv.uv1 - uv.uv0;
+    let du2 = uv.uv2 - uv.uv0;
+    let det = du1.x * du2.y - du1.y * du2.x;
+    if det == 0.0 || !is_finite_f32(det) {
+        return tri.e1;
+    }
+    return (tri.e1 * du2.y - tri.e2 * du1.y) * sign(det);
+}
+
+// The frame of material's lobe on triangle index seen from the side of facing; an
+// anisotropic lobe follows the triangle's coordinates (ppm_core::textures::SurfaceTextures::frame).
+fn surface_frame(material: GpuMaterial, index: u32, tri: GpuTriangle, facing: vec3<f32>) -> Frame {
+    if !bsdf_is_anisotropic(material) {
+        return frame_around(facing);
+    }
+    return frame_with_tangent(facing, u_direction(scene_triangle_uv(index), tri));
+}
+
 // The factor on `material`'s colour at `position` on triangle `index`: one without a texture.
 fn texture_factor(material: GpuMaterial, index: u32, tri: GpuTriangle, position: vec3<f32>) -> vec3<f32> {
     if material.texture == 0u {

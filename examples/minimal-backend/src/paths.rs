@@ -8,7 +8,7 @@ use obvhs::ray::{Ray, RayHit};
 use ppm_core::bsdf::{self, Transport};
 use ppm_core::compile::{CompiledScene, camera_ray};
 use ppm_core::emission::{EMISSION_DIMS, Emission};
-use ppm_core::geometry::{intersect_triangle, oct_encode};
+use ppm_core::geometry::{Frame, intersect_triangle, oct_encode};
 use ppm_core::layout::{
     ChainLight, DirectLightParams, EyePassParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle,
     HitPoint, NO_MATERIAL, Photon, PhotonPassParams, direct_accumulate, eye_flags, first_hit,
@@ -61,6 +61,13 @@ impl Scene {
         let tri = &self.triangles[index as usize];
         let material = &self.materials[tri.material as usize];
         self.textures.shaded(material, index, tri, position)
+    }
+
+    /// The frame of `material`'s lobe on triangle `index`, seen from the side of `facing`:
+    /// an anisotropic lobe follows the surface's coordinates.
+    fn frame(&self, index: u32, material: &GpuMaterial, facing: Vec3) -> Frame {
+        let tri = &self.triangles[index as usize];
+        self.textures.frame(material, index, tri, facing)
     }
 }
 
@@ -173,12 +180,13 @@ pub fn eye_path(
         // Mirror, glass, conductor or a coat's reflection: follow the bounce.
         hp.flags |= hit_flags::EYE_CHAINED;
         let glossy = sample_lights && bsdf::chain_samples_lights(material);
+        let frame = scene.frame(index, material, facing);
         if glossy && !scene.lights.is_empty() {
             let (light, traced) = glossy_light(
                 params,
                 scene,
                 material,
-                (position, facing, front),
+                (position, &frame, front),
                 -dir,
                 (&key, depth),
             );
@@ -186,11 +194,11 @@ pub fn eye_path(
             shadow_rays += u64::from(traced);
         }
         let u = key.eye_bounce(depth);
-        let bounce = bsdf::sample(material, dir, facing, front, u, Transport::Radiance);
+        let bounce = bsdf::sample(material, dir, &frame, front, u, Transport::Radiance);
         if bounce.weight == Vec3::ZERO {
             return (u64::from(depth) + 1 + shadow_rays, chain);
         }
-        bounce_pdf = glossy.then(|| bsdf::glossy_lobe(material, facing, front, -dir, bounce.dir).1);
+        bounce_pdf = glossy.then(|| bsdf::glossy_lobe(material, &frame, front, -dir, bounce.dir).1);
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
@@ -199,8 +207,8 @@ pub fn eye_path(
     (u64::from(params.max_depth) + 1 + shadow_rays, chain)
 }
 
-/// The light sample at a glossy bounce at `depth` (`position`, the normal on the path's
-/// side and whether that is the outside; `wo` the direction back along the path): a light
+/// The light sample at a glossy bounce at `depth` (`position`, the lobe's frame on the
+/// path's side and whether that is the outside; `wo` the direction back along the path): a light
 /// by power and a point on it by area from the eye stream's light dimensions
 /// ([`StreamKey::eye_light`]), its `f cos Le / p_light` from the lobe the path continues by,
 /// weighed against that lobe's density. Returns it and whether a shadow ray was traced.
@@ -208,10 +216,11 @@ fn glossy_light(
     params: &EyePassParams,
     scene: &Scene,
     material: &GpuMaterial,
-    (position, facing, front): (Vec3, Vec3, bool),
+    (position, frame, front): (Vec3, &Frame, bool),
     wo: Vec3,
     (key, depth): (&StreamKey, u32),
 ) -> (Vec3, bool) {
+    let facing = frame.normal;
     let (choice, (u1, u2)) = key.eye_light(depth);
     let light = &scene.lights[sample_cdf(|i| scene.lights[i].cdf, scene.lights.len(), choice)];
     let (b1, b2) = uniform_triangle(u1, u2);
@@ -230,7 +239,7 @@ fn glossy_light(
     let dist = dist2.sqrt();
     let wi = to_light / dist;
     let cos_l = -Vec3::from(light.normal).dot(wi);
-    let (f_cos, pb) = bsdf::glossy_lobe(material, facing, front, wo, wi);
+    let (f_cos, pb) = bsdf::glossy_lobe(material, frame, front, wo, wi);
     if cos_l <= 0.0 || f_cos == Vec3::ZERO {
         return (Vec3::ZERO, false);
     }
@@ -381,7 +390,8 @@ pub fn photon_path(
             });
         }
         let u = (key.uniform(d), (key.uniform(d + 1), key.uniform(d + 2)));
-        let Some(b) = bsdf::photon_bounce(material, dir, facing, facing == normal, u) else {
+        let frame = scene.frame(index, material, facing);
+        let Some(b) = bsdf::photon_bounce(material, dir, &frame, facing == normal, u) else {
             break;
         };
         power *= b.weight;

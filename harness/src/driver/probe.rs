@@ -241,7 +241,7 @@ pub(super) fn eye_path(
         }
         let at = GlossyVertex {
             position,
-            facing,
+            frame: scene.frame(&hit, material, facing),
             front,
             wo: -dir,
             depth,

@@ -83,19 +83,26 @@ pub fn reference_key(scene: &Scene, request: &ReferenceRequest) -> u64 {
                 h.u32(1);
                 h.floats(&reflectance.to_array());
             }
-            MaterialKind::Glass { ior, alpha } => {
+            MaterialKind::Glass {
+                ior,
+                alpha,
+                alpha_v,
+            } => {
                 h.u32(2);
                 h.floats(&[ior, alpha]);
+                h.anisotropy(alpha, alpha_v);
             }
             MaterialKind::Conductor {
                 eta,
                 k,
                 reflectance,
                 alpha,
+                alpha_v,
             } => {
                 h.u32(4);
                 h.floats(&[eta.to_array(), k.to_array(), reflectance.to_array()].concat());
                 h.floats(&[alpha]);
+                h.anisotropy(alpha, alpha_v);
             }
             MaterialKind::Coated {
                 albedo,
@@ -209,6 +216,14 @@ impl Fnv {
 
     fn floats(&mut self, v: &[f32]) {
         v.iter().for_each(|f| self.u32(f.to_bits()));
+    }
+
+    /// A roughness across the tangent, only where it differs from the one along it: the
+    /// keys of isotropic scenes stay those cached before anisotropy existed.
+    fn anisotropy(&mut self, alpha: f32, alpha_v: f32) {
+        if alpha_v != alpha {
+            self.floats(&[alpha_v]);
+        }
     }
 }
 

@@ -111,17 +111,18 @@ impl PathTracer<'_> {
                 break;
             }
             let wo = -dir;
+            let frame = self.scene.frame(&hit, material, facing);
             if bsdf::samples_lights(material) {
                 let eval = |w| {
                     (
-                        bsdf::eval_cos(material, facing, wo, w),
-                        bsdf::pdf(material, facing, wo, w),
+                        bsdf::eval_cos(material, &frame, wo, w),
+                        bsdf::pdf(material, &frame, wo, w),
                     )
                 };
                 radiance += throughput * self.light_sample(position, facing, eval, &u);
             } else if bsdf::is_rough_glass(material) {
                 let eval = |w| {
-                    let (f_cos, pdf) = rough_glass::eval_cos_pdf(material, facing, front, wo, w);
+                    let (f_cos, pdf) = rough_glass::eval_cos_pdf(material, &frame, front, wo, w);
                     (Vec3::splat(f_cos), pdf)
                 };
                 radiance += throughput * self.light_sample(position, facing, eval, &u);
@@ -132,7 +133,7 @@ impl PathTracer<'_> {
             let scattered = bsdf::sample(
                 material,
                 dir,
-                facing,
+                &frame,
                 front,
                 (u.light, u.direction),
                 Transport::Radiance,
@@ -152,7 +153,7 @@ impl PathTracer<'_> {
             // sampling cannot weigh against it. A rough dielectric's bounce reports none
             // either, since its density takes the side: asked here.
             let pdf = if bsdf::is_rough_glass(material) {
-                rough_glass::eval_cos_pdf(material, facing, front, wo, scattered.dir).1
+                rough_glass::eval_cos_pdf(material, &frame, front, wo, scattered.dir).1
             } else {
                 scattered.pdf
             };

@@ -21,10 +21,11 @@
 
 use super::{
     BsdfSample, FRAC_1_PI, GpuMaterial, SMOOTH_ALPHA, Vec3, ggx_g2_over_g1, ggx_pdf,
-    ggx_reflection_cos, sample_ggx_reflection, sample_visible, visible_normal,
+    ggx_reflection_cos, roughness, sample_ggx_reflection, sample_visible, visible_normal,
 };
-use crate::geometry::{fresnel_refract, reflect};
+use crate::geometry::{Frame, fresnel_refract, reflect};
 use crate::layout::material_kind;
+use glam::Vec2;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -113,38 +114,39 @@ pub fn visible_point_weight(material: &GpuMaterial, cos_o: f32, u_lobe: f32) -> 
 
 /// `f(wo, wi) cos_i` of both lobes ([`super::eval_cos`]'s conventions; a smooth coat's
 /// reflection is a delta lobe and has none).
-pub fn eval_cos(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+pub fn eval_cos(material: &GpuMaterial, frame: &Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+    let (cos_o, cos_i) = (frame.normal.dot(wo), frame.normal.dot(wi));
     let diffuse = base_f(material)
         * (transmittance(material, cos_o) * transmittance(material, cos_i) * cos_i);
     if is_smooth(material) {
         return diffuse;
     }
-    let (lobe, h) = ggx_reflection_cos(material.alpha, facing, wo, wi);
+    let (lobe, h) = ggx_reflection_cos(roughness(material), frame, wo, wi);
     diffuse + Vec3::splat(dielectric_fresnel(wo.dot(h), 1.0 / material.ior) * lobe)
 }
 
 /// The rough coat's reflection lobe alone, the one an eye path continues by: `f cos` over
 /// the chance of taking it, and the density with which [`sample`] draws `wi` once it has
 /// ([`super::glossy_lobe`]).
-pub fn reflection_lobe(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
-    let p = specular_probability(material, facing.dot(wo));
+pub fn reflection_lobe(material: &GpuMaterial, frame: &Frame, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+    let p = specular_probability(material, frame.normal.dot(wo));
     if p <= 0.0 {
         return (Vec3::ZERO, 0.0);
     }
-    let (lobe, h) = ggx_reflection_cos(material.alpha, facing, wo, wi);
+    let alpha = roughness(material);
+    let (lobe, h) = ggx_reflection_cos(alpha, frame, wo, wi);
     let f_cos = dielectric_fresnel(wo.dot(h), 1.0 / material.ior) * lobe / p;
-    (Vec3::splat(f_cos), ggx_pdf(material.alpha, facing, wo, wi))
+    (Vec3::splat(f_cos), ggx_pdf(alpha, frame, wo, wi))
 }
 
 /// The density of `wi` over both lobes, each weighed by its chance.
-pub fn pdf(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-    let p = specular_probability(material, facing.dot(wo));
-    let diffuse = (1.0 - p) * facing.dot(wi) * FRAC_1_PI;
+pub fn pdf(material: &GpuMaterial, frame: &Frame, wo: Vec3, wi: Vec3) -> f32 {
+    let p = specular_probability(material, frame.normal.dot(wo));
+    let diffuse = (1.0 - p) * frame.normal.dot(wi) * FRAC_1_PI;
     if is_smooth(material) {
         return diffuse;
     }
-    diffuse + p * ggx_pdf(material.alpha, facing, wo, wi)
+    diffuse + p * ggx_pdf(roughness(material), frame, wo, wi)
 }
 
 /// Draws one lobe with `u_lobe` (below the reflection's chance: the reflection) and a
@@ -154,11 +156,11 @@ pub fn pdf(material: &GpuMaterial, facing: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 pub fn sample(
     material: &GpuMaterial,
     incoming: Vec3,
-    facing: Vec3,
+    frame: &Frame,
     u_lobe: f32,
     u_dir: (f32, f32),
 ) -> BsdfSample {
-    let wo = -incoming;
+    let (wo, facing) = (-incoming, frame.normal);
     let cos_o = facing.dot(wo);
     let p = specular_probability(material, cos_o);
     let eta = 1.0 / material.ior;
@@ -171,13 +173,13 @@ pub fn sample(
                 transmitted: false,
             };
         }
-        let r = sample_ggx_reflection(material.alpha, facing, wo, u_dir);
+        let r = sample_ggx_reflection(roughness(material), frame, wo, u_dir);
         let weight = dielectric_fresnel(wo.dot(r.h), eta) * r.g2_over_g1 / p;
         return BsdfSample {
             dir: r.dir,
             weight: Vec3::splat(weight),
             pdf: if weight > 0.0 {
-                pdf(material, facing, wo, r.dir)
+                pdf(material, frame, wo, r.dir)
             } else {
                 0.0
             },
@@ -189,7 +191,7 @@ pub fn sample(
     let through = transmittance(material, cos_o) * transmittance(material, cos_i);
     BsdfSample {
         weight: base_f(material) * (std::f32::consts::PI * through / (1.0 - p)),
-        pdf: pdf(material, facing, wo, drawn.dir),
+        pdf: pdf(material, frame, wo, drawn.dir),
         ..drawn
     }
 }
@@ -247,10 +249,11 @@ fn integrate_tables(ior: f32, alpha: f32) -> (f32, [f32; NODES]) {
 /// take it). Not `1 - R`: single scattering on the microfacets loses light on the way in as
 /// on the way back, and `1 - R` would hand the reflection's loss to the base.
 fn rough_transmittance(eta: f32, alpha: f32, mu: f64) -> f64 {
+    let (alpha, frame) = (Vec2::splat(alpha), Frame::around(Vec3::Z));
     mean_over_visible_normals(mu, |wo, u| {
-        let (_, h) = visible_normal(alpha, Vec3::Z, wo, u);
+        let (_, h) = visible_normal(alpha, &frame, wo, u);
         match fresnel_refract(-wo, h, eta) {
-            (fresnel, Some(t)) if t.z < 0.0 => (1.0 - fresnel) * ggx_g2_over_g1(alpha, wo.z, -t.z),
+            (fresnel, Some(t)) if t.z < 0.0 => (1.0 - fresnel) * ggx_g2_over_g1(alpha, wo, t),
             _ => 0.0,
         }
     })
@@ -263,8 +266,9 @@ fn reflectance(eta: f32, alpha: f32, mu: f64) -> f64 {
     if alpha < SMOOTH_ALPHA {
         return f64::from(dielectric_fresnel(mu as f32, eta));
     }
+    let (alpha, frame) = (Vec2::splat(alpha), Frame::around(Vec3::Z));
     mean_over_visible_normals(mu, |wo, u| {
-        let r = sample_ggx_reflection(alpha, Vec3::Z, wo, u);
+        let r = sample_ggx_reflection(alpha, &frame, wo, u);
         dielectric_fresnel(wo.dot(r.h), eta) * r.g2_over_g1
     })
 }
@@ -313,7 +317,9 @@ mod tests {
 
     /// Mean weight of `sample` over a grid of its numbers: the directional albedo.
     fn albedo(material: &GpuMaterial, n: Vec3, wo: Vec3) -> f64 {
-        grid_mean(48, |(l, d)| sample(material, -wo, n, l, d).weight.x)
+        grid_mean(48, |(l, d)| {
+            sample(material, -wo, &Frame::around(n), l, d).weight.x
+        })
     }
 
     /// The smooth coat's internal reflectance is the known one for an index of 1.5 (0.596),
@@ -397,11 +403,12 @@ mod tests {
                         let wi =
                             to_world(Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t), n);
                         let w = 2.0 * std::f64::consts::PI / f64::from(k * k);
-                        by_eval += f64::from(eval_cos(&m, n, wo, wi).x) * w;
-                        density += f64::from(pdf(&m, n, wo, wi)) * w;
-                        let back = eval_cos(&m, n, wi, wo).x / mu;
+                        let frame = Frame::around(n);
+                        by_eval += f64::from(eval_cos(&m, &frame, wo, wi).x) * w;
+                        density += f64::from(pdf(&m, &frame, wo, wi)) * w;
+                        let back = eval_cos(&m, &frame, wi, wo).x / mu;
                         assert_relative_eq!(
-                            eval_cos(&m, n, wo, wi).x / cos_t,
+                            eval_cos(&m, &frame, wo, wi).x / cos_t,
                             back,
                             max_relative = 1e-3
                         );
@@ -421,10 +428,11 @@ mod tests {
         let m = coated([0.9, 0.5, 0.2], 1.5, 0.0, true);
         let wo = at(n, 0.6);
         let power = grid_mean(64, |u| {
-            photon_bounce(&m, -wo, n, true, u).map_or(0.0, |s| s.weight.x)
+            photon_bounce(&m, -wo, &Frame::around(n), true, u).map_or(0.0, |s| s.weight.x)
         });
         assert_relative_eq!(power, albedo(&m, n, wo), max_relative = 3e-3);
-        let s = super::super::sample(&m, -wo, n, true, (0.0, (0.5, 0.5)), Transport::Radiance);
+        let up = Frame::around(n);
+        let s = super::super::sample(&m, -wo, &up, true, (0.0, (0.5, 0.5)), Transport::Radiance);
         assert_eq!(
             (s.pdf, s.transmitted),
             (0.0, false),

@@ -10,22 +10,23 @@
 //! from `wo`, then reflection with the chance `F` or refraction with `1 - F` (Walter et al.
 //! 2007, sections 4-5; Heitz 2018).
 
-use super::{GpuMaterial, Vec3, ggx_d, ggx_pdf, ggx_reflection_cos, smith_root};
-use crate::geometry::{fresnel_refract, orthonormal_basis};
+use super::{GpuMaterial, Vec3, ggx_d, ggx_pdf, ggx_reflection_cos, roughness, smith_root};
+use crate::geometry::{Frame, fresnel_refract};
 
 /// `f cos_i` and the solid-angle density of `wi` for an eye path (radiance) that arrived
-/// from `wo` at rough glass: `facing` is the unit normal on `wo`'s side, `front` whether that
-/// is the outside. `wi` above the surface is a reflection, below it a refraction; zero (and
+/// from `wo` at rough glass: `frame.normal` is the unit normal on `wo`'s side, `front`
+/// whether that is the outside. `wi` above the surface is a reflection, below it a refraction; zero (and
 /// zero density) where the sampler cannot draw `wi` from `wo`.
 pub fn eval_cos_pdf(
     material: &GpuMaterial,
-    facing: Vec3,
+    frame: &Frame,
     front: bool,
     wo: Vec3,
     wi: Vec3,
 ) -> (f32, f32) {
-    let alpha = material.alpha;
-    let (cos_o, cos_i) = (facing.dot(wo), facing.dot(wi));
+    let (alpha, facing) = (roughness(material), frame.normal);
+    let (local_o, local_i) = (frame.to_local(wo), frame.to_local(wi));
+    let (cos_o, cos_i) = (local_o.z, local_i.z);
     if cos_o <= 0.0 || cos_i == 0.0 {
         return (0.0, 0.0);
     }
@@ -36,9 +37,9 @@ pub fn eval_cos_pdf(
         material.ior
     };
     if cos_i > 0.0 {
-        let (lobe, h) = ggx_reflection_cos(alpha, facing, wo, wi);
+        let (lobe, h) = ggx_reflection_cos(alpha, frame, wo, wi);
         let (fresnel, _) = fresnel_refract(-wo, h, eta);
-        return (fresnel * lobe, fresnel * ggx_pdf(alpha, facing, wo, wi));
+        return (fresnel * lobe, fresnel * ggx_pdf(alpha, frame, wo, wi));
     }
     // The microfacet normal that refracts `-wo` into `wi` (Walter et al. eq. 16), turned to
     // `wo`'s side.
@@ -57,10 +58,9 @@ pub fn eval_cos_pdf(
     if refracted.is_none() {
         return (0.0, 0.0);
     }
-    let (t, b) = orthonormal_basis(facing);
-    let d = ggx_d(alpha, Vec3::new(t.dot(h), b.dot(h), facing.dot(h)));
-    let (abs_i, root_o) = (-cos_i, smith_root(alpha, cos_o));
-    let root_i = smith_root(alpha, abs_i);
+    let d = ggx_d(alpha, frame.to_local(h));
+    let (abs_i, root_o) = (-cos_i, smith_root(alpha, local_o));
+    let root_i = smith_root(alpha, local_i);
     // Visible-normal density D G1(wo) (wo.h) / cos_o, G1 = 2 cos_o / (cos_o + root_o), times
     // the refraction's Jacobian |wi.h| / (eta wo.h + wi.h)^2 (both indices divided by the far
     // one), times the chance 1 - F of refracting.
@@ -82,13 +82,20 @@ mod tests {
     use crate::sampling::uniform_cone;
     use bytemuck::Zeroable;
 
-    fn rough_glass(ior: f32, alpha: f32) -> GpuMaterial {
+    fn rough_glass(ior: f32, (alpha, alpha_v): (f32, f32)) -> GpuMaterial {
         GpuMaterial {
             kind: material_kind::GLASS,
             ior,
             alpha,
+            alpha_v,
             ..Zeroable::zeroed()
         }
+    }
+
+    /// The +y side's frame, its tangent off every view's plane so that an anisotropic lobe
+    /// is seen obliquely.
+    fn frame() -> Frame {
+        Frame::with_tangent(Vec3::Y, Vec3::new(0.8, 0.0, 0.6))
     }
 
     /// Directions `wo` on the facing side (the normal is +y), from normal to grazing.
@@ -101,7 +108,13 @@ mod tests {
 
     #[test]
     fn each_sampled_direction_s_weight_is_its_value_over_its_density() {
-        for (ior, alpha) in [(1.5, 0.3), (1.5, 0.05), (1.33, 0.8), (2.4, 0.15)] {
+        for (ior, alpha) in [
+            (1.5, (0.3, 0.3)),
+            (1.5, (0.05, 0.05)),
+            (1.33, (0.8, 0.8)),
+            (2.4, (0.15, 0.15)),
+            (1.5, (0.05, 0.4)),
+        ] {
             let material = rough_glass(ior, alpha);
             for front in [true, false] {
                 for wo in views() {
@@ -114,16 +127,16 @@ mod tests {
                                 (i % 61) as f32 / 61.0,
                             ),
                         );
-                        let s = sample(&material, -wo, Vec3::Y, front, u, Transport::Radiance);
+                        let s = sample(&material, -wo, &frame(), front, u, Transport::Radiance);
                         if s.weight.x == 0.0 {
                             continue;
                         }
-                        let (f_cos, pdf) = eval_cos_pdf(&material, Vec3::Y, front, wo, s.dir);
-                        assert!(pdf > 0.0, "{ior} {alpha} {front} {wo} {}", s.dir);
+                        let (f_cos, pdf) = eval_cos_pdf(&material, &frame(), front, wo, s.dir);
+                        assert!(pdf > 0.0, "{ior} {alpha:?} {front} {wo} {}", s.dir);
                         let w = f_cos / pdf;
                         assert!(
                             (w - s.weight.x).abs() <= 1e-3 * s.weight.x.max(1.0),
-                            "ior {ior} alpha {alpha} front {front} wo {wo} wi {}: {w} against {}",
+                            "ior {ior} alpha {alpha:?} front {front} wo {wo} wi {}: {w} against {}",
                             s.dir,
                             s.weight.x
                         );
@@ -139,9 +152,11 @@ mod tests {
 
     #[test]
     fn the_density_integrates_to_the_share_of_samples_the_sampler_keeps() {
-        let material = rough_glass(1.5, 0.3);
         const N: u32 = 1 << 18;
-        for front in [true, false] {
+        for (material, front) in [(0.3, 0.3), (0.1, 0.5)]
+            .into_iter()
+            .flat_map(|a| [true, false].map(|f| (rough_glass(1.5, a), f)))
+        {
             for wo in views() {
                 let integral: f64 = (0..N)
                     .map(|i| {
@@ -150,7 +165,7 @@ mod tests {
                             ((i * 40503) % N) as f32 / N as f32,
                         );
                         let wi = uniform_cone(u.0, u.1, -1.0);
-                        let (_, pdf) = eval_cos_pdf(&material, Vec3::Y, front, wo, wi);
+                        let (_, pdf) = eval_cos_pdf(&material, &frame(), front, wo, wi);
                         f64::from(pdf) * 4.0 * std::f64::consts::PI
                     })
                     .sum::<f64>()
@@ -164,7 +179,7 @@ mod tests {
                                 ((i * 40503) % N) as f32 / N as f32,
                             ),
                         );
-                        let s = sample(&material, -wo, Vec3::Y, front, u, Transport::Radiance);
+                        let s = sample(&material, -wo, &frame(), front, u, Transport::Radiance);
                         s.weight.x > 0.0
                     })
                     .count() as f64

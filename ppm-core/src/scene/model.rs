@@ -76,15 +76,19 @@ pub enum MaterialKind {
         reflectance: Vec3,
     },
     /// Dielectric: Fresnel reflection and refraction of index `ior`, on GGX microfacets of
-    /// roughness `alpha` (0: smooth).
+    /// roughness `alpha` along the surface's tangent and `alpha_v` across it (both 0: smooth;
+    /// docs/materials.md, "Anisotropic roughness").
     Glass {
         /// Index of refraction, positive.
         ior: f32,
-        /// GGX roughness, in [0, 1].
+        /// GGX roughness along the tangent (the direction of increasing `u`), in [0, 1].
         alpha: f32,
+        /// GGX roughness across the tangent, in [0, 1]; `alpha` when isotropic.
+        alpha_v: f32,
     },
     /// Metal: Fresnel reflection of complex index `eta + i k` (per channel), times
-    /// `reflectance`, on GGX microfacets of roughness `alpha` (0: smooth).
+    /// `reflectance`, on GGX microfacets of roughness `alpha` along the surface's tangent and
+    /// `alpha_v` across it (both 0: smooth).
     Conductor {
         /// Real part of the index, non-negative.
         eta: Vec3,
@@ -92,8 +96,10 @@ pub enum MaterialKind {
         k: Vec3,
         /// Factor on the Fresnel term, in [0, 1] (Mitsuba 3's `specular_reflectance`).
         reflectance: Vec3,
-        /// GGX roughness, in [0, 1]: the microfacet slopes' spread.
+        /// GGX roughness along the tangent, in [0, 1]: the microfacet slopes' spread.
         alpha: f32,
+        /// GGX roughness across the tangent, in [0, 1]; `alpha` when isotropic.
+        alpha_v: f32,
     },
     /// A diffuse base under a clear dielectric coat (Mitsuba 3's `plastic` and `roughplastic`,
     /// pbrt-v4's `coateddiffuse` without a medium in the layer): the coat reflects as a
@@ -123,10 +129,27 @@ pub enum MaterialKind {
 
 impl MaterialKind {
     /// The kind with its colour set to one where a texture gives it (a diffuse albedo, a
-    /// coated base's), as the importers read a textured reflectance; any other kind as is.
+    /// coated base's, a mirror's or conductor's reflectance), as the importers read a
+    /// textured reflectance; any other kind as is.
     pub fn white_under_texture(self) -> Self {
         match self {
             Self::Diffuse { .. } => Self::Diffuse { albedo: Vec3::ONE },
+            Self::Mirror { .. } => Self::Mirror {
+                reflectance: Vec3::ONE,
+            },
+            Self::Conductor {
+                eta,
+                k,
+                alpha,
+                alpha_v,
+                ..
+            } => Self::Conductor {
+                eta,
+                k,
+                reflectance: Vec3::ONE,
+                alpha,
+                alpha_v,
+            },
             Self::Coated {
                 ior,
                 alpha,
@@ -139,6 +162,17 @@ impl MaterialKind {
                 nonlinear,
             },
             kind => kind,
+        }
+    }
+
+    /// Whether the lobe's roughness differs along and across the surface's tangent (a
+    /// conductor's or glass's), so that the surface's texture coordinates orient it.
+    pub fn is_anisotropic(&self) -> bool {
+        match self {
+            Self::Conductor { alpha, alpha_v, .. } | Self::Glass { alpha, alpha_v, .. } => {
+                alpha != alpha_v
+            }
+            _ => false,
         }
     }
 

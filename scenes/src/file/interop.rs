@@ -65,7 +65,8 @@ pub struct MeshFile {
     pub name: String,
     /// Triangles in world space.
     pub triangles: Vec<[Vec3; 3]>,
-    /// Their vertices' texture coordinates (empty for an object without a texture).
+    /// Their vertices' texture coordinates (empty for an object whose material has neither
+    /// a texture nor an anisotropic lobe, which they orient).
     pub uvs: Vec<[Vec2; 3]>,
 }
 
@@ -84,15 +85,19 @@ impl Export {
     /// objects' meshes under `mesh_names` (one per object, in order).
     pub(crate) fn of(
         scene: &Scene,
-        extension: &str,
+        format: Format,
         text: String,
         mesh_names: Vec<String>,
         notes: Vec<String>,
     ) -> Self {
-        let textures = texture_files(scene)
+        let extension = match format {
+            Format::Mitsuba => "xml",
+            Format::Pbrt => "pbrt",
+        };
+        let textures = texture_files(scene, format)
             .into_iter()
             .zip(&scene.materials)
-            .filter_map(|(file, m)| Some((file?, texture_image(m)?)))
+            .filter_map(|(file, m)| Some((file?, texture_image(m, format)?)))
             .collect();
         Export {
             scene_file: format!("{}.{extension}", scene_stem(scene)),
@@ -101,11 +106,12 @@ impl Export {
                 .into_iter()
                 .zip(&scene.objects)
                 .map(|(name, o)| {
-                    let textured = texture_written(&scene.materials[o.material]);
+                    let material = &scene.materials[o.material];
+                    let uvs = texture_written(material, format) || material.kind.is_anisotropic();
                     MeshFile {
                         name,
                         triangles: o.triangles.clone(),
-                        uvs: if textured { object_uvs(o) } else { Vec::new() },
+                        uvs: if uvs { object_uvs(o) } else { Vec::new() },
                     }
                 })
                 .collect(),
@@ -155,28 +161,44 @@ pub(crate) fn mesh_names(scene: &Scene) -> Vec<String> {
     names
 }
 
-/// Whether an export writes `m`'s texture: both formats take an image as a diffuse
-/// reflectance (a diffuse surface's, or a coated one's base); a texture on another colour is
-/// left out (the notes say so).
-fn texture_written(m: &Material) -> bool {
-    m.texture.is_some() && diffuse_reflectance(&m.kind).is_some()
+/// The format an export writes, which decides the colours it can take from an image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Format {
+    /// Mitsuba 3's XML.
+    Mitsuba,
+    /// pbrt-v4's scene description.
+    Pbrt,
 }
 
-/// The diffuse reflectance a texture on `kind` scales, for the kinds whose texture the
-/// formats take: a diffuse surface's albedo and a coated one's base.
-fn diffuse_reflectance(kind: &MaterialKind) -> Option<Vec3> {
-    match kind {
-        MaterialKind::Diffuse { albedo } | MaterialKind::Coated { albedo, .. } => Some(*albedo),
+/// Whether an export writes `m`'s texture ([`textured_colour`]); a texture on another colour
+/// is left out (the notes say so).
+fn texture_written(m: &Material, format: Format) -> bool {
+    m.texture.is_some() && textured_colour(&m.kind, format).is_some()
+}
+
+/// The colour a texture on `kind` scales, for the kinds whose texture `format` takes: both
+/// take an image as a diffuse reflectance (a diffuse surface's, or a coated one's base);
+/// Mitsuba also as a mirror's or conductor's `specular_reflectance`, a factor as ours.
+/// pbrt-v4 turns a conductor's textured reflectance into an index per point, not a factor.
+fn textured_colour(kind: &MaterialKind, format: Format) -> Option<Vec3> {
+    match (kind, format) {
+        (MaterialKind::Diffuse { albedo } | MaterialKind::Coated { albedo, .. }, _) => {
+            Some(*albedo)
+        }
+        (
+            MaterialKind::Mirror { reflectance } | MaterialKind::Conductor { reflectance, .. },
+            Format::Mitsuba,
+        ) => Some(*reflectance),
         _ => None,
     }
 }
 
 /// Per material, the file its texture is written to (`wood-texture.exr`), unique and safe
 /// for file systems; `None` for a material whose texture is not written or that has none.
-pub(crate) fn texture_files(scene: &Scene) -> Vec<Option<String>> {
+pub(crate) fn texture_files(scene: &Scene, format: Format) -> Vec<Option<String>> {
     let mut names: Vec<Option<String>> = Vec::new();
     for m in &scene.materials {
-        if !texture_written(m) {
+        if !texture_written(m, format) {
             names.push(None);
             continue;
         }
@@ -194,8 +216,8 @@ pub(crate) fn texture_files(scene: &Scene) -> Vec<Option<String>> {
 
 /// A textured material's image as written: its texels times the material's colour (both
 /// formats then read the colour from the image alone), linear.
-fn texture_image(m: &Material) -> Option<Image> {
-    let (Some(t), Some(colour)) = (&m.texture, diffuse_reflectance(&m.kind)) else {
+fn texture_image(m: &Material, format: Format) -> Option<Image> {
+    let (Some(t), Some(colour)) = (&m.texture, textured_colour(&m.kind, format)) else {
         return None;
     };
     let mut image = Image::new(t.width, t.height);
@@ -238,7 +260,7 @@ fn safe_stem(name: &str, empty: &str) -> String {
 
 /// What neither format can hold, whatever the renderer: our photon-mapping settings, the
 /// moves, and lights that no object uses (their radiance lives on shapes there).
-pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions) -> Vec<String> {
+pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions, format: Format) -> Vec<String> {
     let r = &scene.render;
     let mut notes = vec![format!(
         "photon mapping settings have no equivalent (initial radius {}, alpha {}, {} photons \
@@ -254,7 +276,7 @@ pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions) -> Vec<String
     }
     for (i, m) in scene.materials.iter().enumerate() {
         if let Some(t) = &m.texture {
-            notes.push(if texture_written(m) {
+            notes.push(if texture_written(m, format) {
                 format!(
                     "material '{}' is textured ({}, {}x{}): its image is written as a linear \
                      EXR with the colour baked in; ours is read bilinear (or nearest) at its one \
@@ -263,9 +285,14 @@ pub(crate) fn common_notes(scene: &Scene, options: &ExportOptions) -> Vec<String
                 )
             } else {
                 format!(
-                    "material '{}' is textured ({}): only a diffuse reflectance's texture is \
-                     written, the other renderer sees this colour without it",
-                    m.name, t.name
+                    "material '{}' is textured ({}): this format takes a texture only on a \
+                     diffuse reflectance{}, the other renderer sees this colour without it",
+                    m.name,
+                    t.name,
+                    match format {
+                        Format::Mitsuba => " or a specular one",
+                        Format::Pbrt => " (pbrt-v4 reads a conductor's as an index per point)",
+                    }
                 )
             });
         }

@@ -77,20 +77,29 @@ enum MaterialFile {
         texture: Option<String>,
     },
     Mirror {
-        reflectance: [f32; 3],
+        /// Required unless `texture` is given (then 1 by default, a factor on it).
+        reflectance: Option<[f32; 3]>,
+        /// An image file, relative to the scene file, whose colour scales the reflectance.
+        texture: Option<String>,
     },
     Glass {
         ior: f32,
         #[serde(default)]
         alpha: f32,
+        /// Roughness across the tangent; `alpha` when not given (isotropic).
+        alpha_v: Option<f32>,
     },
     Conductor {
         eta: [f32; 3],
         k: [f32; 3],
         #[serde(default = "white")]
         reflectance: [f32; 3],
+        /// An image file, relative to the scene file, whose colour scales the reflectance.
+        texture: Option<String>,
         #[serde(default)]
         alpha: f32,
+        /// Roughness across the tangent; `alpha` when not given (isotropic).
+        alpha_v: Option<f32>,
     },
     Coated {
         /// Required unless `texture` is given (then 1 by default, a factor on it), as for
@@ -302,35 +311,36 @@ impl Converter<'_> {
         Ok(c)
     }
 
-    /// A diffuse reflectance (of a diffuse material, or of a coated one's base): `albedo`
-    /// in [0, 1], and the image `texture` names, read relative to the scene file, that
-    /// scales it (the albedo is then 1 unless given). One of the two is needed.
-    fn textured_albedo(
+    /// A reflecting colour (a diffuse or coated base's `albedo`, a mirror's or conductor's
+    /// `reflectance`, the field `colour_field`) in [0, 1], and the image `texture` names,
+    /// read relative to the scene file, that scales it (the colour is then 1 unless given).
+    /// One of the two is needed.
+    fn textured_colour(
         &self,
-        name: &str,
-        what: &str,
-        albedo: Option<[f32; 3]>,
+        (name, what): (&str, &str),
+        colour_field: &str,
+        colour: Option<[f32; 3]>,
         texture: &Option<String>,
     ) -> Result<(Vec3, Option<Arc<Texture>>), SceneError> {
         let field = |f: &str| format!("materials.{name}.{f}");
-        let albedo = match (albedo, texture) {
-            (Some(a), _) => self.colour(&field("albedo"), a, Some(1.0))?,
+        let colour = match (colour, texture) {
+            (Some(c), _) => self.colour(&field(colour_field), c, Some(1.0))?,
             (None, Some(_)) => Vec3::ONE,
             (None, None) => {
                 return Err(self.err(
-                    field("albedo"),
+                    field(colour_field),
                     "missing",
-                    &format!("a {what} material needs an albedo or a texture"),
+                    &format!("a {what} material needs its {colour_field} or a texture"),
                 ));
             }
         };
         let Some(file) = texture else {
-            return Ok((albedo, None));
+            return Ok((colour, None));
         };
         let path = self.base.join(file);
         let texture = read_texture(&path, ImageOptions::default())
             .map_err(|e| self.err(field("texture"), format!("\"{file}\""), &e))?;
-        Ok((albedo, Some(Arc::new(texture))))
+        Ok((colour, Some(Arc::new(texture))))
     }
 
     /// The camera, its directions judged in `f64` (in `f32`, lengths at 1e20 square to
@@ -426,35 +436,66 @@ impl Converter<'_> {
         let field = |f: &str| format!("materials.{name}.{f}");
         let kind = match m {
             MaterialFile::Diffuse { albedo, texture } => {
-                let (albedo, texture) = self.textured_albedo(name, "diffuse", *albedo, texture)?;
+                let (albedo, texture) =
+                    self.textured_colour((name, "diffuse"), "albedo", *albedo, texture)?;
                 return Ok(Material {
                     texture,
                     ..Material::new(name, MaterialKind::Diffuse { albedo })
                 });
             }
-            MaterialFile::Mirror { reflectance } => MaterialKind::Mirror {
-                reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
-            },
-            MaterialFile::Glass { ior, alpha } => {
+            MaterialFile::Mirror {
+                reflectance,
+                texture,
+            } => {
+                let (reflectance, texture) =
+                    self.textured_colour((name, "mirror"), "reflectance", *reflectance, texture)?;
+                return Ok(Material {
+                    texture,
+                    ..Material::new(name, MaterialKind::Mirror { reflectance })
+                });
+            }
+            MaterialFile::Glass {
+                ior,
+                alpha,
+                alpha_v,
+            } => {
                 if !(ior.is_finite() && *ior > 0.0) {
                     return Err(self.err(field("ior"), ior, "must be a positive number"));
                 }
+                let alpha = self.roughness(&field("alpha"), *alpha)?;
                 MaterialKind::Glass {
                     ior: *ior,
-                    alpha: self.roughness(&field("alpha"), *alpha)?,
+                    alpha,
+                    alpha_v: self.roughness(&field("alpha_v"), alpha_v.unwrap_or(alpha))?,
                 }
             }
             MaterialFile::Conductor {
                 eta,
                 k,
                 reflectance,
+                texture,
                 alpha,
-            } => MaterialKind::Conductor {
-                eta: self.colour(&field("eta"), *eta, None)?,
-                k: self.colour(&field("k"), *k, None)?,
-                reflectance: self.colour(&field("reflectance"), *reflectance, Some(1.0))?,
-                alpha: self.roughness(&field("alpha"), *alpha)?,
-            },
+                alpha_v,
+            } => {
+                let alpha = self.roughness(&field("alpha"), *alpha)?;
+                let (reflectance, texture) = self.textured_colour(
+                    (name, "conductor"),
+                    "reflectance",
+                    Some(*reflectance),
+                    texture,
+                )?;
+                let kind = MaterialKind::Conductor {
+                    eta: self.colour(&field("eta"), *eta, None)?,
+                    k: self.colour(&field("k"), *k, None)?,
+                    reflectance,
+                    alpha,
+                    alpha_v: self.roughness(&field("alpha_v"), alpha_v.unwrap_or(alpha))?,
+                };
+                return Ok(Material {
+                    texture,
+                    ..Material::new(name, kind)
+                });
+            }
             MaterialFile::Coated {
                 albedo,
                 texture,
@@ -462,7 +503,8 @@ impl Converter<'_> {
                 alpha,
                 nonlinear,
             } => {
-                let (albedo, texture) = self.textured_albedo(name, "coated", *albedo, texture)?;
+                let (albedo, texture) =
+                    self.textured_colour((name, "coated"), "albedo", *albedo, texture)?;
                 if !(ior.is_finite() && *ior > 1.0) {
                     return Err(self.err(
                         field("ior"),

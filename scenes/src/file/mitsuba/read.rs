@@ -116,12 +116,13 @@ struct Reader<'a, 'input> {
 /// A rough BSDF's microfacet parameters as read so far ([`Reader::microfacet`]).
 #[derive(Default)]
 struct Microfacet {
-    /// `alpha`, `alpha_u` or `alpha_v`, the last given.
+    /// `alpha`, which sets both roughnesses where given.
     alpha: Option<f32>,
     /// Whether `distribution="ggx"` was given.
     ggx: bool,
-    /// `alpha_u` or `alpha_v`, which must agree (isotropic).
-    alpha_uv: Option<f32>,
+    /// `alpha_u` and `alpha_v`, read where `alpha` is not given.
+    alpha_u: Option<f32>,
+    alpha_v: Option<f32>,
 }
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -558,9 +559,9 @@ impl<'input> Reader<'_, 'input> {
         Ok(())
     }
 
-    /// A BSDF, and the texture on its colour: a diffuse reflectance given by a `bitmap` (a
-    /// `diffuse`'s `reflectance`, a `plastic`'s or `roughplastic`'s `diffuse_reflectance`;
-    /// its albedo then 1).
+    /// A BSDF, and the texture on its colour: a reflectance given by a `bitmap` (a
+    /// `diffuse`'s `reflectance`, a `plastic`'s or `roughplastic`'s `diffuse_reflectance`, a
+    /// `conductor`'s or `roughconductor`'s `specular_reflectance`; the colour then 1).
     fn bsdf(&self, node: Node) -> Result<(MaterialKind, Option<Arc<Texture>>)> {
         let ty = self.required(node, "type")?;
         let elements: Vec<Node> = node.children().filter(Node::is_element).collect();
@@ -572,6 +573,7 @@ impl<'input> Reader<'_, 'input> {
         let reflectance = match ty.as_str() {
             "diffuse" => "reflectance",
             "plastic" | "roughplastic" => "diffuse_reflectance",
+            "conductor" | "roughconductor" => "specular_reflectance",
             _ => return Ok((self.bsdf_kind(node, None)?, None)),
         };
         let named = |p: &Node| p.attribute("name") == Some(reflectance);
@@ -701,7 +703,7 @@ impl<'input> Reader<'_, 'input> {
                         return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
+                let (alpha, alpha_v) = self.ggx_alphas(rough, node, &ty, &microfacet)?;
                 match (eta, k) {
                     (None, None) if !rough => Ok(MaterialKind::Mirror { reflectance }),
                     // Mitsuba's material "none": a lossless metal, Fresnel factor one.
@@ -710,12 +712,14 @@ impl<'input> Reader<'_, 'input> {
                         k: Vec3::ONE,
                         reflectance,
                         alpha,
+                        alpha_v,
                     }),
                     (Some(eta), Some(k)) => Ok(MaterialKind::Conductor {
                         eta,
                         k,
                         reflectance,
                         alpha,
+                        alpha_v,
                     }),
                     _ => Err(self.err(node, "a conductor needs both eta and k, or neither")),
                 }
@@ -751,7 +755,13 @@ impl<'input> Reader<'_, 'input> {
                         return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
+                let (alpha, alpha_v) = self.ggx_alphas(rough, node, &ty, &microfacet)?;
+                if alpha != alpha_v {
+                    return Err(self.err(
+                        node,
+                        format!("anisotropic roughness (alpha_u {alpha}, alpha_v {alpha_v}) on a {ty} is {SUBSET}: ours is isotropic"),
+                    ));
+                }
                 let ior = ior_ratio(int_ior, ext_ior);
                 if ior <= 1.0 || !ior.is_finite() {
                     return Err(self.err(
@@ -795,9 +805,13 @@ impl<'input> Reader<'_, 'input> {
                         return Err(self.err(*p, format!("unknown parameter of a {ty}")));
                     }
                 }
-                let alpha = self.ggx_alpha(rough, node, &ty, &microfacet)?;
+                let (alpha, alpha_v) = self.ggx_alphas(rough, node, &ty, &microfacet)?;
                 let ior = ior_ratio(int_ior, ext_ior);
-                Ok(MaterialKind::Glass { ior, alpha })
+                Ok(MaterialKind::Glass {
+                    ior,
+                    alpha,
+                    alpha_v,
+                })
             }
             _ => Err(self.err(
                 node,
@@ -826,10 +840,12 @@ impl<'input> Reader<'_, 'input> {
             if !(0.0..=1.0).contains(&a) {
                 return Err(self.err(p, format!("{a}: must be in [0, 1] (GGX roughness)")));
             }
-            if !named("alpha") && m.alpha_uv.replace(a).is_some_and(|b| b != a) {
-                return Err(self.err(p, format!("anisotropic roughness is {SUBSET}")));
-            }
-            m.alpha = Some(a);
+            let slot = match p.attribute("name") {
+                Some("alpha_u") => &mut m.alpha_u,
+                Some("alpha_v") => &mut m.alpha_v,
+                _ => &mut m.alpha,
+            };
+            *slot = Some(a);
         } else if !named("sample_visible") {
             // sample_visible is a sampling strategy: the image is the same either way.
             return Ok(false);
@@ -837,13 +853,14 @@ impl<'input> Reader<'_, 'input> {
         Ok(true)
     }
 
-    /// The GGX roughness of the BSDF `node` (of type `ty`): 0 unless it is `rough`; else from
-    /// the microfacet parameters read into `m`, Mitsuba's default 0.1 where none is given.
-    /// Without `distribution="ggx"` the distribution is Beckmann's (Mitsuba's default),
-    /// refused.
-    fn ggx_alpha(&self, rough: bool, node: Node, ty: &str, m: &Microfacet) -> Result<f32> {
+    /// The GGX roughness of the BSDF `node` (of type `ty`) along and across the surface's
+    /// tangent: 0 unless it is `rough`; else from the microfacet parameters read into `m`,
+    /// `alpha` for both where given, else `alpha_u` and `alpha_v`, each Mitsuba's default
+    /// 0.1 where not given. Without `distribution="ggx"` the distribution is Beckmann's
+    /// (Mitsuba's default), refused.
+    fn ggx_alphas(&self, rough: bool, node: Node, ty: &str, m: &Microfacet) -> Result<(f32, f32)> {
         if !rough {
-            return Ok(0.0);
+            return Ok((0.0, 0.0));
         }
         if !m.ggx {
             return Err(self.err(
@@ -853,7 +870,10 @@ impl<'input> Reader<'_, 'input> {
                 ),
             ));
         }
-        Ok(m.alpha.unwrap_or(0.1))
+        Ok(match m.alpha {
+            Some(alpha) => (alpha, alpha),
+            None => (m.alpha_u.unwrap_or(0.1), m.alpha_v.unwrap_or(0.1)),
+        })
     }
 
     /// An index of refraction, a number or one of Mitsuba's named materials.

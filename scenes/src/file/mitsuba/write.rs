@@ -2,11 +2,11 @@
 
 use crate::file::bands::Colours;
 use crate::file::interop::{
-    Export, ExportOptions, clip_range, common_notes, list3, mesh_names, texture_files,
+    Export, ExportOptions, Format, clip_range, common_notes, list3, mesh_names, texture_files,
 };
 use glam::Vec3;
 use ppm_core::params::MAX_DEPTH;
-use ppm_core::scene::{MaterialKind, Scene, Texture, TextureFilter};
+use ppm_core::scene::{Material, MaterialKind, Scene, Texture, TextureFilter};
 use std::fmt::Write;
 
 /// The scene in Mitsuba 3's XML format (`scene version="3.0.0"`), meshes as PLY files.
@@ -27,7 +27,7 @@ use std::fmt::Write;
 /// `options.colours` asks for band spectra ([`bands`](crate::file::bands)) for its spectral variants.
 pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
-    let mut notes = common_notes(scene, options);
+    let mut notes = common_notes(scene, options, Format::Mitsuba);
     notes.push(format!(
         "Mitsuba's path tracer runs to unbounded depth with Russian roulette; ours stops \
              eye paths and photons after {MAX_DEPTH} bounces"
@@ -137,7 +137,11 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
     let _ = writeln!(w, "            <rfilter type=\"box\"/>");
     let _ = writeln!(w, "        </film>");
     let _ = writeln!(w, "    </sensor>");
-    for (m, file) in scene.materials.iter().zip(texture_files(scene)) {
+    for (m, file) in scene
+        .materials
+        .iter()
+        .zip(texture_files(scene, Format::Mitsuba))
+    {
         let id = xml_attr(&material_id(&m.name));
         match &m.kind {
             MaterialKind::Diffuse { albedo } | MaterialKind::Light { albedo, .. } => {
@@ -160,11 +164,7 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
                 let _ = writeln!(w, "        <bsdf type=\"conductor\">");
                 let _ = writeln!(w, "            <string name=\"material\" value=\"none\"/>");
-                let _ = writeln!(
-                    w,
-                    "            {}",
-                    colour_element("specular_reflectance", *reflectance, colours)
-                );
+                write_specular_reflectance(w, (m, file.as_deref()), *reflectance, colours);
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }
@@ -173,25 +173,23 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 k,
                 reflectance,
                 alpha,
+                alpha_v,
             } => {
                 let _ = writeln!(w, "    <bsdf type=\"twosided\" id=\"{id}\">");
-                if *alpha > 0.0 {
+                if alpha.max(*alpha_v) > 0.0 {
                     let _ = writeln!(w, "        <bsdf type=\"roughconductor\">");
                     let _ = writeln!(
                         w,
                         "            <string name=\"distribution\" value=\"ggx\"/>"
                     );
-                    let _ = writeln!(w, "            <float name=\"alpha\" value=\"{alpha}\"/>");
+                    write_alphas(w, *alpha, *alpha_v, "            ");
                 } else {
                     let _ = writeln!(w, "        <bsdf type=\"conductor\">");
                 }
-                for (name, value) in [
-                    ("eta", eta),
-                    ("k", k),
-                    ("specular_reflectance", reflectance),
-                ] {
+                for (name, value) in [("eta", eta), ("k", k)] {
                     let _ = writeln!(w, "            {}", colour_element(name, *value, colours));
                 }
+                write_specular_reflectance(w, (m, file.as_deref()), *reflectance, colours);
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }
@@ -231,11 +229,15 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
                 let _ = writeln!(w, "        </bsdf>");
                 let _ = writeln!(w, "    </bsdf>");
             }
-            MaterialKind::Glass { ior, alpha } => {
-                if *alpha > 0.0 {
+            MaterialKind::Glass {
+                ior,
+                alpha,
+                alpha_v,
+            } => {
+                if alpha.max(*alpha_v) > 0.0 {
                     let _ = writeln!(w, "    <bsdf type=\"roughdielectric\" id=\"{id}\">");
                     let _ = writeln!(w, "        <string name=\"distribution\" value=\"ggx\"/>");
-                    let _ = writeln!(w, "        <float name=\"alpha\" value=\"{alpha}\"/>");
+                    write_alphas(w, *alpha, *alpha_v, "        ");
                 } else {
                     let _ = writeln!(w, "    <bsdf type=\"dielectric\" id=\"{id}\">");
                 }
@@ -268,7 +270,7 @@ pub fn export_mitsuba(scene: &Scene, options: &ExportOptions) -> Export {
         let _ = writeln!(w, "    </shape>");
     }
     let _ = writeln!(w, "</scene>");
-    Export::of(scene, "xml", x, names, notes)
+    Export::of(scene, Format::Mitsuba, x, names, notes)
 }
 
 /// A colour parameter: `<rgb>`, or with band colours a band `<spectrum>`. A grey stays
@@ -353,4 +355,36 @@ fn xml_attr(s: &str) -> String {
 /// XML comments may not hold `--`.
 fn xml_comment(s: &str) -> String {
     s.replace("--", "- -")
+}
+
+/// A microfacet BSDF's roughness: `alpha`, or `alpha_u` along the surface's `dp_du` and
+/// `alpha_v` across it where they differ (the meshes then carry the coordinates that
+/// orient it, `Export::of`).
+fn write_alphas(w: &mut String, alpha: f32, alpha_v: f32, indent: &str) {
+    if alpha == alpha_v {
+        let _ = writeln!(w, "{indent}<float name=\"alpha\" value=\"{alpha}\"/>");
+    } else {
+        let _ = writeln!(w, "{indent}<float name=\"alpha_u\" value=\"{alpha}\"/>");
+        let _ = writeln!(w, "{indent}<float name=\"alpha_v\" value=\"{alpha_v}\"/>");
+    }
+}
+
+/// A mirror's or conductor's reflectance factor, Mitsuba's `specular_reflectance`: the
+/// material's texture where it has one written to `file`, else the colour.
+fn write_specular_reflectance(
+    w: &mut String,
+    (m, file): (&Material, Option<&str>),
+    reflectance: Vec3,
+    colours: Colours,
+) {
+    match (&m.texture, file) {
+        (Some(t), Some(file)) => write_bitmap(w, t, file, "specular_reflectance"),
+        _ => {
+            let _ = writeln!(
+                w,
+                "            {}",
+                colour_element("specular_reflectance", reflectance, colours)
+            );
+        }
+    }
 }

@@ -622,6 +622,12 @@ impl Reader<'_> {
         params: &[Param],
     ) -> Result<(MaterialKind, Option<Arc<Texture>>)> {
         let textured = |p: &&Param| p.name == "reflectance" && p.ty == "texture";
+        if let (Some(p), "conductor") = (params.iter().find(textured), ty) {
+            return Err(d.param_err(
+                p,
+                format!("a textured conductor reflectance is {SUBSET}: pbrt-v4 turns it into an index per point (eta 1, k from the texel), which ours has no form for; Mitsuba 3's specular_reflectance bitmap, a factor as ours, is read"),
+            ));
+        }
         if let (Some(p), "diffuse" | "coateddiffuse") = (params.iter().find(textured), ty) {
             let texture = self.texture_param(d, p)?;
             let rest: Vec<Param> = params.iter().filter(|p| !textured(p)).cloned().collect();
@@ -686,10 +692,10 @@ impl Reader<'_> {
                         _ => return Err(unknown(p)),
                     }
                 }
-                let alpha = roughness.alpha();
+                let (alpha, alpha_v) = roughness.alphas();
                 match (eta, k, reflectance) {
                     // As our export writes a mirror.
-                    (None, None, Some(reflectance)) if alpha == 0.0 => {
+                    (None, None, Some(reflectance)) if alpha.max(alpha_v) == 0.0 => {
                         Ok(MaterialKind::Mirror { reflectance })
                     }
                     // pbrt-v4's ConductorMaterial: the index whose normal-incidence
@@ -701,6 +707,7 @@ impl Reader<'_> {
                             k: 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5),
                             reflectance: Vec3::ONE,
                             alpha,
+                            alpha_v,
                         })
                     }
                     (Some(eta), Some(k), None) => Ok(MaterialKind::Conductor {
@@ -708,6 +715,7 @@ impl Reader<'_> {
                         k,
                         reflectance: Vec3::ONE,
                         alpha,
+                        alpha_v,
                     }),
                     (None, None, None) => Err(d.err(format!("a conductor without \"rgb reflectance\" or \"rgb eta\" and \"rgb k\" (pbrt's default is copper's named spectra) is {SUBSET}"))),
                     _ => Err(d.err("a conductor takes \"rgb eta\" and \"rgb k\" together, or \"rgb reflectance\" alone")),
@@ -735,9 +743,11 @@ impl Reader<'_> {
                         _ => return Err(unknown(p)),
                     }
                 }
+                let (alpha, alpha_v) = roughness.alphas();
                 Ok(MaterialKind::Glass {
                     ior,
-                    alpha: roughness.alpha(),
+                    alpha,
+                    alpha_v,
                 })
             }
             // pbrt-v4's CoatedDiffuseMaterial, its defaults (reflectance 0.5, roughness 0,
@@ -779,7 +789,7 @@ impl Reader<'_> {
                 Ok(MaterialKind::Coated {
                     albedo,
                     ior,
-                    alpha: roughness.alpha(),
+                    alpha: roughness.isotropic_alpha(d)?,
                     nonlinear: true,
                 })
             }
@@ -1007,13 +1017,13 @@ fn named_metal(values: &[Token]) -> Option<Vec3> {
     }
 }
 
-/// A microfacet material's roughness as pbrt-v4 reads it: `roughness`, or `uroughness` and
-/// `vroughness` (which must agree: ours is isotropic), in [0, 1], and `remaproughness`.
+/// A microfacet material's roughness as pbrt-v4 reads it: `uroughness` and `vroughness`,
+/// each `roughness` where not given, in [0, 1], and `remaproughness`.
 struct Roughness {
     roughness: f32,
     remap: bool,
-    /// `uroughness` or `vroughness`, the first given.
-    uv: Option<f32>,
+    u: Option<f32>,
+    v: Option<f32>,
 }
 
 impl Default for Roughness {
@@ -1021,7 +1031,8 @@ impl Default for Roughness {
         Self {
             roughness: 0.0,
             remap: true,
-            uv: None,
+            u: None,
+            v: None,
         }
     }
 }
@@ -1035,10 +1046,11 @@ impl Roughness {
                 if !(0.0..=1.0).contains(&r) {
                     return Err(d.param_err(p, "must be in [0, 1]"));
                 }
-                if p.name != "roughness" && self.uv.replace(r).is_some_and(|u| u != r) {
-                    return Err(d.param_err(p, format!("anisotropic roughness is {SUBSET}")));
+                match p.name.as_str() {
+                    "uroughness" => self.u = Some(r),
+                    "vroughness" => self.v = Some(r),
+                    _ => self.roughness = r,
                 }
-                self.roughness = r;
             }
             "remaproughness" => self.remap = d.boolean(p)?,
             _ => return Ok(false),
@@ -1046,13 +1058,25 @@ impl Roughness {
         Ok(true)
     }
 
-    /// The GGX alpha: pbrt-v4's TrowbridgeReitzDistribution::RoughnessToAlpha (the square
-    /// root) unless `remaproughness` is false.
-    fn alpha(&self) -> f32 {
-        if self.remap {
-            self.roughness.sqrt()
-        } else {
-            self.roughness
+    /// The GGX alphas along and across the tangent: pbrt-v4's
+    /// TrowbridgeReitzDistribution::RoughnessToAlpha (the square root) unless
+    /// `remaproughness` is false.
+    fn alphas(&self) -> (f32, f32) {
+        let alpha = |r: f32| if self.remap { r.sqrt() } else { r };
+        (
+            alpha(self.u.unwrap_or(self.roughness)),
+            alpha(self.v.unwrap_or(self.roughness)),
+        )
+    }
+
+    /// The one GGX alpha of a lobe that must be isotropic (a coat's); `d` is refused where
+    /// the two differ.
+    fn isotropic_alpha(&self, d: &Directive) -> Result<f32> {
+        match self.alphas() {
+            (u, v) if u == v => Ok(u),
+            (u, v) => Err(d.err(format!(
+                "anisotropic roughness (alpha {u} along u, {v} along v) on a coat is {SUBSET}: ours is isotropic"
+            ))),
         }
     }
 }

@@ -2,7 +2,7 @@
 
 use crate::file::bands::{self, Colours};
 use crate::file::interop::{
-    Export, ExportOptions, common_notes, list3, mesh_names, scene_stem, texture_files,
+    Export, ExportOptions, Format, common_notes, list3, mesh_names, scene_stem, texture_files,
 };
 use glam::Vec3;
 use ppm_core::params::MAX_DEPTH;
@@ -33,7 +33,7 @@ pub const PBRT_MAX_DEPTH: u32 = 2 * MAX_DEPTH;
 /// divides a light's spectrum by.
 pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
     let names = mesh_names(scene);
-    let mut notes = common_notes(scene, options);
+    let mut notes = common_notes(scene, options, Format::Pbrt);
     let colours = options.colours.unwrap_or(Colours::Bands);
     notes.push(match colours {
         Colours::Bands => "pbrt-v4 renders spectrally: colours are written as spectra constant \
@@ -158,7 +158,11 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         scene_stem(scene)
     );
     let _ = writeln!(w, "WorldBegin");
-    for (m, file) in scene.materials.iter().zip(texture_files(scene)) {
+    for (m, file) in scene
+        .materials
+        .iter()
+        .zip(texture_files(scene, Format::Pbrt))
+    {
         let name = quoted(&m.name);
         // A textured diffuse reflectance (a diffuse surface's or a coated one's base) reads
         // an image that holds the colour (interop::texture_image); pbrt's (s, t) mapping and
@@ -196,9 +200,14 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
                 "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] {} \"float roughness\" [ 0 ]",
                 colour_param("reflectance", *reflectance, colours)
             ),
-            MaterialKind::Glass { ior, alpha } => writeln!(
+            MaterialKind::Glass {
+                ior,
+                alpha,
+                alpha_v,
+            } => writeln!(
                 w,
-                "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] \"float roughness\" [ {alpha} ] \"bool remaproughness\" false"
+                "MakeNamedMaterial {name} \"string type\" [ \"dielectric\" ] \"float eta\" [ {ior} ] {} \"bool remaproughness\" false",
+                roughness_params(*alpha, *alpha_v)
             ),
             // A layer of thickness zero attenuates nothing; `nonlinear` has no parameter
             // (see the notes).
@@ -209,11 +218,18 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
                 "MakeNamedMaterial {name} \"string type\" [ \"coateddiffuse\" ] {} \"float roughness\" [ {alpha} ] \"bool remaproughness\" false \"float eta\" [ {ior} ] \"float thickness\" [ 0 ]",
                 reflectance(*albedo)
             ),
-            MaterialKind::Conductor { eta, k, alpha, .. } => writeln!(
+            MaterialKind::Conductor {
+                eta,
+                k,
+                alpha,
+                alpha_v,
+                ..
+            } => writeln!(
                 w,
-                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] {} {} \"float roughness\" [ {alpha} ] \"bool remaproughness\" false",
+                "MakeNamedMaterial {name} \"string type\" [ \"conductor\" ] {} {} {} \"bool remaproughness\" false",
                 colour_param("eta", *eta, colours),
-                colour_param("k", *k, colours)
+                colour_param("k", *k, colours),
+                roughness_params(*alpha, *alpha_v)
             ),
         };
     }
@@ -235,7 +251,7 @@ pub fn export_pbrt(scene: &Scene, options: &ExportOptions) -> Export {
         );
         let _ = writeln!(w, "AttributeEnd");
     }
-    Export::of(scene, "pbrt", t, names, notes)
+    Export::of(scene, Format::Pbrt, t, names, notes)
 }
 
 /// A colour parameter: an `rgb` triple, or with band colours a band spectrum. A grey
@@ -269,4 +285,15 @@ fn spectrum_values(points: &[(f32, f32)]) -> String {
 /// A pbrt string literal (pbrt strings cannot hold a double quote or a line break).
 fn quoted(s: &str) -> String {
     format!("\"{}\"", s.replace(['"', '\n'], "_"))
+}
+
+/// A microfacet lobe's roughness as pbrt-v4 takes it (`remaproughness` false): one value, or
+/// `uroughness` along the surface's `dpdu` and `vroughness` across it where they differ
+/// (the meshes then carry the coordinates that orient it, `Export::of`).
+fn roughness_params(alpha: f32, alpha_v: f32) -> String {
+    if alpha == alpha_v {
+        format!("\"float roughness\" [ {alpha} ]")
+    } else {
+        format!("\"float uroughness\" [ {alpha} ] \"float vroughness\" [ {alpha_v} ]")
+    }
 }
