@@ -91,8 +91,9 @@ impl Frame {
         }
         let d = direction / scale;
         let tangent = d - normal * normal.dot(d);
-        // Parallel to the normal within rounding: no direction in the plane.
-        if tangent.length_squared() <= 1e-12 {
+        // Parallel to the normal within rounding, or a NaN in one component (which the
+        // largest component's test above passes over): no direction in the plane.
+        if !tangent.is_finite() || tangent.length_squared() <= 1e-12 {
             return Self::around(normal);
         }
         let tangent = tangent.normalize();
@@ -248,7 +249,13 @@ mod tests {
         assert!((f.bitangent - n.cross(f.tangent)).length() < 1e-6);
         let v = Vec3::new(0.1, 0.7, -0.3);
         assert!((f.to_world(f.to_local(v)) - v).length() < 1e-6);
-        for degenerate in [n * 3.0, Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::INFINITY] {
+        for degenerate in [
+            n * 3.0,
+            Vec3::ZERO,
+            Vec3::splat(f32::NAN),
+            Vec3::new(f32::NAN, 1.0, 0.0),
+            Vec3::INFINITY,
+        ] {
             assert_eq!(Frame::with_tangent(n, degenerate), Frame::around(n));
         }
     }
