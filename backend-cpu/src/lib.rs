@@ -12,12 +12,14 @@ pub mod direct_light;
 mod eye_pass;
 mod gather_pass;
 mod hit_point_update;
+mod path_record;
 mod photon_grid;
 mod photon_pass;
 mod photon_search;
 mod resolve;
 pub mod trace;
 
+use path_record::PathRecord;
 use photon_grid::{PhotonGrid, build_photon_grid};
 use photon_pass::{Deposits, photon_pass_main};
 use photon_search::{PhotonMap, for_photons_in_disc};
@@ -62,6 +64,9 @@ pub struct CpuBackend {
     /// The gather kind the last photon pass named (none since the scene was loaded or
     /// updated).
     map_kind: Option<u32>,
+    /// The gather kind and floor (its bits) of the last photon pass while no eye pass or
+    /// gather has consumed it: what a pass with [`photon_flags::ADD_TO_MAP`] adds to.
+    unconsumed: Option<(u32, u32)>,
     /// Deferred region photons per hit point (area mode).
     pending: Vec<gather_pass::Pending>,
     /// The photon map's grid: `Indexed` once built from the last pass's deposits (at the first
@@ -70,6 +75,13 @@ pub struct CpuBackend {
     /// The crossed-path mask: one bit per path of the passes that record it, kept across
     /// scene updates so that pose B reads what pose A wrote.
     crossed: Vec<AtomicU32>,
+    /// Photon passes stored since the backend was made: names the pass whose deposits
+    /// `photons` holds.
+    passes_stored: u64,
+    /// The paths of the last ordinary pass that asked to keep them, while the pose they were
+    /// traced in is loaded, and the pass they are (their deposits are `photons` while
+    /// `passes_stored` names it).
+    paths: Option<(u64, PathRecord)>,
 }
 
 /// Whether the current photons are indexed yet.
@@ -147,6 +159,8 @@ impl SceneUpload for CpuBackend {
         self.weights = None;
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
+        self.unconsumed = None;
+        self.paths = None;
         Ok(())
     }
 }
@@ -187,8 +201,16 @@ impl CpuBackend {
         self.grid = PhotonIndex::Pending;
         self.map_kind = Some(params.gather_kind);
         self.r2_floor = params.gather_r2_floor;
-        self.photons = deposits.photons;
+        if params.flags & photon_flags::ADD_TO_MAP != 0 {
+            self.photons.extend(deposits.photons);
+        } else {
+            self.photons = deposits.photons;
+        }
+        self.passes_stored += 1;
+        let unweighted = deposits.weights.is_none();
         self.weights = deposits.weights;
+        self.unconsumed =
+            unweighted.then_some((params.gather_kind, params.gather_r2_floor.to_bits()));
         Ok(deposits.stats)
     }
 }
@@ -204,6 +226,7 @@ impl EyePass for CpuBackend {
                 needs: "an eye pass that starts the slots fresh",
             });
         }
+        self.unconsumed = None;
         let mut hit_points = std::mem::take(&mut self.hit_points);
         hit_points.resize(slots, HitPoint::default());
         self.slot_bounds.resize(slots, SlotBounds::NOTHING);
@@ -245,8 +268,39 @@ impl PhotonPass for CpuBackend {
     ) -> Result<PhotonStats, BackendError> {
         self.fit_crossed_mask(params)?;
         let (scene, _) = loaded(&self.scene, "photon")?;
-        let deposits = photon_pass_main(params, scene, source, &self.crossed);
-        self.store(params, deposits)
+        let adds = params.flags & photon_flags::ADD_TO_MAP != 0;
+        let same = Some((params.gather_kind, params.gather_r2_floor.to_bits()));
+        if adds && (self.unconsumed != same || source.keeps_weights()) {
+            return Err(BackendError::OutOfOrder {
+                pass: "photon (added to the map)",
+                needs: "an unconsumed photon pass of the same gather kind and floor, without path weights",
+            });
+        }
+        let answer = self
+            .paths
+            .as_ref()
+            .filter(|(pass, _)| *pass == self.passes_stored)
+            .and_then(|(_, r)| Some((r, r.answers(params, source)?)));
+        let mut deposits = match answer {
+            Some((record, sign)) => {
+                record.replay(params, scene, (sign, &self.photons), &self.crossed)
+            }
+            None => {
+                // A pass that keeps its paths writes them into the last record's memory.
+                let spare = match PathRecord::wanted(params, source) {
+                    true => self.paths.take().map(|(_, r)| r.into_batches()),
+                    false => None,
+                };
+                let spare = spare.unwrap_or_default();
+                photon_pass_main(params, scene, source, &self.crossed, spare)
+            }
+        };
+        let paths = deposits.paths.take();
+        let stats = self.store(params, deposits)?;
+        if let Some(paths) = paths {
+            self.paths = Some((self.passes_stored, paths));
+        }
+        Ok(stats)
     }
 }
 
@@ -272,9 +326,18 @@ fn indexed<'a>(
 
 impl DynamicBackend for CpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        self.scene = Some((SceneData::new(scene), scene.camera));
-        self.photons.clear();
-        self.weights = None;
+        // The same pose with other movers' boxes (a local move's pose A) keeps its data and
+        // the paths traced in it.
+        match &mut self.scene {
+            Some((data, camera)) if data.same_pose(scene) && *camera == scene.camera => {
+                data.movers.clone_from(&scene.movers);
+            }
+            _ => {
+                self.scene = Some((SceneData::new(scene), scene.camera));
+                self.paths = None;
+            }
+        }
+        // The photons stay for a pass that adds to them; until one does, nothing gathers them.
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
         Ok(())
@@ -343,6 +406,7 @@ impl GatherPass for CpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "gather")?;
         check_gather_kind(self.map_kind, params)?;
+        self.unconsumed = None;
         let grid = indexed(
             &mut self.grid,
             &self.photons,

@@ -1,6 +1,7 @@
 //! Photon pass (docs/algorithm.md 1.3): photons leave the lights with the light's whole power,
 //! bounce with Russian roulette, and deposit at non-specular surfaces.
 
+use crate::path_record::{BatchRecord, PathRecord, Segment};
 use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::bsdf;
@@ -27,18 +28,23 @@ pub struct Deposits {
     pub weights: Option<Vec<f32>>,
     /// Counters.
     pub stats: PhotonStats,
+    /// The paths' segments, where the pass keeps them ([`PathRecord::wanted`]).
+    pub paths: Option<PathRecord>,
 }
 
 /// Traces paths `first_path .. first_path + photon_count`, each starting where `source` says;
 /// deposits come back in path order whatever the threads, with their path weights for a
 /// source that keeps them (region passes count `M` in ordinary-photon units with them).
 /// `crossed` is the crossed-path mask that [`photon_flags::RECORD_CROSSED`] writes and
-/// [`photon_flags::CULL_UNCROSSED`] reads; it must hold the bits a recording pass writes.
+/// [`photon_flags::CULL_UNCROSSED`] reads; it must hold the bits a recording pass writes. An
+/// ordinary pass that asks ([`PathRecord::wanted`]) also returns its paths' record, written
+/// into the memory of `spare` (an earlier record's batches) where there is some.
 pub fn photon_pass_main(
     params: &PhotonPassParams,
     scene: &SceneData,
     source: &PhotonSource<'_>,
     crossed: &[AtomicU32],
+    spare: Vec<BatchRecord>,
 ) -> Deposits {
     // No light, no photon: the pass emits its count and deposits nothing.
     let chunks = if scene.lights.is_empty() {
@@ -46,12 +52,17 @@ pub fn photon_pass_main(
     } else {
         params.photon_count.div_ceil(CHUNK)
     };
-    let record = params.flags & photon_flags::RECORD_CROSSED != 0;
+    let record_crossed = params.flags & photon_flags::RECORD_CROSSED != 0;
     let cull = params.flags & photon_flags::CULL_UNCROSSED != 0;
-    let traced: Vec<(Vec<Photon>, Vec<f32>, u64, u64)> = (0..chunks)
+    let keep_paths = PathRecord::wanted(params, source);
+    let mut spare: Vec<Option<BatchRecord>> = spare.into_iter().map(Some).collect();
+    spare.resize_with(chunks as usize, || None);
+    let traced: Vec<Traced> = (0..chunks)
         .into_par_iter()
-        .map(|c| {
+        .zip(spare)
+        .map(|(c, spare)| {
             let (mut deposits, mut weights, mut rays, mut culled) = (Vec::new(), Vec::new(), 0, 0);
+            let mut record = keep_paths.then(|| spare.unwrap_or_default().recycled(c * CHUNK));
             let end = ((c + 1) * CHUNK).min(params.photon_count);
             for local in c * CHUNK..end {
                 let path = params.first_path + local;
@@ -69,30 +80,42 @@ pub fn photon_pass_main(
                 let before = deposits.len();
                 let path_crossed = if emission.weight > 0.0 {
                     let (path_rays, path_crossed) =
-                        trace_photon(params, scene, &key, &emission, &mut deposits);
+                        trace_photon(params, scene, &key, &emission, &mut deposits, &mut record);
                     rays += path_rays;
                     path_crossed
                 } else {
+                    if let Some(r) = &mut record {
+                        r.end_path();
+                    }
                     false
                 };
-                if record {
+                if record_crossed {
                     set_mask_bit(crossed, params.mask_offset + path, path_crossed);
                 }
                 if source.keeps_weights() {
                     weights.resize(weights.len() + deposits.len() - before, emission.weight);
                 }
             }
-            (deposits, weights, rays, culled)
+            Traced {
+                deposits,
+                weights,
+                rays,
+                culled,
+                record,
+            }
         })
         .collect();
-    let rays = traced.iter().map(|t| t.2).sum();
-    let culled = traced.iter().map(|t| t.3).sum();
+    let rays = traced.iter().map(|t| t.rays).sum();
+    let culled = traced.iter().map(|t| t.culled).sum();
     let mut photons = Vec::new();
     let mut weights = Vec::new();
-    for (d, w, _, _) in traced {
-        photons.extend(d);
-        weights.extend(w);
+    let mut records = Vec::new();
+    for t in traced {
+        photons.extend(t.deposits);
+        weights.extend(t.weights);
+        records.extend(t.record);
     }
+    let paths = keep_paths.then(|| PathRecord::new(params, records));
     let stats = PhotonStats {
         emitted: u64::from(params.photon_count),
         deposited: photons.len() as u64,
@@ -103,7 +126,17 @@ pub fn photon_pass_main(
         photons,
         weights: source.keeps_weights().then_some(weights),
         stats,
+        paths,
     }
+}
+
+/// What one parallel task traced.
+struct Traced {
+    deposits: Vec<Photon>,
+    weights: Vec<f32>,
+    rays: u64,
+    culled: u64,
+    record: Option<BatchRecord>,
 }
 
 /// Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),
@@ -115,7 +148,7 @@ fn mask_bit(mask: &[AtomicU32], bit: u32) -> bool {
 
 /// Sets or clears bit `bit` of the crossed-path mask (atomically: neighbouring paths share
 /// the word, as on the GPU).
-fn set_mask_bit(mask: &[AtomicU32], bit: u32, value: bool) {
+pub fn set_mask_bit(mask: &[AtomicU32], bit: u32, value: bool) {
     let word = &mask[(bit / 32) as usize];
     let m = 1 << (bit % 32);
     if value {
@@ -125,14 +158,17 @@ fn set_mask_bit(mask: &[AtomicU32], bit: u32, value: bool) {
     }
 }
 
-/// Traces one photon path from `emission`, appending its deposits; returns the ray segments
-/// traced and whether the path crossed a mover's box (always true when no flag asks).
+/// Traces one photon path from `emission`, appending its deposits (and to `record`, where
+/// the pass keeps its paths, its segments and which of them each deposit ends); returns the
+/// ray segments traced and whether the path crossed a mover's box (always true when no flag
+/// asks).
 fn trace_photon(
     params: &PhotonPassParams,
     scene: &SceneData,
     key: &StreamKey,
     emission: &Emission,
     out: &mut Vec<Photon>,
+    record: &mut Option<BatchRecord>,
 ) -> (u64, bool) {
     let path = key.path;
     let mut dir = emission.direction;
@@ -148,7 +184,11 @@ fn trace_photon(
     for bounce in 0..params.max_depth {
         rays += 1;
         let hit = scene.closest_hit(origin, dir, f32::INFINITY);
-        crossed = crossed || scene.near_mover(origin, dir, hit.map_or(f32::INFINITY, |h| h.t));
+        let t = hit.map_or(f32::INFINITY, |h| h.t);
+        crossed = crossed || scene.near_mover(origin, dir, t);
+        if let Some(r) = record {
+            r.segments.push(Segment { origin, dir, t });
+        }
         let Some(hit) = hit else {
             break;
         };
@@ -176,6 +216,9 @@ fn trace_photon(
                 power: (power * arrived).into(),
                 normal_oct: oct_encode(facing),
             });
+            if let Some(r) = record {
+                r.deposit_segments.push(bounce);
+            }
         }
         let u = (key.uniform(d), (key.uniform(d + 1), key.uniform(d + 2)));
         let frame = scene.frame(&hit, material, facing);
@@ -190,6 +233,9 @@ fn trace_photon(
             facing
         };
         origin = position + side * params.ray_epsilon;
+    }
+    if let Some(r) = record {
+        r.end_path();
     }
     (rays, crossed)
 }

@@ -54,6 +54,23 @@ impl SceneData {
         }
     }
 
+    /// Whether `scene` holds the same surfaces as these buffers, whatever its movers' boxes:
+    /// the same triangles, tree, materials, lights and textures, byte for byte.
+    pub fn same_pose(&self, scene: &CompiledScene) -> bool {
+        fn same<T: bytemuck::Pod>(a: &[T], b: &[T]) -> bool {
+            bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
+        }
+        let (a, b) = (&self.textures, &scene.textures);
+        same(&self.triangles, &scene.triangles)
+            && same(&self.bvh.nodes, &scene.bvh.nodes)
+            && self.bvh.primitive_indices == scene.bvh.primitive_indices
+            && same(&self.materials, &scene.materials)
+            && same(&self.lights, &scene.lights)
+            && same(&a.uvs, &b.uvs)
+            && same(&a.headers, &b.headers)
+            && (std::sync::Arc::ptr_eq(&a.texels, &b.texels) || a.texels == b.texels)
+    }
+
     /// Whether the segment from `origin` along `dir` to `tmax` (may be infinite) crosses the
     /// box of a moving object.
     #[inline]

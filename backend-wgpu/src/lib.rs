@@ -128,6 +128,10 @@ pub struct WgpuBackend {
     map: Option<PhotonMap>,
     /// The gather kind the photon pass that built `map` named.
     map_kind: u32,
+    /// The gather kind and floor (its bits) of the last photon pass while no eye pass or
+    /// gather has consumed the sums it accumulated: what a pass with
+    /// [`photon_flags::ADD_TO_MAP`] adds to.
+    unconsumed: Option<(u32, u32)>,
     /// Batches the last photon pass took.
     batches: u32,
     /// Path indices of the last photon pass end here.
@@ -189,6 +193,7 @@ impl WgpuBackend {
             grid_buffers: None,
             map: None,
             map_kind: 0,
+            unconsumed: None,
             batches: 0,
             last_pass_paths: 0,
             photon_buffer_limit: u64::MAX,
@@ -378,6 +383,7 @@ impl SceneUpload for WgpuBackend {
         self.accumulated = None;
         self.pending = None;
         self.map = None;
+        self.unconsumed = None;
         Ok(())
     }
 }
@@ -436,6 +442,7 @@ impl EyePass for WgpuBackend {
             self.r2_initial = Some(params.r2_initial);
         }
         self.map = None;
+        self.unconsumed = None;
         self.check("eye", &counters)?;
         Ok(EyeStats {
             rays: u64::from(counters[COUNTER_RAYS]),
@@ -556,10 +563,19 @@ impl WgpuBackend {
         let mut start = 0;
         let (accumulated, _, r2_initial) = self.gather_state("photon")?;
         let radii = radii(&self.ctx, r2_initial, params.gather_r2_floor);
-        self.run("photon accumulator reset", |encoder| {
-            encoder.clear_buffer(accumulated, 0, None);
-            Ok(())
-        })?;
+        // A pass added to the last one accumulates onto its sums; any other starts them over.
+        let same = Some((params.gather_kind, params.gather_r2_floor.to_bits()));
+        if params.flags & photon_flags::ADD_TO_MAP == 0 {
+            self.run("photon accumulator reset", |encoder| {
+                encoder.clear_buffer(accumulated, 0, None);
+                Ok(())
+            })?;
+        } else if self.unconsumed != same || weighted {
+            return Err(BackendError::OutOfOrder {
+                pass: "photon (added to the map)",
+                needs: "an unconsumed photon pass of the same gather kind and floor, without path weights",
+            });
+        }
         while start < params.photon_count {
             let launch = PhotonPassParams {
                 photon_count: batch.min(params.photon_count - start),
@@ -663,6 +679,7 @@ impl WgpuBackend {
         }
         self.map = map;
         self.map_kind = params.gather_kind;
+        self.unconsumed = same.filter(|_| !weighted);
         self.batches = batches;
         self.last_pass_paths = params.first_path + params.photon_count;
         Ok(stats)
@@ -822,6 +839,7 @@ impl GatherPass for WgpuBackend {
         if kind == gather_kind::REGION_APPLY || params.kind & gather_kind::DEFERRED != 0 {
             self.allocate_pending("gather")?;
         }
+        self.unconsumed = None;
         let scene = self.scene("gather")?;
         let (hit_points, slots) = self.hit_points("gather")?;
         let needs_photons = BackendError::OutOfOrder {

@@ -5,8 +5,9 @@
 //! `PPM_BENCH_WARMUP` iterations (default 30) at `PPM_BENCH_SIZE` (default 256), then moves
 //! the object its `[[moves]]` name by a thirtieth of that move, `PPM_BENCH_MOVES` times
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
-//! last ten) and per move (mean and largest), their ratio, and the slots the moves reset and
-//! corrected on average. Figures only, no threshold: machines are noisy, compare rows of one
+//! last ten, and the mean of those between the moves, which keep their photon paths for the
+//! next move and serve the reset slots first) and per move (mean and largest), the move's
+//! ratio to a warm-up iteration, and the slots the moves reset and corrected on average. Figures only, no threshold: machines are noisy, compare rows of one
 //! run. `PPM_BENCH_BACKENDS` (default `cpu,wgpu`) and `PPM_BENCH_SCENES` choose the rows;
 //! `PPM_BENCH_CORRECTION_PASSES` caps local mode's correction (0: none, the move's fixed
 //! cost).
@@ -39,8 +40,16 @@ fn main() {
          thirtieth of the scene's move, one iteration after each"
     );
     println!(
-        "{:<14} {:<5} {:>12} {:>12} {:>12} {:>10} {:>9} {:>9}",
-        "scene", "back", "ms/iteration", "ms/move", "largest", "move/iter", "reset", "corrected"
+        "{:<14} {:<5} {:>12} {:>11} {:>9} {:>9} {:>10} {:>9} {:>9}",
+        "scene",
+        "back",
+        "ms/iteration",
+        "in the drag",
+        "ms/move",
+        "largest",
+        "move/iter",
+        "reset",
+        "corrected"
     );
     for name in scenes.split(',') {
         let Some(scene) = scenes::builtin(name.trim()).and_then(|s| s.load().ok()) else {
@@ -67,7 +76,8 @@ fn main() {
                 r.iteration().expect("an iteration runs");
                 iteration_ms.push(t.elapsed().as_secs_f64() * 1e3);
             }
-            let (mut move_ms, mut reset, mut corrected) = (Vec::new(), 0, 0);
+            let (mut move_ms, mut drag_ms, mut reset, mut corrected) =
+                (Vec::new(), Vec::new(), 0, 0);
             for _ in 0..moves {
                 let t = Instant::now();
                 let m = r
@@ -75,15 +85,19 @@ fn main() {
                     .expect("a move runs");
                 move_ms.push(t.elapsed().as_secs_f64() * 1e3);
                 (reset, corrected) = (reset + m.updated, corrected + m.direct_corrected);
+                let t = Instant::now();
                 r.iteration().expect("an iteration runs");
+                drag_ms.push(t.elapsed().as_secs_f64() * 1e3);
             }
             let tail = &iteration_ms[iteration_ms.len().saturating_sub(10)..];
             let per_iteration = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
-            let per_move = move_ms.iter().sum::<f64>() / move_ms.len().max(1) as f64;
+            let mean = |ms: &[f64]| ms.iter().sum::<f64>() / ms.len().max(1) as f64;
+            let (per_move, per_drag_iteration) = (mean(&move_ms), mean(&drag_ms));
             let largest = move_ms.iter().copied().fold(0.0, f64::max);
             let n = u64::from(moves.max(1));
             println!(
-                "{name:<14} {:<5} {per_iteration:>12.1} {per_move:>12.1} {largest:>12.1} {:>10.2} {:>9} {:>9}",
+                "{name:<14} {:<5} {per_iteration:>12.1} {per_drag_iteration:>11.1} {per_move:>9.1} \
+                 {largest:>9.1} {:>10.2} {:>9} {:>9}",
                 r.backend().name(),
                 per_move / per_iteration,
                 reset / n,

@@ -532,6 +532,18 @@ pub mod photon_flags {
     /// A recorded): such a path meets the same surfaces in both poses, so with
     /// [`CHANGED_ONLY`] it would store nothing. A bit no pass recorded counts as set.
     pub const CULL_UNCROSSED: u32 = 4;
+    /// A hint, on an ordinary pass: a local move may soon ask, in this same pose, for a
+    /// [`CHANGED_ONLY`] pass with these random numbers (its pose-A correction). A backend may
+    /// keep the paths' segments to answer it by testing them against the movers' boxes instead
+    /// of tracing them again; the answer must be what tracing gives. One that keeps nothing
+    /// ignores it.
+    pub const KEEP_PATHS: u32 = 8;
+    /// Add this pass's photons to those of the photon pass before it, which no eye pass or
+    /// gather has consumed since and which named the same gather kind and floor: the gather
+    /// that follows folds both as one map (local mode's correction, whose gather only adds,
+    /// searches pose A's negative and pose B's positive photons at once instead of twice). A
+    /// scene update between the two keeps the first one's photons for this.
+    pub const ADD_TO_MAP: u32 = 16;
 }
 
 /// Which photons a gather folds in, who gathers them, and with which update

@@ -302,7 +302,8 @@ pub trait Backend:
 pub trait DynamicBackend: Backend {
     /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3):
     /// replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
-    /// statistics.
+    /// statistics. No gather may follow before a photon pass, but the last pass's photons stay
+    /// for one that adds to them ([`crate::layout::photon_flags::ADD_TO_MAP`]).
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
 
     /// The box of each slot's eye-path vertices, slot by slot, that eye passes with

@@ -38,7 +38,9 @@
 //!   channel) or reflection at glass; at a coated surface it picks the coat's reflection
 //!   below its chance and otherwise, rescaled to `[0, 1)`, decides the roulette; the next two the cosine-weighted or glossy direction. A
 //!   negative pass and its positive twin use the same indices, so their unchanged paths
-//!   cancel; difference passes start at [`DIFFERENCE_PASS_BASE`].
+//!   cancel; difference passes start at [`DIFFERENCE_PASS_BASE`], except a local move's
+//!   one-pass correction right after an ordinary pass, which draws that pass's numbers (its
+//!   paths in pose A are then the ones that pass traced).
 
 /// Which pass draws the number: keeps the streams of different passes apart.
 #[repr(u32)]

@@ -3,9 +3,11 @@
 #![warn(missing_docs)]
 
 use backend_cpu::CpuBackend;
+use glam::Vec3;
 use harness::driver::{Budget, Outcome, Schedule, run};
 use harness::registry::Registry;
 use ppm_core::compile::{camera_ray, compile_scene};
+use ppm_core::layout::{EyePassParams, GpuBounds};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
@@ -117,4 +119,22 @@ pub fn around(i: usize, size: u32, f: impl Fn(usize) -> bool) -> bool {
             !(0..size).contains(&nx) || !(0..size).contains(&ny) || f((ny * size + nx) as usize)
         })
     })
+}
+
+/// Loads the furnace (a closed grey cube) with `movers` as the movers' boxes and traces its
+/// hit points at 16x16: for tests of the pass contract on a backend directly.
+pub fn load_furnace(backend: &mut dyn Backend, movers: &[GpuBounds]) {
+    let scene = scenes::analytic::furnace(Vec3::splat(0.5), 1.0);
+    let mut compiled = compile_scene(&scene, 16, 16);
+    compiled.movers = movers.to_vec();
+    backend.load_scene(&compiled).unwrap();
+    backend
+        .eye_pass(&EyePassParams {
+            spp: 1,
+            max_depth: 4,
+            r2_initial: 0.04,
+            ray_epsilon: 1e-5,
+            ..Default::default()
+        })
+        .unwrap();
 }

@@ -9,9 +9,8 @@
 
 use glam::Vec3;
 use harness::driver::{MoveReport, Renderer};
-use ppm_core::compile::compile_scene;
 use ppm_core::emission::PhotonSource;
-use ppm_core::layout::{EyePassParams, GpuBounds, HitPoint, PhotonPassParams, photon_flags};
+use ppm_core::layout::{GpuBounds, HitPoint, PhotonPassParams, photon_flags};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::rng::DIFFERENCE_PASS_BASE;
@@ -191,24 +190,6 @@ fn both_backends_cull_the_same_paths_and_culling_changes_no_statistic() {
     }
 }
 
-/// Loads the furnace with `movers` as the movers' boxes and traces its hit points: the pass
-/// contract below is tested on the backend directly.
-fn load_furnace(backend: &mut dyn Backend, movers: &[GpuBounds]) {
-    let scene = scenes::analytic::furnace(Vec3::splat(0.5), 1.0);
-    let mut compiled = compile_scene(&scene, 16, 16);
-    compiled.movers = movers.to_vec();
-    backend.load_scene(&compiled).unwrap();
-    backend
-        .eye_pass(&EyePassParams {
-            spp: 1,
-            max_depth: 4,
-            r2_initial: 0.04,
-            ray_epsilon: 1e-5,
-            ..Default::default()
-        })
-        .unwrap();
-}
-
 /// Bits no pass recorded count as crossed: a pass that culls where nothing was recorded
 /// (before any record, or past the recorded slots) traces every path.
 #[test]
@@ -216,7 +197,7 @@ fn a_pass_culls_only_paths_recorded_as_uncrossed() {
     let far = GpuBounds::new(Vec3::new(5.0, 5.0, 5.0), Vec3::new(6.0, 6.0, 6.0));
     for (name, mut backend) in backends("a_pass_culls_only_paths_recorded_as_uncrossed", false) {
         let backend = backend.as_mut();
-        load_furnace(backend, &[far]);
+        tests::load_furnace(backend, &[far]);
         let cull = |mask_offset| PhotonPassParams {
             pass_index: DIFFERENCE_PASS_BASE,
             photon_count: PHOTONS,

@@ -26,9 +26,12 @@
 //!   photons traced in both poses with the same random numbers, whose deferred net sum is the change
 //!   of every photon path the move changed. A path is the same in both poses until it
 //!   crosses a moved object's box in pose A or in pose B, so only deposits made after that
-//!   are stored (in both poses): the gathers cost in proportion to the light the objects
+//!   are stored (in both poses): the gather costs in proportion to the light the objects
 //!   touch. Pose A records, one bit per path, whether the path crossed a box at all; pose B
-//!   traces only those that did (`culled_share` in the report). The correction is gathered
+//!   traces only those that did (`culled_share` in the report), and adds its photons to pose
+//!   A's, so that one gather folds both. A drag step's one-pass correction draws the random
+//!   numbers of the ordinary pass just traced in pose A, whose paths a backend may have
+//!   kept (`photon_flags::KEEP_PATHS`: then pose A traces no ray). The correction is gathered
 //!   within a disc wider than a converged slot's ([`MoveParams::correction_radii`]), wider
 //!   still far from the moved objects ([`CORRECTION_SPREAD`]), and added to the flux alone:
 //!   it brings no new photons to shrink the radius with.
@@ -180,6 +183,8 @@ impl Renderer<'_> {
         mut report: MoveReport,
         start: Instant,
     ) -> Result<MoveReport, BackendError> {
+        // From now on ordinary passes keep their paths for the next move's pose A.
+        self.keep_paths = true;
         // The passes of both poses test the moved objects' boxes in both poses: a path is the
         // same in A and B until it crosses one.
         let movers = mover_boxes(&self.scene, &next, changed, self.extent);

@@ -32,7 +32,7 @@ use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, GpuLight, GpuMaterial, GuidedEmission,
-    PhotonPassParams, RecordedPath, ResolveParams, eye_flags, gather_kind,
+    PhotonPassParams, RecordedPath, ResolveParams, eye_flags, gather_kind, photon_flags,
 };
 use ppm_core::params::{Estimator, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError, DynamicBackend, PhotonStats};
@@ -83,6 +83,11 @@ pub struct Renderer<'a> {
     counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,
+    /// Ordinary passes ask the backend to keep their paths
+    /// ([`photon_flags::KEEP_PATHS`]): set by the first local move, so that a render that
+    /// never moves records nothing, and the next moves' pose-A corrections are answered from
+    /// them.
+    keep_paths: bool,
     guide: Option<(GuidedEmission, Vec<RecordedPath>)>,
     /// Photons emitted and deposited so far, per kind.
     pub counts: PhotonCounts,
@@ -125,6 +130,7 @@ impl<'a> Renderer<'a> {
                 ..Counters::default()
             },
             focus: false,
+            keep_paths: false,
             guide: None,
             counts: PhotonCounts::default(),
             report,
@@ -212,7 +218,10 @@ impl<'a> Renderer<'a> {
     fn ordinary_pass(&mut self) -> Result<(), BackendError> {
         let n = self.params.photons_per_pass;
         let kind = gather_kind::ORDINARY;
-        let params = self.photon_params(self.counters.photon_pass, n, 1.0, kind);
+        let mut params = self.photon_params(self.counters.photon_pass, n, 1.0, kind);
+        if self.keep_paths {
+            params.flags |= photon_flags::KEEP_PATHS;
+        }
         let t = Instant::now();
         let stats = self.backend.photon_pass(&params, &PhotonSource::Lights)?;
         self.count_photons(&stats, t);

@@ -341,12 +341,20 @@ impl Renderer<'_> {
                 let total = (n * passes) as f32;
                 // Storing only what follows a box crossing, pose A also records which paths
                 // crossed one, each pass in its own slot of the mask, and pose B traces only
-                // those: the others would store nothing.
+                // those: the others would store nothing. A correction's gather only adds, the
+                // sign riding on the photons' power, so pose B's pass adds its photons to pose
+                // A's and one gather folds both.
                 let mut flags = 0;
                 let mut gathered = kind | gather_kind::DEFERRED;
-                if correction_photons.is_some() {
-                    gathered |= gather_kind::ADD_FLUX;
+                let correction = correction_photons.is_some();
+                if correction {
+                    gathered = gather_kind::REGION_POSITIVE
+                        | gather_kind::DEFERRED
+                        | gather_kind::ADD_FLUX;
                     flags |= photon_flags::CHANGED_ONLY;
+                    if kind == gather_kind::REGION_POSITIVE {
+                        flags |= photon_flags::ADD_TO_MAP;
+                    }
                     if self.moves.cull_uncrossed {
                         flags |= if kind == gather_kind::REGION_NEGATIVE {
                             photon_flags::RECORD_CROSSED
@@ -355,8 +363,10 @@ impl Renderer<'_> {
                         };
                     }
                 }
+                let reused = correction_photons.and_then(|n| self.reused_pass(n, passes));
                 for k in 0..passes {
-                    let index = DIFFERENCE_PASS_BASE + self.counters.difference_pass + k;
+                    let index =
+                        reused.unwrap_or(DIFFERENCE_PASS_BASE + self.counters.difference_pass + k);
                     let mask_offset = k.checked_mul(n).ok_or_else(|| {
                         BackendError::Limit(format!(
                             "crossed-path mask: {passes} difference passes of {n} photons exceed 2^32 bits"
@@ -373,11 +383,26 @@ impl Renderer<'_> {
                     self.count_photons(&stats, t);
                     total_stats.add(&stats);
                     self.count_compensation(kind, &stats);
-                    self.gather(gathered, 0.0, total)?;
+                    if !correction || kind == gather_kind::REGION_POSITIVE {
+                        self.gather(gathered, 0.0, total)?;
+                    }
                 }
             }
         }
         Ok(total_stats)
+    }
+
+    /// The ordinary pass whose paths a local move's correction of `n` photons in `passes`
+    /// passes traces again, if any: a one-pass correction (a drag step's) right after an
+    /// ordinary pass draws that pass's random numbers. In pose A its paths are the ones the
+    /// pass traced there, which a backend that kept them ([`photon_flags::KEEP_PATHS`])
+    /// answers without tracing them again. Sharing numbers with a pass the history gathered
+    /// leaves the correction unbiased: each of the two estimates is, and their sum's
+    /// expectation is the sum of theirs.
+    fn reused_pass(&self, n: u32, passes: u32) -> Option<u32> {
+        let right_after = self.counters.steps_since_move > 0 && self.counters.photon_pass > 0;
+        (passes == 1 && n == self.params.photons_per_pass && right_after)
+            .then(|| self.counters.photon_pass - 1)
     }
 
     fn count_compensation(&mut self, kind: u32, stats: &PhotonStats) {
