@@ -75,6 +75,9 @@ pub struct CpuBackend {
     /// The crossed-path mask: one bit per path of the passes that record it, kept across
     /// scene updates so that pose B reads what pose A wrote.
     crossed: Vec<AtomicU32>,
+    /// Where the last photon pass's own deposits start in `photons` (after those of the pass
+    /// it was added to, [`photon_flags::ADD_TO_MAP`]).
+    last_pass_from: usize,
     /// Photon passes stored since the backend was made: names the pass whose deposits
     /// `photons` holds.
     passes_stored: u64,
@@ -156,6 +159,7 @@ impl SceneUpload for CpuBackend {
         self.slot_bounds.clear();
         self.chain_light.clear();
         self.photons.clear();
+        self.last_pass_from = 0;
         self.weights = None;
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
@@ -202,8 +206,10 @@ impl CpuBackend {
         self.map_kind = Some(params.gather_kind);
         self.r2_floor = params.gather_r2_floor;
         if params.flags & photon_flags::ADD_TO_MAP != 0 {
+            self.last_pass_from = self.photons.len();
             self.photons.extend(deposits.photons);
         } else {
+            self.last_pass_from = 0;
             self.photons = deposits.photons;
         }
         self.passes_stored += 1;
@@ -445,7 +451,7 @@ impl ReadBack for CpuBackend {
     }
 
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
-        Ok(self.photons.clone())
+        Ok(self.photons[self.last_pass_from..].to_vec())
     }
 
     fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError> {

@@ -248,7 +248,8 @@ pub trait Resolve {
 pub trait ReadBack {
     /// The hit-point buffer, slot by slot.
     fn read_hit_points(&mut self) -> Result<Vec<HitPoint>, BackendError>;
-    /// The current photon map's deposits, in path order.
+    /// The last photon pass's deposits, in path order (of a pass added to the one before it,
+    /// [`crate::layout::photon_flags::ADD_TO_MAP`], its own).
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError>;
     /// Replaces the hit-point buffer (same slot count): seeds extreme states for the stress
     /// suite and lets a debugging tool replay a recorded state.

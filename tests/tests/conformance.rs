@@ -50,6 +50,9 @@ enum Fault {
     SkipsEmptiedReset,
     /// A gather of this kind (flags included) leaves every slot's flux 1% too high.
     SkewsKind(u32),
+    /// A pass asked to add its photons to the last pass's replaces them
+    /// ([`photon_flags::ADD_TO_MAP`] ignored): a local correction keeps pose B's photons only.
+    IgnoresAddToMap,
 }
 
 struct Broken(CpuBackend, Fault);
@@ -60,6 +63,10 @@ impl Broken {
         match self.1 {
             Fault::MisSignsCompensation => PhotonPassParams {
                 power_scale: p.power_scale.abs(),
+                ..*p
+            },
+            Fault::IgnoresAddToMap => PhotonPassParams {
+                flags: p.flags & !photon_flags::ADD_TO_MAP,
                 ..*p
             },
             Fault::DropsOneInTen { .. }
@@ -354,18 +361,12 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     }
 }
 
-/// A backend that skips the reset of an emptied slot's normaliser renders still frames as the
-/// CPU does (no still pass empties a slot) and fails the moves check that compares slots, and
-/// the gather check at the first kind that empties slots.
-#[test]
-fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves() {
+/// The dynamic tier on a backend with `fault`, which renders still frames as the CPU does:
+/// it fails the moves check that compares slots, and the gather check at the step named
+/// `step`, and passes the still checks.
+fn fails_on_moves_only(fault: Fault, step: &str) {
     let verdict = run_conformance(
-        &mut || {
-            Ok(Box::new(Broken(
-                CpuBackend::new(),
-                Fault::SkipsEmptiedReset,
-            )))
-        },
+        &mut || Ok(Box::new(Broken(CpuBackend::new(), fault))),
         &ConformanceOptions::quick(),
         Tier::Dynamic,
     );
@@ -376,12 +377,26 @@ fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves(
     );
     let kinds = verdict.check("gather-kinds").unwrap();
     assert!(
-        !kinds.passed && kinds.detail.contains("(thesis compensation)"),
+        !kinds.passed && kinds.detail.contains(&format!("({step})")),
         "{verdict}"
     );
     for still in ["agreement/same-seed", "gather-formulas", "determinism"] {
         assert!(verdict.check(still).unwrap().passed, "{still}: {verdict}");
     }
+}
+
+/// A backend that skips the reset of an emptied slot's normaliser (no still pass empties a
+/// slot) fails at the first kind that empties slots.
+#[test]
+fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves() {
+    fails_on_moves_only(Fault::SkipsEmptiedReset, "thesis compensation");
+}
+
+/// A backend that ignores [`photon_flags::ADD_TO_MAP`] fails where local mode's deferred
+/// correction is applied.
+#[test]
+fn conformance_fails_a_backend_that_ignores_add_to_map() {
+    fails_on_moves_only(Fault::IgnoresAddToMap, "local apply");
 }
 
 /// A backend without dynamic passes passes the static tier, fails the dynamic tier on
@@ -459,7 +474,6 @@ fn the_gather_checks_name_the_one_kind_a_backend_gets_wrong() {
         REGION_NEGATIVE | DEFERRED,
         REGION_POSITIVE | DEFERRED,
         REGION_APPLY,
-        REGION_NEGATIVE | DEFERRED | ADD_FLUX,
         REGION_POSITIVE | DEFERRED | ADD_FLUX,
         REGION_APPLY | ADD_FLUX,
     ];
