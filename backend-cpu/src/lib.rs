@@ -289,15 +289,17 @@ impl PhotonPass for CpuBackend {
             .and_then(|(_, r)| Some((r, r.answers(params, source)?)));
         let mut deposits = match answer {
             Some((record, sign)) => {
-                record.replay(params, scene, (sign, &self.photons), &self.crossed)
+                record.replay(params, scene, sign, &self.photons, &self.crossed)
             }
             None => {
                 // A pass that keeps its paths writes them into the last record's memory.
                 let spare = match PathRecord::wanted(params, source) {
-                    true => self.paths.take().map(|(_, r)| r.into_batches()),
-                    false => None,
+                    true => self
+                        .paths
+                        .take()
+                        .map_or_else(Vec::new, |(_, r)| r.into_batches()),
+                    false => Vec::new(),
                 };
-                let spare = spare.unwrap_or_default();
                 photon_pass_main(params, scene, source, &self.crossed, spare)
             }
         };

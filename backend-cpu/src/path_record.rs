@@ -150,15 +150,16 @@ impl PathRecord {
 
     /// The deposits a [`photon_flags::CHANGED_ONLY`] pass of these paths stores in `scene`
     /// (the pose they were traced in, with its movers' boxes), their power times `sign`: those
-    /// of `deposits` (the recorded pass's, in path order) that follow a segment meeting a
-    /// mover's box, the segment ending at the deposit included. With
-    /// [`photon_flags::RECORD_CROSSED`] it writes the crossed-path mask as tracing does. No
-    /// ray is traced.
+    /// of `deposits` (the recorded pass's, in path order, as the photon map holds them) that
+    /// follow a segment meeting a mover's box, the segment ending at the deposit included.
+    /// With [`photon_flags::RECORD_CROSSED`] it writes the crossed-path mask as tracing does.
+    /// No ray is traced.
     pub fn replay(
         &self,
         params: &PhotonPassParams,
         scene: &SceneData,
-        (sign, deposits): (f32, &[Photon]),
+        sign: f32,
+        deposits: &[Photon],
         crossed: &[AtomicU32],
     ) -> Deposits {
         let record = params.flags & photon_flags::RECORD_CROSSED != 0;

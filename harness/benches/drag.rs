@@ -7,7 +7,8 @@
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
 //! last ten, and the mean of those between the moves, which keep their photon paths for the
 //! next move and serve the reset slots first) and per move (mean and largest), the move's
-//! ratio to a warm-up iteration, and the slots the moves reset and corrected on average. Figures only, no threshold: machines are noisy, compare rows of one
+//! ratio to a warm-up iteration, and the slots the moves reset and corrected on average.
+//! Figures only, no threshold: machines are noisy, compare rows of one
 //! run. `PPM_BENCH_BACKENDS` (default `cpu,wgpu`) and `PPM_BENCH_SCENES` choose the rows;
 //! `PPM_BENCH_CORRECTION_PASSES` caps local mode's correction (0: none, the move's fixed
 //! cost).
