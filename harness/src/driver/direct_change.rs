@@ -7,8 +7,15 @@
 //! traced in both poses with the same random numbers and lit there with the same light
 //! sample; the pairs' spread says how well the mean is known. Traced on the host with the CPU backend's
 //! scene, whatever backend renders (as [`super::probe`]): a few thousand slots' paths.
+//!
+//! Every move draws a slot's pairs from the same random numbers, so what they found in a
+//! move's pose B is what the next move's would find in its pose A: it is kept
+//! ([`PairsInPose`]) and a drag traces each pose once. Each move's correction stays
+//! unbiased, its pairs being drawn independently of the slot's iterations; successive
+//! moves' errors then cancel along a drag (their sum is one estimate of the whole change)
+//! instead of adding up.
 
-use super::probe::{EyePath, HostPose, ProbeSettings, Traced, Watch, eye_path};
+use super::probe::{EyePath, HostPose, ProbeSettings, Traced, Watch, camera_segment, eye_path};
 use backend_cpu::direct_light::slot_direct;
 use glam::Vec3;
 use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate};
@@ -28,14 +35,6 @@ pub const MOST_SAMPLES: u32 = 16;
 /// 96 to 148 ms, 4 iterations).
 pub fn direct_samples_for(share: f32) -> u32 {
     (4.0 * share).round().clamp(4.0, MOST_SAMPLES as f32) as u32
-}
-
-/// Which samples of each slot's sequences a correction draws.
-pub struct Samples {
-    /// Index of the first: a move's own.
-    pub first: u32,
-    /// How many.
-    pub count: u32,
 }
 
 /// Keys the correction's random numbers apart from every iteration's.
@@ -71,36 +70,73 @@ impl Reach<'_> {
     }
 }
 
+/// A pair's eye path in the pose it was traced in, and its direct light there if it was
+/// evaluated: the next move's pose A.
+#[derive(Clone, Copy)]
+struct PairInPose {
+    path: EyePath,
+    light: Option<Vec3>,
+}
+
+/// Each corrected slot's pairs in a move's pose B, by slot (none for the others), kept for
+/// the next move, whose pose A that is.
+#[derive(Default)]
+pub(super) struct PairsInPose {
+    /// What they were traced with: a move that traces with other settings (the ray offset
+    /// follows the scene's extent) does not take them.
+    settings: Option<ProbeSettings>,
+    slots: Vec<Box<[PairInPose]>>,
+}
+
+impl PairsInPose {
+    /// Pair `k` of slot `slot`, if it was traced.
+    fn get(&self, slot: usize, k: u32) -> Option<&PairInPose> {
+        self.slots.get(slot)?.get(k as usize)
+    }
+}
+
 /// The change from pose `before` to pose `after` of the direct light of each slot of `slots`
-/// that `corrected` flags (`None` for the others), slot `i` keyed by its index.
+/// that `corrected` flags (`None` for the others), slot `i` keyed by its index, from
+/// `samples` pairs each; and the pairs in pose `after`. `known` holds pairs traced in pose
+/// `before` by the last move, if it left that pose.
 pub(super) fn direct_changes(
-    before: &HostPose,
-    after: &HostPose,
+    (before, after): (&HostPose, &HostPose),
     slots: &[HitPoint],
     corrected: &[bool],
-    samples: &Samples,
+    samples: u32,
     settings: &ProbeSettings,
     reach: &Reach,
-) -> Vec<Option<DirectChange>> {
+    known: Option<&PairsInPose>,
+) -> (Vec<Option<DirectChange>>, PairsInPose) {
     // Copied once, before the threads share them.
     let (before, after) = (before.traced(), after.traced());
-    slots
+    let known = known.filter(|k| k.settings == Some(*settings));
+    let (changes, pairs): (Vec<_>, Vec<_>) = slots
         .par_iter()
         .zip(corrected)
         .enumerate()
         .map(|(slot, (hp, &corrected))| {
-            corrected.then(|| {
-                let diffs: Vec<Vec3> = (0..samples.count)
-                    .map(|s| {
-                        let k = samples.first.wrapping_add(s);
-                        let pair = Pair::new(slot as u32, hp.pixel, k, settings);
-                        pair.difference(&before, &after, reach)
-                    })
-                    .collect();
-                change_of(&diffs)
-            })
+            if !corrected {
+                return (None, Box::default());
+            }
+            let (diffs, pairs): (Vec<Vec3>, Vec<PairInPose>) = (0..samples)
+                .map(|k| {
+                    let pair = Pair::new(slot as u32, hp.pixel, k, settings);
+                    let known = known.and_then(|p| p.get(slot, k));
+                    pair.difference(&before, &after, reach, known)
+                })
+                .unzip();
+            (Some(change_of(&diffs)), pairs.into_boxed_slice())
         })
-        .collect()
+        .unzip();
+    let settings = Some(*settings);
+    (
+        changes,
+        PairsInPose {
+            settings,
+            slots: pairs,
+        },
+    )
 }
 
 /// One paired sample of a slot: an eye path through a point of its pixel and a light
@@ -164,12 +200,32 @@ impl Pair {
         slot_direct(&self.light, scene, &visible, &path.chain, self.slot).0
     }
 
-    /// Its direct light in pose `after` less that in `before`. Pose B is traced first.
-    /// When its eye path neither bounced nor crossed a moved box, it is pose A's path too
-    /// and is not traced again; when, besides, no ray from its visible point to a light may
-    /// cross a moved box, the difference is exactly zero.
-    fn difference(&self, before: &Traced, after: &Traced, reach: &Reach) -> Vec3 {
-        let b = self.trace(after, reach.moved);
+    /// Its direct light in pose `after` less that in `before`, and the pair in pose `after`.
+    /// `known` is the pair in pose `before`, if a move left it: its light is pose A's, and
+    /// when its path went straight to its visible point without crossing a moved box, it is
+    /// pose B's path too. Otherwise pose B is traced first. When its eye path neither bounced
+    /// nor crossed a moved box, it is pose A's path too and is not traced again; when,
+    /// besides, no ray from its visible point to a light may cross a moved box, the
+    /// difference is exactly zero.
+    fn difference(
+        &self,
+        before: &Traced,
+        after: &Traced,
+        reach: &Reach,
+        known: Option<&PairInPose>,
+    ) -> (Vec3, PairInPose) {
+        let straight = |path: &EyePath| {
+            let (origin, dir) = camera_segment(after.1, self.pixel, self.jitter);
+            let watch = Watch {
+                groups: 0,
+                boxes: reach.moved,
+            };
+            !path.bounced && !watch.crossed(origin, dir, path.first_t)
+        };
+        let b = match known {
+            Some(a) if straight(&a.path) => a.path,
+            _ => self.trace(after, reach.moved),
+        };
         let same_path = !b.crossed && !b.bounced;
         // The box of the visible point and of its rays' origin, offset along the normal.
         let same_light = |hp: &HitPoint| {
@@ -177,15 +233,25 @@ impl Pair {
             let offset = x + Vec3::from(hp.normal) * self.settings.ray_epsilon;
             !reach.direct_may_change(&Aabb::new(x.min(offset), x.max(offset)))
         };
+        let known_light = known.and_then(|a| a.light);
         if same_path && b.visible.as_ref().is_none_or(same_light) {
-            return Vec3::ZERO;
+            let unchanged = PairInPose {
+                path: b,
+                light: known_light,
+            };
+            return (Vec3::ZERO, unchanged);
         }
-        let a = if same_path {
-            self.direct(before, &b)
-        } else {
-            self.direct(before, &self.trace(before, &[]))
+        let a = known_light.unwrap_or_else(|| match known {
+            Some(a) => self.direct(before, &a.path),
+            None if same_path => self.direct(before, &b),
+            None => self.direct(before, &self.trace(before, &[])),
+        });
+        let light = self.direct(after, &b);
+        let pair = PairInPose {
+            path: b,
+            light: Some(light),
         };
-        self.direct(after, &b) - a
+        (light - a, pair)
     }
 }
 
@@ -208,7 +274,8 @@ fn change_of(diffs: &[Vec3]) -> DirectChange {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ppm_core::compile::compile_scene;
+    use ppm_core::compile::{CompiledScene, compile_scene};
+    use ppm_core::scene::{Move, Scene};
 
     /// No change is exactly none; pairs that agree are still as uncertain as an
     /// all-or-nothing change seen by as many samples; pairs that disagree give their sample
@@ -227,67 +294,106 @@ mod tests {
         assert!((split.variance - 16.0 / 12.0).abs() < 1e-4, "{split:?}");
     }
 
-    /// Pose A is traced only where pose B's pair may differ from it, and that changes no
-    /// correction: on cornell-box (paths straight to their visible points), wedding-band
-    /// (paths off the rings' mirrors) and cornell-metal (light samples at glossy bounces), the
-    /// changes equal those of every pair traced in full in both poses, and some of them are
-    /// not zero.
-    #[test]
-    fn pairs_that_cannot_change_are_traced_once_and_change_nothing() {
-        // cornell-metal's copper block lifted between the gold block and the light: the gold's
-        // glossy light samples are blocked where no eye path crosses the copper's box.
+    /// The scenes the tests below move, each with a move: cornell-box (paths straight to
+    /// their visible points), wedding-band (paths off the rings' mirrors) and cornell-metal
+    /// (light samples at glossy bounces; its copper block lifted between the gold block and
+    /// the light, so that the gold's glossy light samples are blocked where no eye path
+    /// crosses the copper's box).
+    fn moved_scenes() -> Vec<(&'static str, Scene, Move)> {
         let lifted = Vec3::new(60.0, 250.0, 120.0);
-        for (name, moved) in [
+        [
             ("cornell-box", None),
             ("wedding-band", None),
             ("cornell-metal", Some(("short-block", lifted))),
-        ] {
+        ]
+        .into_iter()
+        .map(|(name, moved)| {
             let scene = scenes::builtin(name).unwrap().load().unwrap();
             let m = match moved {
                 None => scene.moves[0],
-                Some((object, translation)) => ppm_core::scene::Move {
+                Some((object, translation)) => Move {
                     object: scene.object_index(object).unwrap(),
                     translation,
                     rotation: glam::Quat::IDENTITY,
                 },
             };
-            let mut next = scene.clone();
-            next.apply(&m);
-            let (a, b) = (compile_scene(&scene, 48, 48), compile_scene(&next, 48, 48));
-            let (before, after) = (HostPose::new(&a), HostPose::new(&b));
-            let slots: Vec<HitPoint> = (0..48 * 48).map(HitPoint::empty).collect();
-            let corrected = vec![true; slots.len()];
-            let bounds = |s: &ppm_core::scene::Scene| {
-                let (lo, hi) = s.objects[m.object].bounds();
+            (name, scene, m)
+        })
+        .collect()
+    }
+
+    const SIZE: u32 = 48;
+
+    /// What `direct_changes` needs besides the poses, for a move of `object` from `scene`
+    /// to `next`: every slot corrected, its lights' and the object's boxes, the settings.
+    struct Setting {
+        slots: Vec<HitPoint>,
+        corrected: Vec<bool>,
+        lights: Vec<Aabb>,
+        moved: [Aabb; 2],
+        settings: ProbeSettings,
+    }
+
+    impl Setting {
+        fn new(compiled: &CompiledScene, (scene, next): (&Scene, &Scene), object: usize) -> Self {
+            let bounds = |s: &Scene| {
+                let (lo, hi) = s.objects[object].bounds();
                 Aabb::new(lo, hi)
             };
-            let lights: Vec<Aabb> = a
-                .lights
-                .iter()
-                .map(|l| {
-                    let v0 = Vec3::from(l.v0);
-                    Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)])
-                })
-                .collect();
-            let settings = ProbeSettings {
-                seed: 3,
-                max_depth: 8,
-                ray_epsilon: 1e-4 * a.extent,
-                sample_lights: false,
-            };
-            let samples = Samples { first: 0, count: 4 };
+            let slots: Vec<HitPoint> = (0..SIZE * SIZE).map(HitPoint::empty).collect();
+            Self {
+                corrected: vec![true; slots.len()],
+                slots,
+                lights: compiled
+                    .lights
+                    .iter()
+                    .map(|l| {
+                        let v0 = Vec3::from(l.v0);
+                        Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)])
+                    })
+                    .collect(),
+                moved: [bounds(scene), bounds(next)],
+                settings: ProbeSettings {
+                    seed: 3,
+                    max_depth: 8,
+                    ray_epsilon: 1e-4 * compiled.extent,
+                    sample_lights: false,
+                },
+            }
+        }
+
+        fn changes(
+            &self,
+            poses: (&HostPose, &HostPose),
+            known: Option<&PairsInPose>,
+        ) -> (Vec<Option<DirectChange>>, PairsInPose) {
             let reach = Reach {
-                lights: &lights,
-                moved: &[bounds(&scene), bounds(&next)],
+                lights: &self.lights,
+                moved: &self.moved,
             };
-            let traced_once = direct_changes(
-                &before, &after, &slots, &corrected, &samples, &settings, &reach,
-            );
-            let in_full: Vec<Option<DirectChange>> = (0..slots.len() as u32)
+            let (slots, corrected) = (&self.slots, &self.corrected);
+            direct_changes(poses, slots, corrected, 4, &self.settings, &reach, known)
+        }
+    }
+
+    /// Pose A is traced only where pose B's pair may differ from it, and that changes no
+    /// correction: on every scene of [`moved_scenes`], the changes equal those of every pair
+    /// traced in full in both poses, and some of them are not zero.
+    #[test]
+    fn pairs_that_cannot_change_are_traced_once_and_change_nothing() {
+        for (name, scene, m) in moved_scenes() {
+            let mut next = scene.clone();
+            next.apply(&m);
+            let a = compile_scene(&scene, SIZE, SIZE);
+            let b = compile_scene(&next, SIZE, SIZE);
+            let (before, after) = (HostPose::new(&a), HostPose::new(&b));
+            let setting = Setting::new(&a, (&scene, &next), m.object);
+            let (traced_once, _) = setting.changes((&before, &after), None);
+            let in_full: Vec<Option<DirectChange>> = (0..SIZE * SIZE)
                 .map(|slot| {
-                    let diffs: Vec<Vec3> = (0..samples.count)
+                    let diffs: Vec<Vec3> = (0..4)
                         .map(|k| {
-                            let pair = Pair::new(slot, slot, k, &settings);
+                            let pair = Pair::new(slot, slot, k, &setting.settings);
                             let direct = |pose: &Traced| pair.direct(pose, &pair.trace(pose, &[]));
                             direct(&after.traced()) - direct(&before.traced())
                         })
@@ -302,6 +408,83 @@ mod tests {
                 .filter(|c| c.is_some_and(|c| c.mean != [0.0; 3]))
                 .count();
             assert!(changed > 20, "{name}: only {changed} slots changed");
+        }
+    }
+
+    /// Along a drag (a third of each scene's move, three times), a move that takes its pose
+    /// A's pairs from the last move finds the changes of one that traces both poses, bit for
+    /// bit, and does take them: kept lights or kept paths made wrong change its result, unless
+    /// they were traced with other settings.
+    #[test]
+    fn a_drag_traces_each_pose_once_and_changes_nothing() {
+        for (name, scene, m) in moved_scenes() {
+            let step = Move {
+                translation: m.translation / 3.0,
+                rotation: glam::Quat::IDENTITY.slerp(m.rotation, 1.0 / 3.0),
+                ..m
+            };
+            let mut poses = vec![scene];
+            for _ in 0..3 {
+                let mut next = poses.last().unwrap().clone();
+                next.apply(&step);
+                poses.push(next);
+            }
+            let compiled: Vec<CompiledScene> =
+                poses.iter().map(|s| compile_scene(s, SIZE, SIZE)).collect();
+            let mut known: Option<PairsInPose> = None;
+            for w in 0..3 {
+                let (before, after) =
+                    (HostPose::new(&compiled[w]), HostPose::new(&compiled[w + 1]));
+                let setting = Setting::new(&compiled[w], (&poses[w], &poses[w + 1]), m.object);
+                let (fresh, _) = setting.changes((&before, &after), None);
+                let (reused, pairs) = setting.changes((&before, &after), known.as_ref());
+                let differ = fresh.iter().zip(&reused).filter(|(a, b)| a != b).count();
+                assert_eq!(differ, 0, "{name}, move {w}: slots whose change differs");
+                if let Some(kept) = &known {
+                    let wrong = |f: &dyn Fn(&PairInPose) -> PairInPose| PairsInPose {
+                        settings: kept.settings,
+                        slots: kept
+                            .slots
+                            .iter()
+                            .map(|s| s.iter().map(f).collect())
+                            .collect(),
+                    };
+                    let brighter = wrong(&|p| PairInPose {
+                        light: p.light.map(|l| l * 2.0 + Vec3::ONE),
+                        ..*p
+                    });
+                    let moved_point = wrong(&|p| {
+                        let mut p = *p;
+                        if let Some(v) = p.path.visible.as_mut() {
+                            v.position[1] += 0.25 * compiled[w].extent;
+                        }
+                        p
+                    });
+                    for (what, wrong) in [("lights", brighter), ("paths", moved_point)] {
+                        let (changes, _) = setting.changes((&before, &after), Some(&wrong));
+                        let differ = fresh.iter().zip(&changes).filter(|(a, b)| a != b).count();
+                        assert!(
+                            differ > 10,
+                            "{name}, move {w}: wrong {what} changed {differ} slots"
+                        );
+                        // Pairs traced with another ray offset are not taken.
+                        let offset = setting.settings.ray_epsilon * 2.0;
+                        let other = PairsInPose {
+                            settings: wrong.settings.map(|s| ProbeSettings {
+                                ray_epsilon: offset,
+                                ..s
+                            }),
+                            ..wrong
+                        };
+                        let (changes, _) = setting.changes((&before, &after), Some(&other));
+                        assert!(
+                            changes == fresh,
+                            "{name}, move {w}: pairs of other settings taken"
+                        );
+                    }
+                }
+                known = Some(pairs);
+            }
         }
     }
 

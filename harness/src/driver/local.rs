@@ -46,7 +46,7 @@
 //!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
-use super::direct_change::{MOST_SAMPLES, Reach, Samples, direct_changes, direct_samples_for};
+use super::direct_change::{PairsInPose, Reach, direct_changes, direct_samples_for};
 use super::moves::{Compensation, MoveReport};
 use super::probe::{self, HostPose, ProbeSettings};
 use super::{Renderer, dynamic, pass_params};
@@ -204,10 +204,13 @@ impl Renderer<'_> {
         // Pose B as the host's probes trace it, copied once if one of them needs it.
         let after = HostPose::new(&compiled);
         let resets = self.reset_near(&mut slots, &next, &after, changed, &moved, &size)?;
+        // The last move's pose B, if it left this pose: its copy and its direct pairs.
+        let (copy, known) = self.host_copy.take().unzip();
+        let mut pairs = PairsInPose::default();
         if resets.direct_corrected > 0 {
-            let before = HostPose::reusing(&self.compiled, self.host_copy.take());
+            let before = HostPose::reusing(&self.compiled, copy);
             let poses = (&before, &after);
-            self.correct_direct(&mut slots, poses, &moved, size.direct_samples);
+            pairs = self.correct_direct(&mut slots, poses, &moved, size.direct_samples, known);
         }
         self.backend.write_hit_points(&slots)?;
         report.updated = resets.reset;
@@ -224,7 +227,7 @@ impl Renderer<'_> {
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         let copy = after.into_copy();
         self.adopt(next, compiled);
-        self.host_copy = copy;
+        self.host_copy = copy.map(|copy| (copy, pairs));
         self.counters.frame += 1;
         let positive = self.compensate(&size.photons, gather_kind::REGION_POSITIVE)?;
         if positive.emitted > 0 {
@@ -255,36 +258,33 @@ impl Renderer<'_> {
     /// to a variance `V` leaves the history worth `N' = N / (1 + N V / lum(D)^2)` iterations
     /// ([`history_kept`]), and the sum keeps its mean at that count. An unchanged slot keeps
     /// all of it. Channels the change drives below zero are clamped there. `samples` pairs
-    /// per slot.
+    /// per slot; `known` holds them in pose `before` if the last move left it. Returns them in
+    /// pose `after`.
     fn correct_direct(
         &self,
         slots: &mut [HitPoint],
-        (before, after): (&HostPose, &HostPose),
+        poses: (&HostPose, &HostPose),
         moved: &Moved,
         samples: u32,
-    ) {
+        known: Option<PairsInPose>,
+    ) -> PairsInPose {
         let corrected: Vec<bool> = slots
             .iter()
             .map(|hp| hp.flags & hit_flags::DIRECT_MAY_CHANGE != 0 && hp.iterations > 0)
             .collect();
-        // Each move draws samples of its own.
-        let samples = Samples {
-            first: self.counters.difference_pass.wrapping_mul(MOST_SAMPLES),
-            count: samples,
-        };
         let (lights, boxes) = (self.light_boxes(), moved.both());
         let reach = Reach {
             lights: &lights,
             moved: &boxes,
         };
-        let changes = direct_changes(
-            before,
-            after,
+        let (changes, pairs) = direct_changes(
+            poses,
             slots,
             &corrected,
-            &samples,
+            samples,
             &self.probe_settings(),
             &reach,
+            known.as_ref(),
         );
         slots.par_iter_mut().zip(changes).for_each(|(hp, change)| {
             // No pair changed: the sum stays as it is, bit for bit.
@@ -299,6 +299,7 @@ impl Renderer<'_> {
             hp.direct = mean.map(|d| d * count as f32);
             hp.iterations = count;
         });
+        pairs
     }
 
     /// Starts over the `slots` whose view the move of `changed` objects to `next`
@@ -521,7 +522,7 @@ mod tests {
         for _ in 0..3 {
             r.iteration().unwrap();
             r.move_objects(&[step], MoveMode::Local).unwrap();
-            let copy = r.host_copy.as_ref().expect("the move kept its pose B");
+            let (copy, _) = r.host_copy.as_ref().expect("the move kept its pose B");
             assert_eq!(copy.triangles, r.compiled.triangles);
             assert_eq!(bytes(&copy.bvh.nodes), bytes(&r.compiled.bvh.nodes));
             assert_eq!(copy.materials, r.compiled.materials);

@@ -27,6 +27,7 @@ pub use schedule::{
 
 use crate::report::{RenderReport, left_out};
 use backend_cpu::trace::SceneData;
+use direct_change::PairsInPose;
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
@@ -78,8 +79,9 @@ pub struct Renderer<'a> {
     /// moved objects' boxes.
     compiled: CompiledScene,
     /// A copy of the current pose for the host's traces ([`probe::HostPose`]): the last
-    /// local move's pose B, kept so that a drag copies each pose once, not twice.
-    host_copy: Option<SceneData>,
+    /// local move's pose B, kept so that a drag copies each pose once, not twice; and the
+    /// direct-light pairs that move traced in it, which the next move's pose A reuses.
+    host_copy: Option<(SceneData, PairsInPose)>,
     counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,

@@ -76,7 +76,7 @@ pub(super) type Traced<'a> = (&'a SceneData, &'a CompiledScene);
 
 /// How the probe's paths are traced: the render's seed, depth and ray offset, and whether
 /// they take the light samples the eye pass takes at glossy bounces (for their direct light).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, PartialEq)]
 pub(super) struct ProbeSettings {
     pub seed: u32,
     pub max_depth: u32,
@@ -135,7 +135,7 @@ pub(super) struct Watch<'a> {
 
 impl Watch<'_> {
     /// Whether the segment from `origin` along the unit `dir` for `t_max` meets a box.
-    fn crossed(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+    pub fn crossed(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
         self.boxes
             .iter()
             .any(|b| segment_meets_box(origin, dir, t_max, b.lo, b.hi))
@@ -143,6 +143,7 @@ impl Watch<'_> {
 }
 
 /// One eye path traced on the host, as the eye pass traces it.
+#[derive(Clone, Copy)]
 pub(super) struct EyePath {
     /// Whether it met one of the groups asked about, up to and including its visible point.
     pub met: bool,
@@ -151,6 +152,9 @@ pub(super) struct EyePath {
     pub crossed: bool,
     /// Whether it bounced off a mirror, glass or glossy surface on its way.
     pub bounced: bool,
+    /// How far its first segment, from the eye ([`camera_segment`]), went before a surface
+    /// (infinite when it left the scene).
+    pub first_t: f32,
     /// Its visible point (position, facing normal, material, throughput and `VALID` and
     /// `FRONT` flags, as the eye pass writes them), if it reached one before meeting a group.
     pub visible: Option<HitPoint>,
@@ -175,29 +179,30 @@ pub(super) fn eye_path(
     watch: &Watch,
     settings: &ProbeSettings,
 ) -> EyePath {
-    let camera = &pose.camera;
-    let px = (pixel % camera.width) as f32 + jx;
-    let py = (pixel / camera.width) as f32 + jy;
-    let mut dir = camera_ray(camera, px, py);
-    let mut origin = Vec3::from(camera.eye);
+    let (mut origin, mut dir) = camera_segment(pose, pixel, (jx, jy));
     let mut throughput = Vec3::ONE;
     let lights = settings
         .sample_lights
         .then_some((*key, settings.ray_epsilon));
     let mut chain = ChainTracker::new(lights);
     let mut crossed = false;
-    let nothing = |chain: &ChainTracker, crossed, depth| EyePath {
+    let mut first_t = f32::INFINITY;
+    let nothing = |chain: &ChainTracker, crossed, depth, first_t| EyePath {
         met: false,
         crossed,
         bounced: depth > 0,
+        first_t,
         visible: None,
         chain: chain.finish(scene, None),
     };
     for depth in 0..=settings.max_depth {
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
             crossed |= watch.crossed(origin, dir, f32::INFINITY);
-            return nothing(&chain, crossed, depth);
+            return nothing(&chain, crossed, depth, first_t);
         };
+        if depth == 0 {
+            first_t = hit.t;
+        }
         crossed |= watch.crossed(origin, dir, hit.t);
         let tri = &scene.triangles[hit.triangle as usize];
         if tri.group & watch.groups != 0 {
@@ -205,6 +210,7 @@ pub(super) fn eye_path(
                 met: true,
                 crossed,
                 bounced: depth > 0,
+                first_t,
                 visible: None,
                 chain: ChainLight::NONE,
             };
@@ -228,6 +234,7 @@ pub(super) fn eye_path(
                 met: false,
                 crossed,
                 bounced: depth > 0,
+                first_t,
                 visible: Some(HitPoint {
                     position: position.into(),
                     normal: facing.into(),
@@ -248,12 +255,25 @@ pub(super) fn eye_path(
         };
         let bounce = chain.bounce(scene, material, &at, throughput, u);
         if bounce.weight == Vec3::ZERO {
-            return nothing(&chain, crossed, depth + 1);
+            return nothing(&chain, crossed, depth + 1, first_t);
         }
         throughput *= bounce.weight;
         dir = bounce.dir;
         let side = if bounce.transmitted { -facing } else { facing };
         origin = position + side * settings.ray_epsilon;
     }
-    nothing(&chain, crossed, settings.max_depth + 1)
+    nothing(&chain, crossed, settings.max_depth + 1, first_t)
+}
+
+/// The first segment of an eye path through point `(jx, jy)` of `pixel`: the eye, and the
+/// unit direction to that point.
+pub(super) fn camera_segment(
+    pose: &CompiledScene,
+    pixel: u32,
+    (jx, jy): (f32, f32),
+) -> (Vec3, Vec3) {
+    let camera = &pose.camera;
+    let px = (pixel % camera.width) as f32 + jx;
+    let py = (pixel / camera.width) as f32 + jy;
+    (Vec3::from(camera.eye), camera_ray(camera, px, py))
 }
