@@ -223,7 +223,11 @@ impl Pair {
             !path.bounced && !watch.crossed(origin, dir, path.first_t)
         };
         let b = match known {
-            Some(a) if straight(&a.path) => a.path,
+            // Its crossing was just tested against this move's boxes, not the last move's.
+            Some(a) if straight(&a.path) => EyePath {
+                crossed: false,
+                ..a.path
+            },
             _ => self.trace(after, reach.moved),
         };
         let same_path = !b.crossed && !b.bounced;
