@@ -21,9 +21,9 @@ const CELL_SCALE: f32 = 2.0;
 /// The same for a pass every slot gathers within a floor disc (`r2_floor > 0`: local mode's
 /// corrections). Those discs are wide and find many photons in each cell, so reading fewer
 /// photons pays more than looking up fewer cells: cornell-box's canonical move at 256x256
-/// (8 passes' worth, after 15 s) gathered in 116 ms with [`CELL_SCALE`]'s cells, 77 with
-/// ppm-core's and 77 at 0.7 times; a drag step's one pass in 8.7 and 11.4 ms, 7.4 and 9.7,
-/// 9.0 and 10.0 (two runs each).
+/// (8 passes' worth, after 15 s; three runs, alternately) gathered in 111-128 ms with
+/// [`CELL_SCALE`]'s cells and 73-79 with ppm-core's (0.7 times: no faster); a drag step's
+/// one pass in 8.7 and 11.4 ms, 7.4 and 9.7 (0.7 times: 9.0 and 10.0).
 const FLOOR_CELL_SCALE: f32 = 1.0;
 
 /// A photon as the gather reads it: [`ppm_core::layout::GridPhoton`] with its normal decoded.
