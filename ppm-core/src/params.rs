@@ -278,9 +278,12 @@ pub struct MoveParams {
 pub const ITERATIONS_PER_CORRECTION_PASS: u32 = 64;
 
 /// Iterations since the last move that pay for one pass of a move's correction
-/// ([`MoveParams::correction_for`]): a correction costs at most about a fifth of the
-/// rendering since the move before (a pass traces both poses and gathers twice).
-pub const ITERATIONS_PAYING_A_CORRECTION_PASS: u32 = 8;
+/// ([`MoveParams::correction_for`]): a correction costs at most about a third of the
+/// rendering since the move before (a pass's worth, traced in both poses and gathered, costs
+/// about an iteration and a third on cornell-box). One pass per 8 iterations left moves a
+/// second apart 3-4% further from the truth a second and two seconds after the last one
+/// (docs/error-vs-time.md, "Moves a second apart corrected as fully as a first move").
+pub const ITERATIONS_PAYING_A_CORRECTION_PASS: u32 = 4;
 
 impl MoveParams {
     /// Local mode's correction for a move after `history` iterations of rendering (what
@@ -393,7 +396,8 @@ mod tests {
                 "a drag step corrects with one pass, after {history} iterations"
             );
         }
-        assert_eq!(moves.correction_for(500, 32).0, 4.0, "a second apart");
+        assert_eq!(moves.correction_for(1000, 16).0, 4.0, "half a second apart");
+        assert_eq!(moves.correction_for(1000, 32).0, most, "a second apart");
         assert_eq!(moves.correction_for(128, 32).0, 2.0, "a short history");
         let none = MoveParams {
             correction_passes: 0,
