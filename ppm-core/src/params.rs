@@ -279,10 +279,11 @@ pub const ITERATIONS_PER_CORRECTION_PASS: u32 = 64;
 
 /// Iterations since the last move that pay for one pass of a move's correction
 /// ([`MoveParams::correction_for`]): a correction costs at most about a third of the
-/// rendering since the move before (a pass's worth, traced in both poses and gathered, costs
-/// about an iteration and a third on cornell-box). One pass per 8 iterations left moves a
-/// second apart 3-4% further from the truth a second and two seconds after the last one
-/// (docs/error-vs-time.md, "Moves a second apart corrected as fully as a first move").
+/// rendering since the move before (on cornell-box at 256x256 a pass's worth, traced in both
+/// poses and gathered, takes about 30 ms against an iteration's 25-30). One pass per 8
+/// iterations left moves a second apart 3-5% further from the truth a second and two seconds
+/// after the last one (docs/error-vs-time.md, "Moves a second apart corrected as fully as a
+/// first move").
 pub const ITERATIONS_PAYING_A_CORRECTION_PASS: u32 = 4;
 
 impl MoveParams {
