@@ -317,17 +317,17 @@ impl Renderer<'_> {
         size: &CorrectionSize,
     ) -> Result<Resets, BackendError> {
         let bounds = dynamic(self.backend)?.read_slot_bounds()?;
-        let posed: Vec<[Vec3; 3]> = changed
-            .iter()
-            .flat_map(|&o| next.objects[o].triangles.iter().copied())
-            .collect();
         let camera = &after.compiled.camera;
         // A mesh's cover in parts, one per thread's share of triangles (cornell-bunny's 70,000
-        // took 6 ms in one).
-        let covered = posed
-            .par_chunks(COVER_CHUNK)
+        // took 6 ms in one), or'ed into one.
+        let covered = changed
+            .par_iter()
+            .flat_map(|&o| next.objects[o].triangles.par_chunks(COVER_CHUNK))
             .map(|part| covered_pixels(camera, part))
-            .reduce_with(|a, b| a.iter().zip(&b).map(|(x, y)| *x || *y).collect())
+            .reduce_with(|mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x |= *y);
+                a
+            })
             .unwrap_or_else(|| covered_pixels(camera, &[]));
         let eye = Vec3::from(camera.eye);
         let nearest = moved
