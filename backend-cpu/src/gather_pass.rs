@@ -54,7 +54,7 @@ pub fn gather_pass_main(
                     before,
                     &scaled(found, search_r2(hp, map.r2_floor), hp.r2),
                 );
-                (hp.n, hp.r2, hp.tau, hp.emitted) = (after.n, after.r2, after.tau, after.emitted);
+                after.store(hp);
                 *pending = after.pending;
             }
             stats

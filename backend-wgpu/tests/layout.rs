@@ -65,7 +65,9 @@ fn buffer_elements_match_their_wgsl_twins() {
         iterations,
         flags,
         eye_met,
-        correction_r2
+        correction_r2,
+        discounted,
+        _pad
     });
     same_layout!(Photon {
         position,
@@ -159,7 +161,7 @@ fn the_gather_rule_s_structs_match_their_wgsl_twins() {
         r2,
         emitted,
         flags,
-        _pad
+        discounted
     });
     same_layout!(Found {
         flux,

@@ -414,7 +414,7 @@ fn renders_beyond_memory_are_refused_before_allocation() {
     assert!(
         slots.starts_with(
             "error: command line: width * height * spp = 60000 * 60000 * 1 = 3600000000: \
-             hit points of 96 bytes need 345.6 GB; "
+             hit points of 112 bytes need 403.2 GB; "
         ) && slots.ends_with(": lower --width, --height or --spp"),
         "{slots}"
     );

@@ -63,10 +63,11 @@ pub const NO_MATERIAL: u32 = u32::MAX;
 /// is traced once per frame. Both fold the eye path's throughput and the BRDF into what they
 /// accumulate, so the pixel is `direct / iterations + tau / (pi r2 emitted)` either way.
 ///
-/// 96 bytes: six 16-byte rows, each a `vec3<f32>` plus one scalar. At 768x768 with one eye
-/// sample per pixel that is 589,824 slots = 56.6 MB, well inside one storage binding (128 MiB
-/// baseline limit). The diffuse albedo is not stored (`material` indexes it), nor the
-/// outgoing direction (hit points are Lambertian).
+/// 112 bytes: six 16-byte rows, each a `vec3<f32>` plus one scalar, and a seventh of four
+/// scalars, three of them padding. At 768x768 with one eye sample per pixel that is 589,824
+/// slots = 66.1 MB, well inside one storage binding (128 MiB baseline limit). The diffuse
+/// albedo is not stored (`material` indexes it), nor the outgoing direction (hit points are
+/// Lambertian).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HitPoint {
@@ -104,6 +105,12 @@ pub struct HitPoint {
     /// driver widens it far from the moved objects, where the change is smooth. Written at a
     /// move, read by no other gather.
     pub correction_r2: f32,
+    /// How many of the `n` photons local moves' corrections discounted: the statistics are
+    /// worth `n - discounted` photons against the next correction (docs/algorithm.md 3c),
+    /// while `n` itself still sets how fast the radius shrinks. Starts over with `n`.
+    pub discounted: f32,
+    /// Pads the slot to its WGSL stride, a multiple of 16 bytes.
+    pub _pad: [u32; 3],
 }
 
 impl HitPoint {
@@ -739,7 +746,7 @@ mod tests {
     #[test]
     fn layouts_are_whole_rows() {
         let sizes = [
-            ("HitPoint", size_of::<HitPoint>(), 96),
+            ("HitPoint", size_of::<HitPoint>(), 112),
             ("EmissionRegion", size_of::<EmissionRegion>(), 64),
             ("RecordedPath", size_of::<RecordedPath>(), 32),
             ("GuidedEmission", size_of::<GuidedEmission>(), 16),

@@ -131,14 +131,16 @@ fn gather_accumulate_main(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     accumulated[2u * slot + 1u] += vec4<f32>(weight, found.power_sq * shrink * shrink, 0.0, 0.0);
 }
 
-// Writes a slot's new statistics: only the fields an update changes (a whole slot is 24
+// Writes a slot's new statistics: only the fields an update changes (a whole slot is 28
 // word stores, which lavapipe makes one invocation at a time).
 fn store(slot: u32, hp: HitPoint, s: SlotState) {
-    if s.n != hp.n || s.r2 != hp.r2 || any(s.tau != hp.tau) || s.emitted != hp.emitted {
+    let changed = s.n != hp.n || s.r2 != hp.r2 || any(s.tau != hp.tau);
+    if changed || s.emitted != hp.emitted || s.discounted != hp.discounted {
         hit_points[slot].n = s.n;
         hit_points[slot].r2 = s.r2;
         hit_points[slot].tau = s.tau;
         hit_points[slot].emitted = s.emitted;
+        hit_points[slot].discounted = s.discounted;
     }
 }
 
@@ -170,7 +172,7 @@ fn gather_apply_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     if deferring {
         pending_before = pending[slot];
     }
-    let before = SlotState(hp.tau, hp.n, pending_before, hp.r2, hp.emitted, hp.flags, 0u);
+    let before = SlotState(hp.tau, hp.n, pending_before, hp.r2, hp.emitted, hp.flags, hp.discounted);
     let after = gather_rule(params, radii.x, reflectance, before, found);
     store(slot, hp, after);
     if deferring && any(after.pending != pending_before) {

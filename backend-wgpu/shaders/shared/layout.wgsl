@@ -42,6 +42,8 @@ struct HitPoint {
     flags: u32,
     eye_met: u32,
     correction_r2: f32,
+    discounted: f32,
+    _pad: array<u32, 3>,
 }
 
 struct Photon {

@@ -68,7 +68,7 @@ struct SlotState {
     r2: f32,
     emitted: f32,
     flags: u32,
-    _pad: u32,
+    discounted: f32,
 }
 
 struct Found {
@@ -153,6 +153,7 @@ fn gather_rule(p: GatherParams, r2_initial: f32, reflectance: vec3<f32>, slot: S
     s.n = after.n;
     s.r2 = after.r2;
     s.tau = after.tau;
+    s.discounted = min(s.discounted, s.n);
     s.emitted += p.emitted_increment;
     if kind == GATHER_REGION_NEGATIVE && m > 0.0 && after.n == 0.0 {
         s.emitted = 0.0;
@@ -169,9 +170,11 @@ fn apply_pending(p: GatherParams, r2_initial: f32, slot: SlotState) -> SlotState
     }
     if (p.kind & GATHER_ADD_FLUX) != 0u {
         let tau = max(s.tau + q.xyz, vec3<f32>(0.0));
-        let kept = history_kept(s.n, tau, q.w);
+        let worth = max(s.n - s.discounted, 0.0);
+        let kept = history_kept(worth, tau, q.w);
         s.tau = tau * kept;
         s.emitted *= kept;
+        s.discounted = s.n - worth * kept;
         return s;
     }
     let before = Statistics(s.n, s.r2, s.tau);
@@ -188,5 +191,6 @@ fn apply_pending(p: GatherParams, r2_initial: f32, slot: SlotState) -> SlotState
     s.n = after.n;
     s.r2 = after.r2;
     s.tau = after.tau;
+    s.discounted = min(s.discounted, s.n);
     return s;
 }

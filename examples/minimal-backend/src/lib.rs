@@ -227,7 +227,7 @@ impl GatherPass for MinimalBackend {
             }
             let before = SlotState::of(hp, *pending);
             let after = gather_rule(params, self.r2_initial, reflectance, before, &found);
-            (hp.n, hp.r2, hp.tau, hp.emitted) = (after.n, after.r2, after.tau, after.emitted);
+            after.store(hp);
             *pending = after.pending;
         }
         check_hit_points("gather", &self.hit_points)?;

@@ -27,8 +27,8 @@ pub struct SlotState {
     pub emitted: f32,
     /// The slot's [`hit_flags`].
     pub flags: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// The photons of `n` that corrections discounted ([`HitPoint::discounted`]).
+    pub discounted: f32,
 }
 
 impl SlotState {
@@ -41,8 +41,15 @@ impl SlotState {
             r2: hp.r2,
             emitted: hp.emitted,
             flags: hp.flags,
-            _pad: 0,
+            discounted: hp.discounted,
         }
+    }
+
+    /// Writes the statistics a gather may change back into slot `hp` (the pending sum lives
+    /// apart, in the backend's own buffer).
+    pub fn store(&self, hp: &mut HitPoint) {
+        (hp.n, hp.r2, hp.tau) = (self.n, self.r2, self.tau);
+        (hp.emitted, hp.discounted) = (self.emitted, self.discounted);
     }
 }
 
@@ -172,6 +179,8 @@ pub fn gather_rule(
         ppm_update(before, m, dtau, params.alpha)
     };
     (s.n, s.r2, s.tau) = (after.n, after.r2, after.tau);
+    // Photons a negative pass removed leave no discount behind them.
+    s.discounted = s.discounted.min(s.n);
     s.emitted += params.emitted_increment;
     if kind == gather_kind::REGION_NEGATIVE && m > 0.0 && after.n == 0.0 {
         // Emptied: its statistics start over, so does their normaliser; otherwise the
@@ -194,9 +203,12 @@ fn apply_pending(params: &GatherParams, r2_initial: f32, slot: SlotState) -> Slo
     }
     if params.kind & gather_kind::ADD_FLUX != 0 {
         let tau = [s.tau[0] + t0, s.tau[1] + t1, s.tau[2] + t2].map(|t| t.max(0.0));
-        let kept = history_kept(s.n, tau, m);
+        // What earlier corrections left of the history is what this one weighs against.
+        let worth = (s.n - s.discounted).max(0.0);
+        let kept = history_kept(worth, tau, m);
         s.tau = tau.map(|t| t * kept);
         s.emitted *= kept;
+        s.discounted = s.n - worth * kept;
         return s;
     }
     let before = Statistics {
@@ -217,6 +229,7 @@ fn apply_pending(params: &GatherParams, r2_initial: f32, slot: SlotState) -> Slo
         s.emitted = 0.0;
     }
     (s.n, s.r2, s.tau) = (after.n, after.r2, after.tau);
+    s.discounted = s.discounted.min(s.n);
     s
 }
 
@@ -253,7 +266,8 @@ impl GatherCase {
 
 /// Every gather kind with each of its flags, over slots that gather, that are only served,
 /// that are neither, that are empty, that a negative pass empties, that hold a pending sum
-/// of either sign or a correction's variance: the vectors a backend's twin of
+/// of either sign or a correction's variance, with and without an earlier correction's
+/// discount: the vectors a backend's twin of
 /// [`gather_rule`] must reproduce.
 pub fn test_cases() -> Vec<GatherCase> {
     use gather_kind::*;
@@ -315,6 +329,18 @@ pub fn test_cases() -> Vec<GatherCase> {
             1.0e6,
             [-2.5, 0.25, 0.1, 1.0e-3],
         ),
+        // The same correction after an earlier one discounted part of the history.
+        SlotState {
+            discounted: 300.0,
+            ..slot(
+                valid,
+                400.0,
+                0.01,
+                [2.0, 1.0, 0.5],
+                1.0e6,
+                [0.25, 0.25, 0.1, 1.0e-3],
+            )
+        },
     ];
     let finds = [
         Found::default(),
@@ -370,13 +396,14 @@ fn slot(flags: u32, n: f32, r2: f32, tau: [f32; 3], emitted: f32, pending: [f32;
         r2,
         emitted,
         flags,
-        _pad: 0,
+        discounted: 0.0,
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_relative_eq;
     use gather_kind::*;
 
     fn case(kind: u32, slot_index: usize) -> Vec<(GatherCase, SlotState)> {
@@ -391,7 +418,7 @@ mod tests {
 
     #[test]
     fn an_ordinary_pass_counts_its_photons_in_every_slot_and_gathers_in_the_visible_ones() {
-        for slot in 0..8 {
+        for slot in 0..9 {
             for (c, after) in case(ORDINARY, slot) {
                 assert_eq!(after.emitted, c.slot.emitted + 50_000.0);
                 let visible = c.slot.flags & hit_flags::VALID != 0;
@@ -457,5 +484,38 @@ mod tests {
             corrected.emitted < c.slot.emitted,
             "a noisy correction discounts history"
         );
+    }
+
+    /// Two corrections in a row leave the history what one correction of their summed
+    /// relative variance would: the second weighs against what the first kept, not against
+    /// the whole count, and the count, which sets how fast the radius shrinks, stays.
+    #[test]
+    fn successive_corrections_discount_the_history_once() {
+        let params = GatherParams {
+            alpha: 0.7,
+            emitted_increment: 0.0,
+            kind: REGION_APPLY | ADD_FLUX,
+            region_photons: 0.0,
+        };
+        // Luminance 2 over 400 photons; a variance of 0.01 is the history's own.
+        let start = slot(hit_flags::VALID, 400.0, 0.01, [2.0; 3], 1.0e6, [0.0; 4]);
+        let correct = |s: SlotState, relative: f32| {
+            let lum = luminance(s.tau);
+            let pending = [0.0, 0.0, 0.0, relative * lum * lum];
+            gather_rule(
+                &params,
+                0.04,
+                [0.0; 3],
+                SlotState { pending, ..s },
+                &Found::default(),
+            )
+        };
+        let twice = correct(correct(start, 0.0025), 0.0025);
+        let once = correct(start, 0.005);
+        assert_relative_eq!(once.emitted, 1.0e6 / 3.0, max_relative = 1e-5);
+        assert_relative_eq!(twice.emitted, once.emitted, max_relative = 1e-5);
+        assert_relative_eq!(twice.tau[0], once.tau[0], max_relative = 1e-5);
+        assert_eq!((twice.n, twice.r2), (start.n, start.r2));
+        assert_relative_eq!(twice.discounted, 400.0 * 2.0 / 3.0, max_relative = 1e-5);
     }
 }

@@ -125,7 +125,10 @@ pub fn luminance(c: [f32; 3]) -> f32 {
 /// the estimate and lets the photons that follow weigh what they are worth against it, so the
 /// correction's noise fades at the rate of a consistent estimator instead of freezing in
 /// statistics built from many more samples. No variance keeps everything; a correction that
-/// leaves no flux (or noise of any size against zero) keeps nothing.
+/// leaves no flux (or noise of any size against zero) keeps nothing. After an earlier
+/// correction `n` is what that one kept (`n - HitPoint::discounted`): two corrections then
+/// keep what one of their summed variance would, where weighing each against the whole
+/// count would discount the history again at every move of a drag.
 #[inline]
 pub fn history_kept(n: f32, tau: [f32; 3], variance: f32) -> f32 {
     // NaN counts as no variance, as in the WGSL twin.
