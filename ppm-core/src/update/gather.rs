@@ -267,8 +267,7 @@ impl GatherCase {
 /// Every gather kind with each of its flags, over slots that gather, that are only served,
 /// that are neither, that are empty, that a negative pass empties, that hold a pending sum
 /// of either sign or a correction's variance, with and without an earlier correction's
-/// discount: the vectors a backend's twin of
-/// [`gather_rule`] must reproduce.
+/// discount: the vectors a backend's twin of [`gather_rule`] must reproduce.
 pub fn test_cases() -> Vec<GatherCase> {
     use gather_kind::*;
     let kinds = [
