@@ -37,6 +37,7 @@ use ppm_core::passes::{
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
 use ppm_core::passes::{DynamicBackend, UpdateStats, check_gather_kind, crossed_mask_words};
+use ppm_core::update::luminance;
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 use trace::SceneData;
@@ -59,6 +60,9 @@ pub struct CpuBackend {
     photons: Vec<Photon>,
     /// Path weight per deposit, kept by region passes only.
     weights: Option<Vec<f32>>,
+    /// Squared luminance per deposit where a pass paired its deposits
+    /// ([`photon_flags::PAIR_DEPOSITS`]); otherwise each deposit's own, computed when filed.
+    squares: Option<Vec<f32>>,
     /// The last photon pass's `gather_r2_floor`.
     r2_floor: f32,
     /// The gather kind the last photon pass named (none since the scene was loaded or
@@ -161,6 +165,7 @@ impl SceneUpload for CpuBackend {
         self.photons.clear();
         self.last_pass_from = 0;
         self.weights = None;
+        self.squares = None;
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
         self.unconsumed = None;
@@ -207,10 +212,21 @@ impl CpuBackend {
         self.r2_floor = params.gather_r2_floor;
         if params.flags & photon_flags::ADD_TO_MAP != 0 {
             self.last_pass_from = self.photons.len();
+            if let Some(added) = deposits.squares {
+                let mut squares = self
+                    .squares
+                    .take()
+                    .unwrap_or_else(|| own_squares(&self.photons));
+                squares.extend(added);
+                self.squares = Some(squares);
+            } else if let Some(squares) = &mut self.squares {
+                squares.extend(own_squares(&deposits.photons));
+            }
             self.photons.extend(deposits.photons);
         } else {
             self.last_pass_from = 0;
             self.photons = deposits.photons;
+            self.squares = deposits.squares;
         }
         self.passes_stored += 1;
         let unweighted = deposits.weights.is_none();
@@ -300,7 +316,8 @@ impl PhotonPass for CpuBackend {
                         .map_or_else(Vec::new, |(_, r)| r.into_batches()),
                     false => Vec::new(),
                 };
-                photon_pass_main(params, scene, source, &self.crossed, spare)
+                let pose_a = &self.photons[self.last_pass_from..];
+                photon_pass_main(params, scene, source, &self.crossed, spare, pose_a)
             }
         };
         let paths = deposits.paths.take();
@@ -312,16 +329,22 @@ impl PhotonPass for CpuBackend {
     }
 }
 
+/// Each deposit's own squared power luminance (an unpaired deposit's variance).
+fn own_squares(photons: &[Photon]) -> Vec<f32> {
+    photons.iter().map(|p| luminance(p.power).powi(2)).collect()
+}
+
 /// The last photon pass's grid, built now if it is not yet.
 fn indexed<'a>(
     index: &'a mut PhotonIndex,
-    photons: &[Photon],
+    (photons, squares): (&[Photon], Option<&[f32]>),
     hit_points: &[HitPoint],
     r2_floor: f32,
     pass: &'static str,
 ) -> Result<&'a PhotonGrid, BackendError> {
     if let PhotonIndex::Pending = index {
-        *index = PhotonIndex::Indexed(build_photon_grid(photons, hit_points, r2_floor));
+        let grid = build_photon_grid(photons, squares, hit_points, r2_floor);
+        *index = PhotonIndex::Indexed(grid);
     }
     match index {
         PhotonIndex::Indexed(grid) => Ok(grid),
@@ -384,7 +407,7 @@ impl DynamicBackend for CpuBackend {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         let grid = indexed(
             &mut self.grid,
-            &self.photons,
+            (&self.photons, self.squares.as_deref()),
             &self.hit_points,
             self.r2_floor,
             "landing paths",
@@ -417,7 +440,7 @@ impl GatherPass for CpuBackend {
         self.unconsumed = None;
         let grid = indexed(
             &mut self.grid,
-            &self.photons,
+            (&self.photons, self.squares.as_deref()),
             &self.hit_points,
             self.r2_floor,
             "gather",

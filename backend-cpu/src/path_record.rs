@@ -206,6 +206,7 @@ impl PathRecord {
         Deposits {
             photons,
             weights: None,
+            squares: None,
             stats,
             paths: None,
         }

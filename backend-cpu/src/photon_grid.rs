@@ -8,6 +8,7 @@ use ppm_core::geometry::oct_unfold;
 use ppm_core::grid::{RADIUS_BINS, bucket_count, cell_key, cell_of, cell_size, radius_bin};
 use ppm_core::layout::{GridParams, HitPoint, Photon};
 use ppm_core::update::gather::search_r2;
+use ppm_core::update::luminance;
 use rayon::prelude::*;
 
 /// Cells are this many times as wide as [`ppm_core::grid`]'s. A gather looks each cell up once
@@ -38,6 +39,9 @@ pub struct CellPhoton {
     pub facing: Vec3,
     /// Power carried.
     pub power: Vec3,
+    /// The squared luminance it adds to a correction's variance: its power's, or what its
+    /// pass paired it to ([`ppm_core::update::pairing`]).
+    pub square: f32,
 }
 
 /// Photons filed by bucket.
@@ -53,9 +57,14 @@ pub struct PhotonGrid {
     pub order: Vec<u32>,
 }
 
-/// Builds the grid over `photons` for the gather radii of `hit_points`' visible points (at
-/// least `sqrt(r2_floor)`).
-pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint], r2_floor: f32) -> PhotonGrid {
+/// Builds the grid over `photons` (with their `squares` where a pass paired them) for the
+/// gather radii of `hit_points`' visible points (at least `sqrt(r2_floor)`).
+pub fn build_photon_grid(
+    photons: &[Photon],
+    squares: Option<&[f32]>,
+    hit_points: &[HitPoint],
+    r2_floor: f32,
+) -> PhotonGrid {
     let histogram = hit_points
         .par_iter()
         .filter(|h| h.is_valid())
@@ -111,6 +120,7 @@ pub fn build_photon_grid(photons: &[Photon], hit_points: &[HitPoint], r2_floor: 
                 cell: keys[i as usize],
                 facing: oct_unfold(p.normal_oct),
                 power: Vec3::from(p.power),
+                square: squares.map_or_else(|| luminance(p.power).powi(2), |s| s[i as usize]),
             }
         })
         .collect();

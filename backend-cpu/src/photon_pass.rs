@@ -10,6 +10,7 @@ use ppm_core::geometry::oct_encode;
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, photon_flags};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::StreamKey;
+use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, paired_square};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -26,6 +27,9 @@ pub struct Deposits {
     pub photons: Vec<Photon>,
     /// Per deposit, its path's weight relative to an ordinary photon (region passes only).
     pub weights: Option<Vec<f32>>,
+    /// Per deposit, the squared luminance it adds to a correction's variance, paired with
+    /// pose A's deposits ([`photon_flags::PAIR_DEPOSITS`] in pose B only).
+    pub squares: Option<Vec<f32>>,
     /// Counters.
     pub stats: PhotonStats,
     /// The paths' segments, where the pass keeps them ([`PathRecord::wanted`]).
@@ -38,13 +42,16 @@ pub struct Deposits {
 /// `crossed` is the crossed-path mask that [`photon_flags::RECORD_CROSSED`] writes and
 /// [`photon_flags::CULL_UNCROSSED`] reads; it must hold the bits a recording pass writes. An
 /// ordinary pass that asks ([`PathRecord::wanted`]) also returns its paths' record, written
-/// into the memory of `spare` (an earlier record's batches) where there is some.
+/// into the memory of `spare` (an earlier record's batches) where there is some. A pose-B pass
+/// that pairs its deposits ([`photon_flags::PAIR_DEPOSITS`]) pairs them with `pose_a`, the
+/// pose-A pass's deposits in path order.
 pub fn photon_pass_main(
     params: &PhotonPassParams,
     scene: &SceneData,
     source: &PhotonSource<'_>,
     crossed: &[AtomicU32],
     spare: Vec<BatchRecord>,
+    pose_a: &[Photon],
 ) -> Deposits {
     // No light, no photon: the pass emits its count and deposits nothing.
     let chunks = if scene.lights.is_empty() {
@@ -55,6 +62,7 @@ pub fn photon_pass_main(
     let record_crossed = params.flags & photon_flags::RECORD_CROSSED != 0;
     let cull = params.flags & photon_flags::CULL_UNCROSSED != 0;
     let keep_paths = PathRecord::wanted(params, source);
+    let pairs = params.flags & photon_flags::PAIR_DEPOSITS != 0;
     let mut spare: Vec<Option<BatchRecord>> = spare.into_iter().map(Some).collect();
     spare.resize_with(chunks as usize, || None);
     let traced: Vec<Traced> = (0..chunks)
@@ -62,6 +70,7 @@ pub fn photon_pass_main(
         .zip(spare)
         .map(|(c, spare)| {
             let (mut deposits, mut weights, mut rays, mut culled) = (Vec::new(), Vec::new(), 0, 0);
+            let mut squares = Vec::new();
             let mut record = keep_paths.then(|| spare.unwrap_or_default().recycled(c * CHUNK));
             let end = ((c + 1) * CHUNK).min(params.photon_count);
             for local in c * CHUNK..end {
@@ -95,10 +104,19 @@ pub fn photon_pass_main(
                 if source.keeps_weights() {
                     weights.resize(weights.len() + deposits.len() - before, emission.weight);
                 }
+                if pairs {
+                    let partners = of_path(pose_a, path);
+                    squares.extend(deposits[before..].iter().enumerate().map(|(rank, d)| {
+                        let partner = partners.get(rank).filter(|_| rank < PAIRED_DEPOSITS);
+                        let partner = partner.map(Partner::of);
+                        paired_square(d, partner.as_ref(), params.gather_r2_floor)
+                    }));
+                }
             }
             Traced {
                 deposits,
                 weights,
+                squares,
                 rays,
                 culled,
                 record,
@@ -109,10 +127,12 @@ pub fn photon_pass_main(
     let culled = traced.iter().map(|t| t.culled).sum();
     let mut photons = Vec::new();
     let mut weights = Vec::new();
+    let mut squares = Vec::new();
     let mut records = Vec::new();
     for t in traced {
         photons.extend(t.deposits);
         weights.extend(t.weights);
+        squares.extend(t.squares);
         records.extend(t.record);
     }
     let paths = keep_paths.then(|| PathRecord::new(params, records));
@@ -125,6 +145,7 @@ pub fn photon_pass_main(
     Deposits {
         photons,
         weights: source.keeps_weights().then_some(weights),
+        squares: pairs.then_some(squares),
         stats,
         paths,
     }
@@ -134,9 +155,17 @@ pub fn photon_pass_main(
 struct Traced {
     deposits: Vec<Photon>,
     weights: Vec<f32>,
+    squares: Vec<f32>,
     rays: u64,
     culled: u64,
     record: Option<BatchRecord>,
+}
+
+/// Path `path`'s deposits among `deposits` (in path order).
+fn of_path(deposits: &[Photon], path: u32) -> &[Photon] {
+    let start = deposits.partition_point(|d| d.path < path);
+    let end = start + deposits[start..].partition_point(|d| d.path == path);
+    &deposits[start..end]
 }
 
 /// Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),

@@ -29,7 +29,6 @@ use glam::Vec3;
 use ppm_core::grid::{cell_key, cell_range, cells_in, scan_instead};
 use ppm_core::layout::HitPoint;
 use ppm_core::update::gather::search_r2;
-use ppm_core::update::luminance;
 
 /// Slots searched together: consecutive pixels of a row.
 pub const RUN: usize = 8;
@@ -53,8 +52,9 @@ pub struct Found {
     pub weight: f32,
     /// Their summed power.
     pub flux: Vec3,
-    /// Their summed squared power luminance, where the search was asked for it (the
-    /// variance of a local move's correction); zero otherwise.
+    /// Their summed squared power luminance ([`CellPhoton::square`], paired where their
+    /// passes paired them), where the search was asked for it (the variance of a local move's
+    /// correction); zero otherwise.
     pub power_sq: f32,
 }
 
@@ -229,11 +229,7 @@ impl Lanes {
         let grid = map.grid;
         for_cells_in(range, grid, |_, photons, key| {
             for p in photons.iter().filter(|p| p.cell == key) {
-                let squared = if SQUARES {
-                    luminance(p.power.into()).powi(2)
-                } else {
-                    0.0
-                };
+                let squared = if SQUARES { p.square } else { 0.0 };
                 for l in 0..RUN {
                     let (dx, dy, dz) = (
                         p.position.x - self.x[l],
@@ -270,7 +266,7 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
         found.count += 1;
         found.weight += map.weights.map_or(1.0, |w| w[i]);
         found.flux += p.power;
-        found.power_sq += luminance(p.power.into()).powi(2);
+        found.power_sq += p.square;
     });
     found
 }
@@ -409,7 +405,7 @@ mod tests {
                 hp.correction_r2 = 0.04 * scale * scale;
             }
             let r2_floor = floor * scale * scale;
-            let grid = build_photon_grid(&photons, &hit_points, r2_floor);
+            let grid = build_photon_grid(&photons, None, &hit_points, r2_floor);
             let map = PhotonMap {
                 grid: &grid,
                 weights: None,
@@ -456,7 +452,7 @@ mod tests {
             ];
         }
         for (hit_points, floor) in [(&scattered, 0.0), (&rows, 0.0), (&rows, 1e-4)] {
-            let grid = build_photon_grid(&photons, hit_points, floor);
+            let grid = build_photon_grid(&photons, None, hit_points, floor);
             let map = PhotonMap {
                 grid: &grid,
                 weights: None,

@@ -40,8 +40,9 @@ use ppm_core::compile::{CompiledScene, SceneFeatures};
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
-    ResolveParams, SlotBounds, emission_kind, eye_flags, gather_kind, photon_flags,
+    ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, PathDeposits, Photon,
+    PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags, gather_kind,
+    photon_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, DynamicBackend, EyePass, EyeStats, GatherPass,
@@ -53,8 +54,8 @@ use scan::Scan;
 pub use specialise::Specialisation;
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
-/// and their paths' weights, allocated when a region pass first needs them (other passes
-/// bind `WgpuBackend::no_weights`).
+/// and their paths' weights (or paired squares), allocated when a region pass (or a pairing
+/// pose B) first needs them (other passes bind `WgpuBackend::no_weights`).
 struct DepositBuffers {
     photons: wgpu::Buffer,
     ranks: wgpu::Buffer,
@@ -141,6 +142,10 @@ pub struct WgpuBackend {
     /// The crossed-path mask (`crossed` in photon_pass.wgsl): one bit per path of the passes
     /// that record it, kept across scene updates so that pose B reads what pose A wrote.
     crossed: wgpu::Buffer,
+    /// Pose A's first deposits of each path of a pairing correction (`partners` in
+    /// photon_pass.wgsl, [`PathDeposits`] at the path's bit of the mask), kept across scene
+    /// updates like the mask.
+    partners: wgpu::Buffer,
     /// Whether each submission's wall time goes to stderr (`PPM_WGPU_TIMING=1`).
     timing: bool,
     /// The loaded scene's features, which specialise the eye and photon pipelines.
@@ -173,6 +178,7 @@ impl WgpuBackend {
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
         let crossed = buffers::storage_init(&ctx, "crossed", &[u32::MAX; 4]);
+        let partners = buffers::storage_init(&ctx, "partners", &[PathDeposits::default()]);
         let placeholder = buffers::storage_init(&ctx, "pending placeholder", &[0.0f32; 4]);
         let no_weights = buffers::storage_init(&ctx, "weights placeholder", &[0.0f32; 4]);
         Ok(Self {
@@ -198,6 +204,7 @@ impl WgpuBackend {
             last_pass_paths: 0,
             photon_buffer_limit: u64::MAX,
             crossed,
+            partners,
             timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
             features: None,
             general: false,
@@ -524,6 +531,25 @@ impl WgpuBackend {
         Ok(())
     }
 
+    /// Grows the record of pose A's deposits to hold those of the paths a pairing pass
+    /// records ([`photon_flags::RECORD_DEPOSITS`]), zeroed (a zero record pairs nothing).
+    fn fit_partners(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
+        if params.flags & photon_flags::RECORD_DEPOSITS == 0 {
+            return Ok(());
+        }
+        let bytes = crossed_mask_words(params)? * 32 * size_of::<PathDeposits>() as u64;
+        if bytes > self.ctx.binding_limit() {
+            return Err(BackendError::Limit(format!(
+                "pose A's paired deposits: {bytes} bytes exceed the device's binding limit of {}",
+                self.ctx.binding_limit()
+            )));
+        }
+        if self.partners.size() < bytes {
+            self.partners = storage_zeroed(&self.ctx, "partners", bytes)?;
+        }
+        Ok(())
+    }
+
     /// Traces a pass whose photons start as `source` says, in as few batches as the device's
     /// binding limit allows (one, unless the deposits would not fit one buffer), and
     /// accumulates each batch into the accumulators of the slots that gather the kind the
@@ -534,6 +560,7 @@ impl WgpuBackend {
         source: &PhotonSource<'_>,
     ) -> Result<PhotonStats, BackendError> {
         self.fit_crossed_mask(params)?;
+        self.fit_partners(params)?;
         let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
         let max_deposits = (limit / size_of::<Photon>() as u64).clamp(1, u64::from(u32::MAX));
         // A deposit's rank, (path - first_path) * max_depth + bounce, must fit 32 bits.
@@ -548,9 +575,15 @@ impl WgpuBackend {
         let emitter = source.emitter();
         let emission = emitter.kind;
         let weighted = source.keeps_weights();
-        // Only local mode's correction passes test the movers' boxes.
-        let movers =
-            params.flags & (photon_flags::CHANGED_ONLY | photon_flags::RECORD_CROSSED) != 0;
+        // A pairing pose B writes each deposit's paired square where weights would go.
+        let squared = params.flags & photon_flags::PAIR_DEPOSITS != 0;
+        // Only local mode's correction passes test the movers' boxes (and pair deposits).
+        let movers = params.flags
+            & (photon_flags::CHANGED_ONLY
+                | photon_flags::RECORD_CROSSED
+                | photon_flags::RECORD_DEPOSITS
+                | photon_flags::PAIR_DEPOSITS)
+            != 0;
         let spec = self.specialisation(movers);
         let emitter = buffers::uniform(&self.ctx, "emitter", &emitter);
         let recorded = buffers::storage_init(&self.ctx, "recorded", source.paths());
@@ -584,7 +617,7 @@ impl WgpuBackend {
             };
             let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
             let capacity = expected.min(max_deposits as f64) as u32;
-            self.deposit_buffers(capacity, weighted)?;
+            self.deposit_buffers(capacity, weighted || squared)?;
             self.grid_buffers = Some(GridBuffers::fit(
                 &self.ctx,
                 self.grid_buffers.take(),
@@ -602,6 +635,7 @@ impl WgpuBackend {
                 recorded: &recorded,
                 weights,
                 crossed: &self.crossed,
+                partners: &self.partners,
             };
             let traced = if lit {
                 self.run("photon trace", |encoder| {
@@ -660,7 +694,7 @@ impl WgpuBackend {
                     (hit_points, slots.count),
                     params.gather_r2_floor,
                 )?;
-                let stage = GatherStage::Accumulate { weighted };
+                let stage = GatherStage::Accumulate { weighted, squared };
                 self.kernels
                     .gather
                     .record(&self.ctx, encoder, &gather, &built, &slots, stage);

@@ -183,6 +183,8 @@ pub struct PhotonTargets<'a> {
     pub weights: &'a wgpu::Buffer,
     /// The crossed-path mask (local mode's difference passes).
     pub crossed: &'a wgpu::Buffer,
+    /// Pose A's first deposits per path (a local correction's pairing).
+    pub partners: &'a wgpu::Buffer,
 }
 
 impl PhotonPassKernel {
@@ -203,7 +205,7 @@ impl PhotonPassKernel {
         self.trace[emission as usize][spec.index()].get_or_init(|| {
             let slots = [
                 Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite,
-                ReadWrite, Read,
+                ReadWrite, Read, ReadWrite,
             ];
             let mut constants = spec.constants();
             constants.push(("EMISSION", f64::from(emission)));
@@ -246,16 +248,17 @@ impl PhotonPassKernel {
                 targets.weights,
                 targets.crossed,
                 &scene.texels,
+                targets.partners,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);
     }
 }
 
-/// gather_pass.wgsl: accumulate (once per photon batch; weighted or not), then apply (once
-/// per pass).
+/// gather_pass.wgsl: accumulate (once per photon batch; plain, weighted or squared), then
+/// apply (once per pass).
 pub struct GatherKernel {
-    accumulate: [Kernel; 2],
+    accumulate: [Kernel; 3],
     apply: Kernel,
 }
 
@@ -279,10 +282,12 @@ pub struct GatherInputs<'a> {
 pub enum GatherStage {
     /// Inside the photon pass: one batch's photons into the accumulators of the slots that
     /// gather the named kind; `weighted` when the deposits carry path weights (a region
-    /// source's).
+    /// source's), `squared` when they carry paired squares (a pairing pose B's).
     Accumulate {
         /// Whether the deposits carry path weights.
         weighted: bool,
+        /// Whether they carry paired squares.
+        squared: bool,
     },
     /// The gather pass: each slot's update from its accumulator, by the gather rule.
     Apply,
@@ -297,16 +302,21 @@ impl GatherKernel {
             ReadWrite, Uniform,
         ];
         Self {
-            accumulate: [false, true].map(|weighted| {
-                Kernel::specialised(
-                    &ctx.device,
-                    &module,
-                    "gather_accumulate_main",
-                    &slots,
-                    WORKGROUP,
-                    &[("WEIGHTED", f64::from(u8::from(weighted)))],
-                )
-            }),
+            accumulate: [(false, false), (true, false), (false, true)].map(
+                |(weighted, squared)| {
+                    Kernel::specialised(
+                        &ctx.device,
+                        &module,
+                        "gather_accumulate_main",
+                        &slots,
+                        WORKGROUP,
+                        &[
+                            ("WEIGHTED", f64::from(u8::from(weighted))),
+                            ("SQUARED", f64::from(u8::from(squared))),
+                        ],
+                    )
+                },
+            ),
             apply: Kernel::new(&ctx.device, &module, "gather_apply_main", &slots, WORKGROUP),
         }
     }
@@ -323,7 +333,9 @@ impl GatherKernel {
     ) {
         let kernel = match stage {
             GatherStage::Apply => &self.apply,
-            GatherStage::Accumulate { weighted } => &self.accumulate[usize::from(weighted)],
+            GatherStage::Accumulate { weighted, squared } => {
+                &self.accumulate[usize::from(weighted) + 2 * usize::from(squared)]
+            }
         };
         let params = uniform(ctx, "gather params", inputs.params);
         let group = kernel.bind(

@@ -5,6 +5,7 @@ use naga::proc::Layouter;
 use ppm_core::bsdf::{BsdfCase, BsdfOutcome, Transport};
 use ppm_core::layout::*;
 use ppm_core::update::gather::{Found, GatherCase, SlotState};
+use ppm_core::update::pairing::{PAIR_RADIUS, PAIRED_DEPOSITS};
 use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
@@ -258,6 +259,10 @@ fn pass_parameters_match_their_wgsl_twins() {
         power,
         normal_oct
     });
+    same_layout!(PathDeposits {
+        deposits,
+        normal_oct
+    });
     same_layout!(ResolveParams {
         width,
         height,
@@ -334,6 +339,17 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
     });
 }
 
+/// The radius within which pose B pairs a deposit with pose A's is ppm-core's in WGSL too.
+#[test]
+fn the_pairing_radius_agrees() {
+    let line = LAYOUT_WGSL
+        .lines()
+        .find(|l| l.starts_with("const PAIR_RADIUS: f32 = "))
+        .expect("layout.wgsl declares PAIR_RADIUS");
+    let literal = line.rsplit("= ").next().unwrap().trim_end_matches(';');
+    assert_eq!(literal.parse::<f32>().unwrap(), PAIR_RADIUS);
+}
+
 /// The WGSL constants that mirror Rust constants carry the same values.
 #[test]
 fn shared_constants_agree() {
@@ -363,6 +379,9 @@ fn shared_constants_agree() {
         ("PHOTON_CHANGED_ONLY", photon_flags::CHANGED_ONLY),
         ("PHOTON_RECORD_CROSSED", photon_flags::RECORD_CROSSED),
         ("PHOTON_CULL_UNCROSSED", photon_flags::CULL_UNCROSSED),
+        ("PHOTON_RECORD_DEPOSITS", photon_flags::RECORD_DEPOSITS),
+        ("PHOTON_PAIR_DEPOSITS", photon_flags::PAIR_DEPOSITS),
+        ("PAIRED_DEPOSITS", PAIRED_DEPOSITS as u32),
         ("NO_MATERIAL", NO_MATERIAL),
         ("FIRST_HIT_SKIP", first_hit::SKIP),
         ("FIRST_HIT_DEPOSIT", first_hit::DEPOSIT),

@@ -5,6 +5,7 @@
 //! grouped as `vec3<f32>` + one scalar so that every struct is a multiple of 16 bytes and matches
 //! WGSL's std430-like alignment rules without hidden padding.
 
+use crate::update::pairing::PAIRED_DEPOSITS;
 use bytemuck::{Pod, Zeroable};
 
 /// Material kinds, stored in [`GpuMaterial::kind`].
@@ -551,6 +552,17 @@ pub mod photon_flags {
     /// searches pose A's negative and pose B's positive photons at once instead of twice). A
     /// scene update between the two keeps the first one's photons for this.
     pub const ADD_TO_MAP: u32 = 16;
+    /// Keep each path's first [`PAIRED_DEPOSITS`](crate::update::pairing::PAIRED_DEPOSITS)
+    /// stored deposits ([`PathDeposits`](super::PathDeposits), at the path's bit of the mask)
+    /// for a [`PAIR_DEPOSITS`] pass to pair with (a local move's pose-A correction). A backend
+    /// that still holds this pass's deposits when the pairing pass runs may read them there.
+    pub const RECORD_DEPOSITS: u32 = 32;
+    /// Give each deposit the square [`paired_square`](crate::update::pairing::paired_square)
+    /// makes with the deposit of the same path stored in the same order by the
+    /// [`RECORD_DEPOSITS`] pass just before (pose A's), which the gather then sums in place of
+    /// the deposit's own square: the correction's variance counts each path's net deposit
+    /// ([`crate::update::pairing`]; a local move's pose-B correction).
+    pub const PAIR_DEPOSITS: u32 = 64;
 }
 
 /// Which photons a gather folds in, who gathers them, and with which update
@@ -720,6 +732,19 @@ pub struct GridPhoton {
     pub power: [f32; 3],
     /// Octahedral encoding of the surface normal on the side the photon arrived from.
     pub normal_oct: u32,
+}
+
+/// Pose A's first stored deposits of one path of a local move's correction, which pose B's
+/// pass pairs its own with ([`crate::update::pairing`]): per deposit its position and power
+/// luminance, then their packed normals. 80 bytes; a deposit of luminance zero stands for
+/// none, so a fresh (zeroed) record pairs nothing.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathDeposits {
+    /// Per stored deposit, in order: position and luminance.
+    pub deposits: [[f32; 4]; PAIRED_DEPOSITS],
+    /// Their octahedral normals ([`Photon::normal_oct`]).
+    pub normal_oct: [u32; PAIRED_DEPOSITS],
 }
 
 /// Parameters of the resolve pass. 16 bytes.

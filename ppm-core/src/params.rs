@@ -271,6 +271,9 @@ pub struct MoveParams {
     /// Local mode: skip in pose B the difference paths that crossed no mover's box in pose A,
     /// which would store nothing; off only to check that culling changes no statistic.
     pub cull_uncrossed: bool,
+    /// Local mode: count each correction path's net deposit in the correction's variance
+    /// ([`crate::update::pairing`]); off only to measure what that buys.
+    pub pair_deposits: bool,
 }
 
 /// Iterations of history one pass of a local move's correction is worth
@@ -364,6 +367,7 @@ impl Default for MoveParams {
             correction_passes: 8,
             correction_radii: 3.0,
             cull_uncrossed: true,
+            pair_deposits: true,
         }
     }
 }

@@ -10,7 +10,7 @@ use ppm_core::compile::{camera_ray, compile_scene};
 use ppm_core::layout::{EyePassParams, GpuBounds};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
-use ppm_core::scene::Scene;
+use ppm_core::scene::{Material, MaterialKind, Move, Object, Scene};
 
 /// The backends a cross-backend test runs on, by name: each one [`Registry::in_tree`]
 /// registers that starts here, so a backend registered there joins every test that calls
@@ -137,4 +137,34 @@ pub fn load_furnace(backend: &mut dyn Backend, movers: &[GpuBounds]) {
             ..Default::default()
         })
         .unwrap();
+}
+
+/// The furnace with a grey mover made of two tiny triangles at the corners `lo` and `hi` of the
+/// box it should have, moved by `shift` in frame 1: a path crosses its box far more often than
+/// it meets it.
+pub fn furnace_with_mover(lo: Vec3, hi: Vec3, shift: Vec3) -> Scene {
+    let mut scene = scenes::analytic::furnace(Vec3::splat(0.5), 1.0);
+    let e = 0.01;
+    scene.materials.push(Material {
+        name: "grey".into(),
+        kind: MaterialKind::Diffuse {
+            albedo: Vec3::splat(0.5),
+        },
+        texture: None,
+    });
+    scene.objects.push(Object {
+        name: "mover".into(),
+        material: scene.materials.len() - 1,
+        triangles: vec![
+            [lo, lo + Vec3::X * e, lo + Vec3::Y * e],
+            [hi, hi - Vec3::Z * e, hi - Vec3::Y * e],
+        ],
+        uvs: Vec::new(),
+    });
+    scene.moves.push(Move {
+        object: scene.objects.len() - 1,
+        translation: shift,
+        rotation: glam::Quat::IDENTITY,
+    });
+    scene
 }

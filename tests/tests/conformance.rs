@@ -53,6 +53,10 @@ enum Fault {
     /// A pass asked to add its photons to the last pass's replaces them
     /// ([`photon_flags::ADD_TO_MAP`] ignored): a local correction keeps pose B's photons only.
     IgnoresAddToMap,
+    /// A correction's pose B counts each deposit's own square
+    /// ([`photon_flags::PAIR_DEPOSITS`] ignored): kept slots give up history a move did not
+    /// change.
+    IgnoresPairing,
 }
 
 struct Broken(CpuBackend, Fault);
@@ -67,6 +71,10 @@ impl Broken {
             },
             Fault::IgnoresAddToMap => PhotonPassParams {
                 flags: p.flags & !photon_flags::ADD_TO_MAP,
+                ..*p
+            },
+            Fault::IgnoresPairing => PhotonPassParams {
+                flags: p.flags & !photon_flags::PAIR_DEPOSITS,
                 ..*p
             },
             Fault::DropsOneInTen { .. }
@@ -397,6 +405,13 @@ fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves(
 #[test]
 fn conformance_fails_a_backend_that_ignores_add_to_map() {
     fails_on_moves_only(Fault::IgnoresAddToMap, "local apply");
+}
+
+/// A backend that ignores [`photon_flags::PAIR_DEPOSITS`] fails where local mode's correction
+/// is applied: its variance, and so the history a kept slot keeps, is not the contract's.
+#[test]
+fn conformance_fails_a_backend_that_ignores_pairing() {
+    fails_on_moves_only(Fault::IgnoresPairing, "local apply");
 }
 
 /// A backend without dynamic passes passes the static tier, fails the dynamic tier on

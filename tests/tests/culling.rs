@@ -4,8 +4,9 @@
 //! statistic, and both backends cull the same paths. The moves run through the driver.
 //!
 //! The scene is the furnace, a closed cube, with a grey mover made of two tiny triangles at
-//! opposite corners of the box it should have: no photon leaves the cube, so a box outside it
-//! is crossed by no path, and a box around it by every path.
+//! opposite corners of the box it should have ([`tests::furnace_with_mover`]): no photon
+//! leaves the cube, so a box outside it is crossed by no path, and a box around it by every
+//! path.
 
 use glam::Vec3;
 use harness::driver::{MoveReport, Renderer};
@@ -14,37 +15,10 @@ use ppm_core::layout::{GpuBounds, HitPoint, PhotonPassParams, photon_flags};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::rng::DIFFERENCE_PASS_BASE;
-use ppm_core::scene::{Material, MaterialKind, Move, Object, Scene};
+use ppm_core::scene::Scene;
+use tests::furnace_with_mover;
 
 const PHOTONS: u32 = 20_000;
-
-/// The furnace with a grey mover whose box runs from `lo` to `hi`, moved by `shift` in frame 1.
-fn furnace_with_mover(lo: Vec3, hi: Vec3, shift: Vec3) -> Scene {
-    let mut scene = scenes::analytic::furnace(Vec3::splat(0.5), 1.0);
-    let e = 0.01;
-    scene.materials.push(Material {
-        name: "grey".into(),
-        kind: MaterialKind::Diffuse {
-            albedo: Vec3::splat(0.5),
-        },
-        texture: None,
-    });
-    scene.objects.push(Object {
-        name: "mover".into(),
-        material: scene.materials.len() - 1,
-        triangles: vec![
-            [lo, lo + Vec3::X * e, lo + Vec3::Y * e],
-            [hi, hi - Vec3::Z * e, hi - Vec3::Y * e],
-        ],
-        uvs: Vec::new(),
-    });
-    scene.moves.push(Move {
-        object: scene.objects.len() - 1,
-        translation: shift,
-        rotation: glam::Quat::IDENTITY,
-    });
-    scene
-}
 
 /// A local move after two iterations, culling or not: its report, the photon rays traced in
 /// all, and the slots before and after it.

@@ -18,6 +18,7 @@
 // Per hit point, two rows: (power, count) and (weight sum, squared power luminance, 0, 0).
 @group(0) @binding(7) var<storage, read_write> accumulated: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
+// Per deposit: its path weight (region passes), or its paired square (a pairing pose B).
 @group(0) @binding(9) var<storage, read> weights: array<f32>;
 // Per hit point: deferred region flux (times BRDF and scale) and signed count.
 @group(0) @binding(10) var<storage, read_write> pending: array<vec4<f32>>;
@@ -27,6 +28,10 @@
 // Whether deposits carry path weights (region passes): one accumulate pipeline each way, so
 // other passes skip the extra reads.
 override WEIGHTED: bool = false;
+
+// Whether deposits carry the squares their pass paired them to (a local correction's pose B,
+// PHOTON_PAIR_DEPOSITS) in place of their own.
+override SQUARED: bool = false;
 
 fn sorted_photon(k: u32) -> GridPhoton {
     let a = textureLoad(sorted_table, table_texel(2u * k));
@@ -55,8 +60,12 @@ fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: 
             (*found).weight += weights[order[k]];
         }
         (*found).flux += p.power;
-        let lum = luminance(p.power);
-        (*found).power_sq += lum * lum;
+        if SQUARED {
+            (*found).power_sq += weights[order[k]];
+        } else {
+            let lum = luminance(p.power);
+            (*found).power_sq += lum * lum;
+        }
     }
 }
 

@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures
+// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures update
 // Photon pass (docs/algorithm.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -12,6 +12,9 @@
 // Local mode's difference passes keep one bit per path in `crossed`: pose A records whether
 // each path crossed a mover's box (atomicOr/atomicAnd, so each path writes only its own bit
 // whatever the order), and pose B skips the paths that did not, which would store nothing.
+// Pairing their deposits, pose A (PHOTON_RECORD_DEPOSITS) writes each path's first stored
+// deposits into `partners` at the path's bit, and pose B (PHOTON_PAIR_DEPOSITS) writes each
+// deposit's paired square (update.wgsl's paired_square) where region passes write weights.
 
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
@@ -24,6 +27,7 @@
 @group(0) @binding(8) var<storage, read_write> weights: array<f32>;
 @group(0) @binding(9) var<storage, read_write> crossed: array<atomic<u32>>;
 @group(0) @binding(10) var<storage, read> scene_texels: array<vec2<u32>>;
+@group(0) @binding(11) var<storage, read_write> partners: array<PathDeposits>;
 
 // The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
 // carry no region or guided code.
@@ -69,11 +73,12 @@ fn pass_kind() -> u32 {
     }
 }
 
-// What a path did: rays traced, and whether it crossed a mover's box (always true when no
-// flag asks).
+// What a path did: rays traced, whether it crossed a mover's box (always true when no flag
+// asks), and its first stored deposits (pose A of a pairing pass).
 struct Traced {
     rays: u32,
     crossed: bool,
+    stored: PathDeposits,
 }
 
 // Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),
@@ -100,10 +105,21 @@ fn set_mask_bit(bit: u32, value: bool) {
 // Traces path `path`, appending its deposits.
 fn trace_photon(path: u32) -> Traced {
     let key = StreamKey(params.seed, pass_kind(), params.pass_index, path);
+    var stored: PathDeposits;
     let emission = emit(key);
     if emission.weight <= 0.0 {
-        return Traced(0u, false);
+        return Traced(0u, false, stored);
     }
+    // Pairing is a local correction's, whose passes test the movers' boxes.
+    let records_pairs = MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u;
+    let squares = MOVERS && (params.flags & PHOTON_PAIR_DEPOSITS) != 0u;
+    // Pose A's deposits of this path (a fresh record pairs nothing), and which of its stored
+    // deposits comes next.
+    var pose_a: PathDeposits;
+    if squares && params.mask_offset + path < arrayLength(&partners) {
+        pose_a = partners[params.mask_offset + path];
+    }
+    var nth = 0u;
     var dir = emission.direction;
     var origin = emission.origin + emission.normal * params.ray_epsilon;
     var power = emission.power * params.power_scale;
@@ -132,16 +148,26 @@ fn trace_photon(path: u32) -> Traced {
         let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
         let stores = !SPECULAR || bsdf_holds_visible_points(material);
         if stores && (stores_all || crossed_box) && (bounce > 0u || params.first_hit == FIRST_HIT_DEPOSIT) {
+            // What reaches the base of a coated surface (ppm_core::bsdf::arrival).
+            let deposit = power * bsdf_arrival(material, -dot(dir, facing));
+            let normal_oct = oct_encode(facing);
             let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
             if slot < arrayLength(&photons) {
-                // What reaches the base of a coated surface (ppm_core::bsdf::arrival).
-                let arrived = bsdf_arrival(material, -dot(dir, facing));
-                photons[slot] = Photon(position, path, power * arrived, oct_encode(facing));
+                photons[slot] = Photon(position, path, deposit, normal_oct);
                 ranks[slot] = rank_base + bounce;
                 if EMISSION == EMISSION_REGION {
                     weights[slot] = emission.weight;
                 }
+                if squares {
+                    let r2 = params.gather_r2_floor;
+                    weights[slot] = paired_square(deposit, position, normal_oct, pose_a, nth, r2);
+                }
             }
+            if records_pairs && nth < PAIRED_DEPOSITS {
+                stored.deposits[nth] = vec4<f32>(position, luminance(deposit));
+                stored.normal_oct[nth] = normal_oct;
+            }
+            nth++;
         }
         // Dimension d picks the lobe at a delta surface and plays Russian roulette where
         // photons are stored (ppm_core::bsdf::photon_bounce).
@@ -167,7 +193,7 @@ fn trace_photon(path: u32) -> Traced {
         let side = select(facing, -facing, scattered.transmitted);
         origin = position + side * params.ray_epsilon;
     }
-    return Traced(rays, crossed_box);
+    return Traced(rays, crossed_box, stored);
 }
 
 @compute @workgroup_size(64)
@@ -184,6 +210,10 @@ fn photon_trace_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     let traced = trace_photon(path);
     if (params.flags & PHOTON_RECORD_CROSSED) != 0u {
         set_mask_bit(params.mask_offset + path, traced.crossed);
+    }
+    let at = params.mask_offset + path;
+    if MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u && at < arrayLength(&partners) {
+        partners[at] = traced.stored;
     }
     atomicAdd(&counters[COUNTER_RAYS], traced.rays);
 }

@@ -177,6 +177,8 @@ struct PhotonPassParams {
 const PHOTON_CHANGED_ONLY: u32 = 1u;
 const PHOTON_RECORD_CROSSED: u32 = 2u;
 const PHOTON_CULL_UNCROSSED: u32 = 4u;
+const PHOTON_RECORD_DEPOSITS: u32 = 32u;
+const PHOTON_PAIR_DEPOSITS: u32 = 64u;
 
 struct GatherParams {
     alpha: f32,
@@ -197,6 +199,15 @@ struct GridPhoton {
     cell: u32,
     power: vec3<f32>,
     normal_oct: u32,
+}
+
+// ppm_core::update::pairing's constants.
+const PAIRED_DEPOSITS: u32 = 4u;
+const PAIR_RADIUS: f32 = 0.5;
+
+struct PathDeposits {
+    deposits: array<vec4<f32>, 4>,
+    normal_oct: vec4<u32>,
 }
 
 struct EmissionRegion {

@@ -44,6 +44,22 @@ fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }
 
+// ppm_core::update::pairing::paired_square: the squared luminance a pose-B deposit (`power`
+// at `position`, normal `normal_oct`) adds to a correction's variance, given rank `rank` of
+// its path's deposits in pose A, `pose_a`.
+fn paired_square(power: vec3<f32>, position: vec3<f32>, normal_oct: u32, pose_a: PathDeposits, rank: u32, r2_floor: f32) -> f32 {
+    let own = luminance(power);
+    var cross = 0.0;
+    if rank < PAIRED_DEPOSITS {
+        let a = pose_a.deposits[rank];
+        let d = a.xyz - position;
+        if pose_a.normal_oct[rank] == normal_oct && dot(d, d) < PAIR_RADIUS * PAIR_RADIUS * r2_floor {
+            cross = 2.0 * a.w * own;
+        }
+    }
+    return own * own + cross;
+}
+
 // ppm_core::update::history_kept: the share of a slot's history worth keeping after a
 // correction of `variance` (squared luminance) was added to its flux `tau`.
 fn history_kept(n: f32, tau: vec3<f32>, variance: f32) -> f32 {

@@ -20,6 +20,7 @@ use ppm_core::region::emitting_region;
 use ppm_core::rng::{PassKind, StreamKey};
 use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, gathers, search_r2};
 use ppm_core::update::luminance;
+use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, paired_square};
 
 /// Where a step's photons start.
 #[derive(Clone, Copy)]
@@ -49,7 +50,11 @@ struct Step {
 #[derive(Clone, Copy, PartialEq)]
 enum Flow {
     Alone,
+    /// Pose A of local mode's correction: held, its deposits recorded for pose B to pair with
+    /// ([`photon_flags::RECORD_DEPOSITS`]).
     Held,
+    /// Pose B: the scene's move made, the held pass's paths traced again, their deposits
+    /// paired with pose A's ([`photon_flags::PAIR_DEPOSITS`]) and added to them.
     Added,
 }
 
@@ -68,8 +73,8 @@ const ORDINARY: Step = step("ordinary", gather_kind::ORDINARY, Source::Lights, 1
 
 /// Every kind a move gathers, as its mode runs them: the thesis's raw region passes, area
 /// mode's deferred ones, difference mode's deferred ordinary photons, local mode's flux-only
-/// correction within a floor disc (pose B's photons added to pose A's, gathered once), and
-/// the guided photons.
+/// correction within a floor disc (pose B's photons, the same paths after the scene's move,
+/// paired with pose A's and added to them, gathered once), and the guided photons.
 const MOVE_STEPS: [Step; 12] = {
     use gather_kind::*;
     let (neg, pos) = (REGION_NEGATIVE, REGION_POSITIVE);
@@ -210,8 +215,11 @@ struct Bench {
     regions: [EmissionRegion; 2],
     paths: Vec<RecordedPath>,
     next_pass: u32,
-    /// A held step's photons and their weights, for the step that adds to them.
-    held: Option<(Vec<Photon>, Vec<f32>)>,
+    /// A held step's photons, their weights and its pass index, for the step that adds to
+    /// them.
+    held: Option<(Vec<Photon>, Vec<f32>, u32)>,
+    /// The scene after its first move: pose B of local mode's correction.
+    moved: CompiledScene,
 }
 
 impl Bench {
@@ -221,6 +229,7 @@ impl Bench {
         params.width = params.width.min(32);
         params.height = params.height.min(32);
         let compiled = compile_scene(&scene, params.width, params.height);
+        let moved = compile_scene(&scene.at_frame(1), params.width, params.height);
         let mut backend = make().map_err(err)?;
         backend.load_scene(&compiled).map_err(err)?;
         backend
@@ -270,6 +279,7 @@ impl Bench {
             paths,
             next_pass: 0,
             held: None,
+            moved,
         })
     }
 
@@ -298,14 +308,17 @@ impl Bench {
             true => (Vec::new(), Vec::new(), 0.0),
             false => self.photon_pass(step, n)?,
         };
+        let mut squares: Vec<f32> = photons.iter().map(|p| luminance(p.power).powi(2)).collect();
         match step.flow {
             Flow::Alone => {}
             Flow::Held => {
-                self.held = Some((photons, weights));
+                self.held = Some((photons, weights, self.next_pass - 1));
                 return Ok(None);
             }
             Flow::Added => {
-                let (p, w) = self.held.take().ok_or("no held step to add to")?;
+                let (p, w, _) = self.held.take().ok_or("no held step to add to")?;
+                squares = paired_squares(&p, &photons, r2_floor);
+                squares.splice(0..0, p.iter().map(|p| luminance(p.power).powi(2)));
                 photons.splice(0..0, p);
                 weights.splice(0..0, w);
             }
@@ -331,7 +344,7 @@ impl Bench {
                 let (reflectance, found) = match gathering {
                     true => (
                         self.reflectance(hp),
-                        found_by_brute_force(hp, &photons, &weights, r2_floor),
+                        found_by_brute_force(hp, (&photons, &weights, &squares), r2_floor),
                     ),
                     false => (Vec3::ZERO, Found::default()),
                 };
@@ -354,9 +367,15 @@ impl Bench {
     /// own photons, would follow a mis-signed pass.
     fn photon_pass(&mut self, step: &Step, n: u32) -> Result<(Vec<Photon>, Vec<f32>, f32), String> {
         let r2_floor = (step.floor_radii * self.params.initial_radius).powi(2);
-        let flags = match step.flow {
-            Flow::Added => photon_flags::ADD_TO_MAP,
-            _ => 0,
+        let (flags, pass) = match (step.flow, &self.held) {
+            (Flow::Added, Some((_, _, pass))) => {
+                let dynamic = self.backend.dynamic().ok_or("no dynamic passes")?;
+                dynamic.update_scene(&self.moved).map_err(err)?;
+                let flags = photon_flags::ADD_TO_MAP | photon_flags::PAIR_DEPOSITS;
+                (flags, *pass)
+            }
+            (Flow::Held, _) => (photon_flags::RECORD_DEPOSITS, self.next_pass),
+            _ => (0, self.next_pass),
         };
         let params = PhotonPassParams {
             gather_r2_floor: r2_floor,
@@ -364,7 +383,7 @@ impl Bench {
             ..pass_params::photon_pass(
                 &self.params,
                 self.compiled.extent,
-                self.next_pass,
+                pass,
                 n,
                 step.power_scale,
                 step.kind,
@@ -438,19 +457,18 @@ fn sign(i: u32, bit: u32) -> f32 {
 /// ([`search_r2`]) scaled to its own ([`Found`]).
 fn found_by_brute_force(
     hp: &HitPoint,
-    photons: &[Photon],
-    weights: &[f32],
+    (photons, weights, squares): (&[Photon], &[f32], &[f32]),
     r2_floor: f32,
 ) -> Found {
     let r2 = search_r2(hp, r2_floor);
     let (x, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
     let (mut count, mut weight, mut flux, mut power_sq) = (0u32, 0.0, Vec3::ZERO, 0.0);
-    for (ph, w) in photons.iter().zip(weights) {
+    for ((ph, w), square) in photons.iter().zip(weights).zip(squares) {
         if (Vec3::from(ph.position) - x).length_squared() < r2 && oct_faces(ph.normal_oct, normal) {
             count += 1;
             weight += w;
             flux += Vec3::from(ph.power);
-            power_sq += luminance(ph.power).powi(2);
+            power_sq += square;
         }
     }
     let shrink = disc_shrink(hp.r2, r2);
@@ -461,6 +479,29 @@ fn found_by_brute_force(
         power_sq: power_sq * shrink * shrink,
         _pad: [0.0; 2],
     }
+}
+
+/// The squares pose B's deposits `pose_b` add to a correction's variance, each paired with
+/// the deposit its path stored in the same order in pose A, `pose_a` (both in path order, as
+/// read back).
+fn paired_squares(pose_a: &[Photon], pose_b: &[Photon], r2_floor: f32) -> Vec<f32> {
+    let mut nth = 0;
+    pose_b
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            nth = match i > 0 && pose_b[i - 1].path == b.path {
+                true => nth + 1,
+                false => 0,
+            };
+            let first = pose_a.partition_point(|a| a.path < b.path);
+            let partner = pose_a
+                .get(first + nth)
+                .filter(|a| a.path == b.path && nth < PAIRED_DEPOSITS)
+                .map(Partner::of);
+            paired_square(b, partner.as_ref(), r2_floor)
+        })
+        .collect()
 }
 
 /// Slots whose statistics differ from `expected` beyond f32 summation order: relative 1e-4 of

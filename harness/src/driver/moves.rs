@@ -364,6 +364,14 @@ impl Renderer<'_> {
                     if kind == gather_kind::REGION_POSITIVE {
                         flags |= photon_flags::ADD_TO_MAP;
                     }
+                    // The variance counts each path's net deposit (ppm_core's pairing).
+                    if self.moves.pair_deposits {
+                        flags |= if kind == gather_kind::REGION_NEGATIVE {
+                            photon_flags::RECORD_DEPOSITS
+                        } else {
+                            photon_flags::PAIR_DEPOSITS
+                        };
+                    }
                     if self.moves.cull_uncrossed {
                         flags |= if kind == gather_kind::REGION_NEGATIVE {
                             photon_flags::RECORD_CROSSED

@@ -4,6 +4,7 @@
 use std::f32::consts::PI;
 
 pub mod gather;
+pub mod pairing;
 
 /// A hit point's running statistics.
 #[derive(Clone, Copy, Debug, PartialEq)]
