@@ -37,7 +37,6 @@ use ppm_core::passes::{
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
 use ppm_core::passes::{DynamicBackend, UpdateStats, check_gather_kind, crossed_mask_words};
-use ppm_core::update::luminance;
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 use trace::SceneData;
@@ -60,9 +59,9 @@ pub struct CpuBackend {
     photons: Vec<Photon>,
     /// Path weight per deposit, kept by region passes only.
     weights: Option<Vec<f32>>,
-    /// Squared luminance per deposit where a pass paired its deposits
-    /// ([`photon_flags::PAIR_DEPOSITS`]); otherwise each deposit's own, computed when filed.
-    squares: Option<Vec<f32>>,
+    /// Per deposit, its pose-A partner (position, luminance; zero for none) where a pass
+    /// paired its deposits ([`photon_flags::PAIR_DEPOSITS`]).
+    partners: Option<Vec<[f32; 4]>>,
     /// The last photon pass's `gather_r2_floor`.
     r2_floor: f32,
     /// The gather kind the last photon pass named (none since the scene was loaded or
@@ -165,7 +164,7 @@ impl SceneUpload for CpuBackend {
         self.photons.clear();
         self.last_pass_from = 0;
         self.weights = None;
-        self.squares = None;
+        self.partners = None;
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
         self.unconsumed = None;
@@ -212,21 +211,19 @@ impl CpuBackend {
         self.r2_floor = params.gather_r2_floor;
         if params.flags & photon_flags::ADD_TO_MAP != 0 {
             self.last_pass_from = self.photons.len();
-            if let Some(added) = deposits.squares {
-                let mut squares = self
-                    .squares
-                    .take()
-                    .unwrap_or_else(|| own_squares(&self.photons));
-                squares.extend(added);
-                self.squares = Some(squares);
-            } else if let Some(squares) = &mut self.squares {
-                squares.extend(own_squares(&deposits.photons));
+            if let Some(added) = deposits.partners {
+                let mut partners = self.partners.take().unwrap_or_default();
+                partners.resize(self.photons.len(), [0.0; 4]);
+                partners.extend(added);
+                self.partners = Some(partners);
+            } else if let Some(partners) = &mut self.partners {
+                partners.resize(partners.len() + deposits.photons.len(), [0.0; 4]);
             }
             self.photons.extend(deposits.photons);
         } else {
             self.last_pass_from = 0;
             self.photons = deposits.photons;
-            self.squares = deposits.squares;
+            self.partners = deposits.partners;
         }
         self.passes_stored += 1;
         let unweighted = deposits.weights.is_none();
@@ -329,21 +326,16 @@ impl PhotonPass for CpuBackend {
     }
 }
 
-/// Each deposit's own squared power luminance (an unpaired deposit's variance).
-fn own_squares(photons: &[Photon]) -> Vec<f32> {
-    photons.iter().map(|p| luminance(p.power).powi(2)).collect()
-}
-
 /// The last photon pass's grid, built now if it is not yet.
 fn indexed<'a>(
     index: &'a mut PhotonIndex,
-    (photons, squares): (&[Photon], Option<&[f32]>),
+    (photons, partners): (&[Photon], Option<&[[f32; 4]]>),
     hit_points: &[HitPoint],
     r2_floor: f32,
     pass: &'static str,
 ) -> Result<&'a PhotonGrid, BackendError> {
     if let PhotonIndex::Pending = index {
-        let grid = build_photon_grid(photons, squares, hit_points, r2_floor);
+        let grid = build_photon_grid(photons, partners, hit_points, r2_floor);
         *index = PhotonIndex::Indexed(grid);
     }
     match index {
@@ -407,7 +399,7 @@ impl DynamicBackend for CpuBackend {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         let grid = indexed(
             &mut self.grid,
-            (&self.photons, self.squares.as_deref()),
+            (&self.photons, self.partners.as_deref()),
             &self.hit_points,
             self.r2_floor,
             "landing paths",
@@ -423,7 +415,7 @@ impl DynamicBackend for CpuBackend {
             .filter(|h| h.is_valid() && h.flags & hit_flags::UPDATED != 0)
             .flat_map_iter(|hp| {
                 let mut found = Vec::new();
-                for_photons_in_disc(hp, &map, |i, _| found.push(self.photons[i].path));
+                for_photons_in_disc(hp, &map, |i, _, _| found.push(self.photons[i].path));
                 found
             })
             .collect();
@@ -440,7 +432,7 @@ impl GatherPass for CpuBackend {
         self.unconsumed = None;
         let grid = indexed(
             &mut self.grid,
-            (&self.photons, self.squares.as_deref()),
+            (&self.photons, self.partners.as_deref()),
             &self.hit_points,
             self.r2_floor,
             "gather",

@@ -206,7 +206,7 @@ impl PathRecord {
         Deposits {
             photons,
             weights: None,
-            squares: None,
+            partners: None,
             stats,
             paths: None,
         }

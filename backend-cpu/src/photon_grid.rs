@@ -8,7 +8,6 @@ use ppm_core::geometry::oct_unfold;
 use ppm_core::grid::{RADIUS_BINS, bucket_count, cell_key, cell_of, cell_size, radius_bin};
 use ppm_core::layout::{GridParams, HitPoint, Photon};
 use ppm_core::update::gather::search_r2;
-use ppm_core::update::luminance;
 use rayon::prelude::*;
 
 /// Cells are this many times as wide as [`ppm_core::grid`]'s. A gather looks each cell up once
@@ -39,9 +38,6 @@ pub struct CellPhoton {
     pub facing: Vec3,
     /// Power carried.
     pub power: Vec3,
-    /// The squared luminance it adds to a correction's variance: its power's, or what its
-    /// pass paired it to ([`ppm_core::update::pairing`]).
-    pub square: f32,
 }
 
 /// Photons filed by bucket.
@@ -55,13 +51,17 @@ pub struct PhotonGrid {
     pub sorted: Vec<CellPhoton>,
     /// Index in the pass's deposits of each photon of `sorted`.
     pub order: Vec<u32>,
+    /// Each photon's pose-A partner (position, luminance; zero for none) in the order of
+    /// `sorted`, where its pass paired them ([`ppm_core::update::pairing`]); empty otherwise.
+    /// In bucket order, so a gather reads it alongside the photons.
+    pub partners: Vec<[f32; 4]>,
 }
 
-/// Builds the grid over `photons` (with their `squares` where a pass paired them) for the
-/// gather radii of `hit_points`' visible points (at least `sqrt(r2_floor)`).
+/// Builds the grid over `photons` (and their pose-A `partners`, where a pass paired them) for
+/// the gather radii of `hit_points`' visible points (at least `sqrt(r2_floor)`).
 pub fn build_photon_grid(
     photons: &[Photon],
-    squares: Option<&[f32]>,
+    partners: Option<&[[f32; 4]]>,
     hit_points: &[HitPoint],
     r2_floor: f32,
 ) -> PhotonGrid {
@@ -120,14 +120,21 @@ pub fn build_photon_grid(
                 cell: keys[i as usize],
                 facing: oct_unfold(p.normal_oct),
                 power: Vec3::from(p.power),
-                square: squares.map_or_else(|| luminance(p.power).powi(2), |s| s[i as usize]),
             }
         })
         .collect();
+    let partners = partners.map_or_else(Vec::new, |all| {
+        order
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&i| all[i as usize])
+            .collect()
+    });
     PhotonGrid {
         params,
         bucket_start,
         sorted,
         order,
+        partners,
     }
 }

@@ -10,7 +10,7 @@ use ppm_core::geometry::oct_encode;
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, photon_flags};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::StreamKey;
-use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, paired_square};
+use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -27,9 +27,9 @@ pub struct Deposits {
     pub photons: Vec<Photon>,
     /// Per deposit, its path's weight relative to an ordinary photon (region passes only).
     pub weights: Option<Vec<f32>>,
-    /// Per deposit, the squared luminance it adds to a correction's variance, paired with
-    /// pose A's deposits ([`photon_flags::PAIR_DEPOSITS`] in pose B only).
-    pub squares: Option<Vec<f32>>,
+    /// Per deposit, the pose-A deposit it is paired with: position and luminance, zero
+    /// luminance for none ([`photon_flags::PAIR_DEPOSITS`] in pose B only).
+    pub partners: Option<Vec<[f32; 4]>>,
     /// Counters.
     pub stats: PhotonStats,
     /// The paths' segments, where the pass keeps them ([`PathRecord::wanted`]).
@@ -70,7 +70,7 @@ pub fn photon_pass_main(
         .zip(spare)
         .map(|(c, spare)| {
             let (mut deposits, mut weights, mut rays, mut culled) = (Vec::new(), Vec::new(), 0, 0);
-            let mut squares = Vec::new();
+            let mut partners = Vec::new();
             let mut record = keep_paths.then(|| spare.unwrap_or_default().recycled(c * CHUNK));
             let end = ((c + 1) * CHUNK).min(params.photon_count);
             for local in c * CHUNK..end {
@@ -105,18 +105,18 @@ pub fn photon_pass_main(
                     weights.resize(weights.len() + deposits.len() - before, emission.weight);
                 }
                 if pairs {
-                    let partners = of_path(pose_a, path);
-                    squares.extend(deposits[before..].iter().enumerate().map(|(rank, d)| {
-                        let partner = partners.get(rank).filter(|_| rank < PAIRED_DEPOSITS);
-                        let partner = partner.map(Partner::of);
-                        paired_square(d, partner.as_ref(), params.gather_r2_floor)
+                    let stored = of_path(pose_a, path);
+                    partners.extend(deposits[before..].iter().enumerate().map(|(nth, d)| {
+                        let candidate = stored.get(nth).filter(|_| nth < PAIRED_DEPOSITS);
+                        partner(d, candidate.map(Partner::of).as_ref())
+                            .map_or([0.0; 4], |a| a.position.extend(a.luminance).into())
                     }));
                 }
             }
             Traced {
                 deposits,
                 weights,
-                squares,
+                partners,
                 rays,
                 culled,
                 record,
@@ -127,12 +127,12 @@ pub fn photon_pass_main(
     let culled = traced.iter().map(|t| t.culled).sum();
     let mut photons = Vec::new();
     let mut weights = Vec::new();
-    let mut squares = Vec::new();
+    let mut partners = Vec::new();
     let mut records = Vec::new();
     for t in traced {
         photons.extend(t.deposits);
         weights.extend(t.weights);
-        squares.extend(t.squares);
+        partners.extend(t.partners);
         records.extend(t.record);
     }
     let paths = keep_paths.then(|| PathRecord::new(params, records));
@@ -145,7 +145,7 @@ pub fn photon_pass_main(
     Deposits {
         photons,
         weights: source.keeps_weights().then_some(weights),
-        squares: pairs.then_some(squares),
+        partners: pairs.then_some(partners),
         stats,
         paths,
     }
@@ -155,7 +155,7 @@ pub fn photon_pass_main(
 struct Traced {
     deposits: Vec<Photon>,
     weights: Vec<f32>,
-    squares: Vec<f32>,
+    partners: Vec<[f32; 4]>,
     rays: u64,
     culled: u64,
     record: Option<BatchRecord>,

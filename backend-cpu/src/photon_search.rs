@@ -29,6 +29,8 @@ use glam::Vec3;
 use ppm_core::grid::{cell_key, cell_range, cells_in, scan_instead};
 use ppm_core::layout::HitPoint;
 use ppm_core::update::gather::search_r2;
+use ppm_core::update::luminance;
+use ppm_core::update::pairing::{cross_term, variance_term};
 
 /// Slots searched together: consecutive pixels of a row.
 pub const RUN: usize = 8;
@@ -52,9 +54,9 @@ pub struct Found {
     pub weight: f32,
     /// Their summed power.
     pub flux: Vec3,
-    /// Their summed squared power luminance ([`CellPhoton::square`], paired where their
-    /// passes paired them), where the search was asked for it (the variance of a local move's
-    /// correction); zero otherwise.
+    /// Their summed squared power luminance, a deposit's cross term with its pose-A partner
+    /// added where both lie in the disc ([`ppm_core::update::pairing`]), where the search was
+    /// asked for it (the variance of a local move's correction); zero otherwise.
     pub power_sq: f32,
 }
 
@@ -227,9 +229,17 @@ impl Lanes {
         let mut flux = [[0.0f32; RUN]; 3];
         let mut power_sq = [0.0f32; RUN];
         let grid = map.grid;
-        for_cells_in(range, grid, |_, photons, key| {
-            for p in photons.iter().filter(|p| p.cell == key) {
-                let squared = if SQUARES { p.square } else { 0.0 };
+        for_cells_in(range, grid, |first, photons, key| {
+            for (k, p) in photons.iter().enumerate().filter(|(_, p)| p.cell == key) {
+                // The deposit's square and, where its pose-A partner lies in the same disc,
+                // the cross term (ppm_core's variance_term, lane by lane).
+                let (own_sq, cross, partner) = if SQUARES {
+                    let own = luminance(p.power.into());
+                    let a = grid.partners.get(first + k).copied().unwrap_or_default();
+                    (own * own, cross_term(a[3], own), a)
+                } else {
+                    (0.0, 0.0, [0.0; 4])
+                };
                 for l in 0..RUN {
                     let (dx, dy, dz) = (
                         p.position.x - self.x[l],
@@ -245,7 +255,14 @@ impl Lanes {
                         flux[c][l] += if hit { power } else { 0.0 };
                     }
                     if SQUARES {
-                        power_sq[l] += if hit { squared } else { 0.0 };
+                        let (ax, ay, az) = (
+                            partner[0] - self.x[l],
+                            partner[1] - self.y[l],
+                            partner[2] - self.z[l],
+                        );
+                        let both = ax * ax + ay * ay + az * az < self.r2[l];
+                        let term = own_sq + if both { cross } else { 0.0 };
+                        power_sq[l] += if hit { term } else { 0.0 };
                     }
                 }
             }
@@ -262,11 +279,15 @@ impl Lanes {
 /// What one slot finds in its disc.
 fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
     let mut found = Found::default();
-    for_photons_in_disc(hp, map, |i, p| {
+    for_photons_in_disc(hp, map, |i, k, p| {
         found.count += 1;
         found.weight += map.weights.map_or(1.0, |w| w[i]);
         found.flux += p.power;
-        found.power_sq += p.square;
+        let partner = map.grid.partners.get(k).copied().unwrap_or_default();
+        let both = (Vec3::from_slice(&partner[..3]) - Vec3::from(hp.position)).length_squared()
+            < search_r2(hp, map.r2_floor);
+        let own = luminance(p.power.into());
+        found.power_sq += variance_term(own, both.then_some(partner[3]));
     });
     found
 }
@@ -282,13 +303,14 @@ fn disc(hp: &HitPoint, map: &PhotonMap) -> (Vec3, Vec3, f32) {
     )
 }
 
-/// Calls `visit(index in the pass, photon)` for each photon within the hit point's gather
-/// disc whose surface faces the same way, cell by cell in z, y, x order (or over all photons,
-/// when the disc spans more cells than there are photons), in bucket order within a cell.
+/// Calls `visit(index in the pass, index in the grid, photon)` for each photon within the hit
+/// point's gather disc whose surface faces the same way, cell by cell in z, y, x order (or
+/// over all photons, when the disc spans more cells than there are photons), in bucket order
+/// within a cell.
 pub fn for_photons_in_disc(
     hp: &HitPoint,
     map: &PhotonMap,
-    mut visit: impl FnMut(usize, &CellPhoton),
+    mut visit: impl FnMut(usize, usize, &CellPhoton),
 ) {
     let (x, n, r2) = disc(hp, map);
     let grid = map.grid;
@@ -297,7 +319,7 @@ pub fn for_photons_in_disc(
     if scan_instead(range, grid.params.photon_count) {
         for (k, p) in grid.sorted.iter().enumerate() {
             if inside(p) {
-                visit(grid.order[k] as usize, p);
+                visit(grid.order[k] as usize, k, p);
             }
         }
         return;
@@ -305,7 +327,7 @@ pub fn for_photons_in_disc(
     for_cells_in(range, grid, |first, photons, key| {
         for (k, p) in photons.iter().enumerate() {
             if p.cell == key && inside(p) {
-                visit(grid.order[first + k] as usize, p);
+                visit(grid.order[first + k] as usize, first + k, p);
             }
         }
     });
@@ -413,7 +435,7 @@ mod tests {
             };
             for hp in &hit_points {
                 let mut found = Vec::new();
-                for_photons_in_disc(hp, &map, |i, _| found.push(i));
+                for_photons_in_disc(hp, &map, |i, _, _| found.push(i));
                 found.sort_unstable();
                 let n = Vec3::from(hp.normal);
                 let expected: Vec<usize> = (0..photons.len())

@@ -54,7 +54,7 @@ use scan::Scan;
 pub use specialise::Specialisation;
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
-/// and their paths' weights (or paired squares), allocated when a region pass (or a pairing
+/// and their paths' weights (or pose-A partners), allocated when a region pass (or a pairing
 /// pose B) first needs them (other passes bind `WgpuBackend::no_weights`).
 struct DepositBuffers {
     photons: wgpu::Buffer,
@@ -487,8 +487,9 @@ impl DirectLight for WgpuBackend {
 }
 
 impl WgpuBackend {
-    /// Deposit buffers holding at least `capacity` records (reused when large enough).
-    fn deposit_buffers(&mut self, capacity: u32, weighted: bool) -> Result<(), BackendError> {
+    /// Deposit buffers holding at least `capacity` records (reused when large enough), and
+    /// `words` per deposit beside them (a path weight, or a pose-A partner's four).
+    fn deposit_buffers(&mut self, capacity: u32, words: u32) -> Result<(), BackendError> {
         if self.deposits.as_ref().is_none_or(|d| d.capacity < capacity) {
             self.deposits = Some(DepositBuffers {
                 photons: storage_zeroed(&self.ctx, "photons", photon_bytes(capacity))?,
@@ -497,10 +498,10 @@ impl WgpuBackend {
                 capacity,
             });
         }
-        let held = self.deposits.as_ref().expect("allocated above").capacity;
-        if weighted && self.deposits.as_ref().is_some_and(|d| d.weights.is_none()) {
-            let weights = storage_zeroed(&self.ctx, "weights", u64::from(held.max(1)) * 4)?;
-            self.deposits.as_mut().expect("allocated above").weights = Some(weights);
+        let deposits = self.deposits.as_mut().expect("allocated above");
+        let bytes = u64::from(deposits.capacity.max(1)) * u64::from(words) * 4;
+        if bytes > deposits.weights.as_ref().map_or(0, wgpu::Buffer::size) {
+            deposits.weights = Some(storage_zeroed(&self.ctx, "weights", bytes)?);
         }
         Ok(())
     }
@@ -575,8 +576,8 @@ impl WgpuBackend {
         let emitter = source.emitter();
         let emission = emitter.kind;
         let weighted = source.keeps_weights();
-        // A pairing pose B writes each deposit's paired square where weights would go.
-        let squared = params.flags & photon_flags::PAIR_DEPOSITS != 0;
+        // A pairing pose B writes each deposit's partner, four words, where weights would go.
+        let paired = params.flags & photon_flags::PAIR_DEPOSITS != 0;
         // Only local mode's correction passes test the movers' boxes (and pair deposits).
         let movers = params.flags
             & (photon_flags::CHANGED_ONLY
@@ -617,7 +618,8 @@ impl WgpuBackend {
             };
             let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
             let capacity = expected.min(max_deposits as f64) as u32;
-            self.deposit_buffers(capacity, weighted || squared)?;
+            let words = if paired { 4 } else { u32::from(weighted) };
+            self.deposit_buffers(capacity, words)?;
             self.grid_buffers = Some(GridBuffers::fit(
                 &self.ctx,
                 self.grid_buffers.take(),
@@ -694,7 +696,7 @@ impl WgpuBackend {
                     (hit_points, slots.count),
                     params.gather_r2_floor,
                 )?;
-                let stage = GatherStage::Accumulate { weighted, squared };
+                let stage = GatherStage::Accumulate { weighted, paired };
                 self.kernels
                     .gather
                     .record(&self.ctx, encoder, &gather, &built, &slots, stage);

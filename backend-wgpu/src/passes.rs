@@ -255,7 +255,7 @@ impl PhotonPassKernel {
     }
 }
 
-/// gather_pass.wgsl: accumulate (once per photon batch; plain, weighted or squared), then
+/// gather_pass.wgsl: accumulate (once per photon batch; plain, weighted or paired), then
 /// apply (once per pass).
 pub struct GatherKernel {
     accumulate: [Kernel; 3],
@@ -282,12 +282,12 @@ pub struct GatherInputs<'a> {
 pub enum GatherStage {
     /// Inside the photon pass: one batch's photons into the accumulators of the slots that
     /// gather the named kind; `weighted` when the deposits carry path weights (a region
-    /// source's), `squared` when they carry paired squares (a pairing pose B's).
+    /// source's), `paired` when they carry their pose-A partners (a pairing pose B's).
     Accumulate {
         /// Whether the deposits carry path weights.
         weighted: bool,
-        /// Whether they carry paired squares.
-        squared: bool,
+        /// Whether they carry pose-A partners.
+        paired: bool,
     },
     /// The gather pass: each slot's update from its accumulator, by the gather rule.
     Apply,
@@ -302,21 +302,19 @@ impl GatherKernel {
             ReadWrite, Uniform,
         ];
         Self {
-            accumulate: [(false, false), (true, false), (false, true)].map(
-                |(weighted, squared)| {
-                    Kernel::specialised(
-                        &ctx.device,
-                        &module,
-                        "gather_accumulate_main",
-                        &slots,
-                        WORKGROUP,
-                        &[
-                            ("WEIGHTED", f64::from(u8::from(weighted))),
-                            ("SQUARED", f64::from(u8::from(squared))),
-                        ],
-                    )
-                },
-            ),
+            accumulate: [(false, false), (true, false), (false, true)].map(|(weighted, paired)| {
+                Kernel::specialised(
+                    &ctx.device,
+                    &module,
+                    "gather_accumulate_main",
+                    &slots,
+                    WORKGROUP,
+                    &[
+                        ("WEIGHTED", f64::from(u8::from(weighted))),
+                        ("PAIRED", f64::from(u8::from(paired))),
+                    ],
+                )
+            }),
             apply: Kernel::new(&ctx.device, &module, "gather_apply_main", &slots, WORKGROUP),
         }
     }
@@ -333,8 +331,8 @@ impl GatherKernel {
     ) {
         let kernel = match stage {
             GatherStage::Apply => &self.apply,
-            GatherStage::Accumulate { weighted, squared } => {
-                &self.accumulate[usize::from(weighted) + 2 * usize::from(squared)]
+            GatherStage::Accumulate { weighted, paired } => {
+                &self.accumulate[usize::from(weighted) + 2 * usize::from(paired)]
             }
         };
         let params = uniform(ctx, "gather params", inputs.params);

@@ -5,7 +5,7 @@ use naga::proc::Layouter;
 use ppm_core::bsdf::{BsdfCase, BsdfOutcome, Transport};
 use ppm_core::layout::*;
 use ppm_core::update::gather::{Found, GatherCase, SlotState};
-use ppm_core::update::pairing::{PAIR_RADIUS, PAIRED_DEPOSITS};
+use ppm_core::update::pairing::PAIRED_DEPOSITS;
 use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
@@ -337,17 +337,6 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
         hit_point_count,
         r2_floor
     });
-}
-
-/// The radius within which pose B pairs a deposit with pose A's is ppm-core's in WGSL too.
-#[test]
-fn the_pairing_radius_agrees() {
-    let line = LAYOUT_WGSL
-        .lines()
-        .find(|l| l.starts_with("const PAIR_RADIUS: f32 = "))
-        .expect("layout.wgsl declares PAIR_RADIUS");
-    let literal = line.rsplit("= ").next().unwrap().trim_end_matches(';');
-    assert_eq!(literal.parse::<f32>().unwrap(), PAIR_RADIUS);
 }
 
 /// The WGSL constants that mirror Rust constants carry the same values.

@@ -557,10 +557,12 @@ pub mod photon_flags {
     /// for a [`PAIR_DEPOSITS`] pass to pair with (a local move's pose-A correction). A backend
     /// that still holds this pass's deposits when the pairing pass runs may read them there.
     pub const RECORD_DEPOSITS: u32 = 32;
-    /// Give each deposit the square [`paired_square`](crate::update::pairing::paired_square)
-    /// makes with the deposit of the same path stored in the same order by the
-    /// [`RECORD_DEPOSITS`] pass just before (pose A's), which the gather then sums in place of
-    /// the deposit's own square: the correction's variance counts each path's net deposit
+    /// Pair each deposit with the one its path stored in the same order in the
+    /// [`RECORD_DEPOSITS`] pass just before (pose A's), as
+    /// [`partner`](crate::update::pairing::partner) says, and carry that partner's position
+    /// and luminance: a gather that sums squares adds the cross term
+    /// ([`variance_term`](crate::update::pairing::variance_term)) where both lie in the
+    /// disc, so the correction's variance counts each path's net deposit
     /// ([`crate::update::pairing`]; a local move's pose-B correction).
     pub const PAIR_DEPOSITS: u32 = 64;
 }

@@ -18,7 +18,8 @@
 // Per hit point, two rows: (power, count) and (weight sum, squared power luminance, 0, 0).
 @group(0) @binding(7) var<storage, read_write> accumulated: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
-// Per deposit: its path weight (region passes), or its paired square (a pairing pose B).
+// Per deposit: its path weight (region passes), or four words, its pose-A partner's position
+// and luminance (a pairing pose B; zero for none).
 @group(0) @binding(9) var<storage, read> weights: array<f32>;
 // Per hit point: deferred region flux (times BRDF and scale) and signed count.
 @group(0) @binding(10) var<storage, read_write> pending: array<vec4<f32>>;
@@ -29,9 +30,9 @@
 // other passes skip the extra reads.
 override WEIGHTED: bool = false;
 
-// Whether deposits carry the squares their pass paired them to (a local correction's pose B,
-// PHOTON_PAIR_DEPOSITS) in place of their own.
-override SQUARED: bool = false;
+// Whether deposits carry their pose-A partners (a local correction's pose B,
+// PHOTON_PAIR_DEPOSITS), whose cross term joins the variance where both lie in the disc.
+override PAIRED: bool = false;
 
 fn sorted_photon(k: u32) -> GridPhoton {
     let a = textureLoad(sorted_table, table_texel(2u * k));
@@ -60,12 +61,16 @@ fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: 
             (*found).weight += weights[order[k]];
         }
         (*found).flux += p.power;
-        if SQUARED {
-            (*found).power_sq += weights[order[k]];
-        } else {
-            let lum = luminance(p.power);
-            (*found).power_sq += lum * lum;
+        let own = luminance(p.power);
+        var both = false;
+        var partner = 0.0;
+        if PAIRED {
+            let i = 4u * order[k];
+            let a = vec3<f32>(weights[i], weights[i + 1u], weights[i + 2u]) - hp.position;
+            partner = weights[i + 3u];
+            both = dot(a, a) < r2;
         }
+        (*found).power_sq += variance_term(own, partner, both);
     }
 }
 

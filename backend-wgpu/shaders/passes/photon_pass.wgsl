@@ -14,7 +14,8 @@
 // whatever the order), and pose B skips the paths that did not, which would store nothing.
 // Pairing their deposits, pose A (PHOTON_RECORD_DEPOSITS) writes each path's first stored
 // deposits into `partners` at the path's bit, and pose B (PHOTON_PAIR_DEPOSITS) writes each
-// deposit's paired square (update.wgsl's paired_square) where region passes write weights.
+// deposit's partner there (position and luminance, four words where region passes write a
+// weight; update.wgsl's pairing_partner).
 
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
@@ -159,8 +160,10 @@ fn trace_photon(path: u32) -> Traced {
                     weights[slot] = emission.weight;
                 }
                 if squares {
-                    let r2 = params.gather_r2_floor;
-                    weights[slot] = paired_square(deposit, position, normal_oct, pose_a, nth, r2);
+                    let partner = pairing_partner(pose_a, nth, normal_oct);
+                    for (var w = 0u; w < 4u; w++) {
+                        weights[4u * slot + w] = partner[w];
+                    }
                 }
             }
             if records_pairs && nth < PAIRED_DEPOSITS {

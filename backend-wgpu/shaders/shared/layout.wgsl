@@ -203,7 +203,7 @@ struct GridPhoton {
 
 // ppm_core::update::pairing's constants.
 const PAIRED_DEPOSITS: u32 = 4u;
-const PAIR_RADIUS: f32 = 0.5;
+const PAIR_FLOOR: f32 = 0.25;
 
 struct PathDeposits {
     deposits: array<vec4<f32>, 4>,

@@ -44,20 +44,25 @@ fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }
 
-// ppm_core::update::pairing::paired_square: the squared luminance a pose-B deposit (`power`
-// at `position`, normal `normal_oct`) adds to a correction's variance, given rank `rank` of
-// its path's deposits in pose A, `pose_a`.
-fn paired_square(power: vec3<f32>, position: vec3<f32>, normal_oct: u32, pose_a: PathDeposits, rank: u32, r2_floor: f32) -> f32 {
-    let own = luminance(power);
-    var cross = 0.0;
-    if rank < PAIRED_DEPOSITS {
-        let a = pose_a.deposits[rank];
-        let d = a.xyz - position;
-        if pose_a.normal_oct[rank] == normal_oct && dot(d, d) < PAIR_RADIUS * PAIR_RADIUS * r2_floor {
-            cross = 2.0 * a.w * own;
+// ppm_core::update::pairing::partner: the partner of a pose-B deposit of normal
+// `normal_oct`, the `nth` its path stored, among pose A's deposits of the path: (position,
+// luminance), or zero for none.
+fn pairing_partner(pose_a: PathDeposits, nth: u32, normal_oct: u32) -> vec4<f32> {
+    if nth < PAIRED_DEPOSITS {
+        let a = pose_a.deposits[nth];
+        if a.w != 0.0 && pose_a.normal_oct[nth] == normal_oct {
+            return a;
         }
     }
-    return own * own + cross;
+    return vec4<f32>(0.0);
+}
+
+// ppm_core::update::pairing::variance_term: what a deposit of luminance `own` adds to a
+// disc's correction variance, its partner of luminance `partner` in the disc or not; the
+// cross term floored as ppm_core::update::pairing::cross_term floors it.
+fn variance_term(own: f32, partner: f32, both: bool) -> f32 {
+    let cross = max(2.0 * partner * own, -(1.0 - PAIR_FLOOR) * (partner * partner + own * own));
+    return own * own + select(0.0, cross, both);
 }
 
 // ppm_core::update::history_kept: the share of a slot's history worth keeping after a

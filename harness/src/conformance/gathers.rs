@@ -20,7 +20,7 @@ use ppm_core::region::emitting_region;
 use ppm_core::rng::{PassKind, StreamKey};
 use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, gathers, search_r2};
 use ppm_core::update::luminance;
-use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, paired_square};
+use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner, variance_term};
 
 /// Where a step's photons start.
 #[derive(Clone, Copy)]
@@ -308,7 +308,7 @@ impl Bench {
             true => (Vec::new(), Vec::new(), 0.0),
             false => self.photon_pass(step, n)?,
         };
-        let mut squares: Vec<f32> = photons.iter().map(|p| luminance(p.power).powi(2)).collect();
+        let mut partners: Vec<Option<Partner>> = vec![None; photons.len()];
         match step.flow {
             Flow::Alone => {}
             Flow::Held => {
@@ -317,8 +317,8 @@ impl Bench {
             }
             Flow::Added => {
                 let (p, w, _) = self.held.take().ok_or("no held step to add to")?;
-                squares = paired_squares(&p, &photons, r2_floor);
-                squares.splice(0..0, p.iter().map(|p| luminance(p.power).powi(2)));
+                partners = pose_a_partners(&p, &photons);
+                partners.splice(0..0, p.iter().map(|_| None));
                 photons.splice(0..0, p);
                 weights.splice(0..0, w);
             }
@@ -344,7 +344,7 @@ impl Bench {
                 let (reflectance, found) = match gathering {
                     true => (
                         self.reflectance(hp),
-                        found_by_brute_force(hp, (&photons, &weights, &squares), r2_floor),
+                        found_by_brute_force(hp, (&photons, &weights, &partners), r2_floor),
                     ),
                     false => (Vec3::ZERO, Found::default()),
                 };
@@ -457,18 +457,20 @@ fn sign(i: u32, bit: u32) -> f32 {
 /// ([`search_r2`]) scaled to its own ([`Found`]).
 fn found_by_brute_force(
     hp: &HitPoint,
-    (photons, weights, squares): (&[Photon], &[f32], &[f32]),
+    (photons, weights, partners): (&[Photon], &[f32], &[Option<Partner>]),
     r2_floor: f32,
 ) -> Found {
     let r2 = search_r2(hp, r2_floor);
     let (x, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
     let (mut count, mut weight, mut flux, mut power_sq) = (0u32, 0.0, Vec3::ZERO, 0.0);
-    for ((ph, w), square) in photons.iter().zip(weights).zip(squares) {
-        if (Vec3::from(ph.position) - x).length_squared() < r2 && oct_faces(ph.normal_oct, normal) {
+    let inside = |p: Vec3| (p - x).length_squared() < r2;
+    for ((ph, w), partner) in photons.iter().zip(weights).zip(partners) {
+        if inside(Vec3::from(ph.position)) && oct_faces(ph.normal_oct, normal) {
             count += 1;
             weight += w;
             flux += Vec3::from(ph.power);
-            power_sq += square;
+            let both = partner.filter(|a| inside(a.position)).map(|a| a.luminance);
+            power_sq += variance_term(luminance(ph.power), both);
         }
     }
     let shrink = disc_shrink(hp.r2, r2);
@@ -481,10 +483,9 @@ fn found_by_brute_force(
     }
 }
 
-/// The squares pose B's deposits `pose_b` add to a correction's variance, each paired with
-/// the deposit its path stored in the same order in pose A, `pose_a` (both in path order, as
-/// read back).
-fn paired_squares(pose_a: &[Photon], pose_b: &[Photon], r2_floor: f32) -> Vec<f32> {
+/// Each of pose B's deposits `pose_b` paired with the deposit its path stored in the same
+/// order in pose A, `pose_a` (both in path order, as read back), where they pair.
+fn pose_a_partners(pose_a: &[Photon], pose_b: &[Photon]) -> Vec<Option<Partner>> {
     let mut nth = 0;
     pose_b
         .iter()
@@ -495,11 +496,11 @@ fn paired_squares(pose_a: &[Photon], pose_b: &[Photon], r2_floor: f32) -> Vec<f3
                 false => 0,
             };
             let first = pose_a.partition_point(|a| a.path < b.path);
-            let partner = pose_a
+            let candidate = pose_a
                 .get(first + nth)
                 .filter(|a| a.path == b.path && nth < PAIRED_DEPOSITS)
                 .map(Partner::of);
-            paired_square(b, partner.as_ref(), r2_floor)
+            partner(b, candidate.as_ref())
         })
         .collect()
 }

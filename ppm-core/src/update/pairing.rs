@@ -7,37 +7,31 @@
 //! twice a path the move barely changed: in a small move (a drag's step) a path that meets the
 //! moved object lands almost where it did, with the same power, and its two deposits cancel in
 //! the flux but not in the squares. The slot then gives up history the correction did not
-//! cost (a drag's error right after it was 30% higher).
+//! cost (a drag's error right after it was 30% higher on cornell-box).
 //!
-//! So pose B weighs each of its deposits against the deposit of the same path and rank (the
-//! same count of deposits stored before it) in pose A: where the two lie within
-//! [`PAIR_RADIUS`] floor radii of each other and face the same way, the B deposit carries the
-//! cross term, so that a disc holding both sums the square of their sum. A disc that holds
-//! one of them alone, which only a pair straddling its rim can do, is off by the cross term;
-//! the slot's sum is clamped at zero ([`crate::update::history_kept`] keeps all history for
-//! none). Pose A records its paths' first [`PAIRED_DEPOSITS`] stored deposits; later ones
-//! count alone, as before.
+//! So pose B pairs each of its deposits with the deposit its path stored in the same order in
+//! pose A ([`partner`]), if that one faces the same way, and carries its position and
+//! luminance. A disc that holds both adds the cross term `2 l_A l_B` to their squares, so it
+//! sums the square of their sum; a disc that holds one of them counts that one's square
+//! ([`variance_term`]). Pose A records its paths' first [`PAIRED_DEPOSITS`] stored deposits;
+//! later ones count alone, as before.
 
 use crate::layout::Photon;
 use glam::Vec3;
 
 /// Stored deposits per path that pose B pairs with pose A's: on cornell-box's drag, pairing
 /// the first 1, 2, 3 or 4 measured 0.074, 0.067, 0.063 and 0.062 a quarter second after it,
-/// pairing all of them 0.062.
+/// pairing all of them 0.062 (docs/error-vs-time.md, "A path's two deposits counted as
+/// one").
 pub const PAIRED_DEPOSITS: usize = 4;
 
-/// How near a path's deposits in the two poses must lie to count as one, in radii of the
-/// correction's floor disc: on cornell-box's drag 0.5 measured 0.061 a quarter second after
-/// it, 1.0 measured 0.062 (more pairs straddle a disc's rim).
-pub const PAIR_RADIUS: f32 = 0.5;
-
-/// A pose-A deposit as pose B's pass pairs with it: where it landed, its power's luminance
-/// (negative: pose A's power is), and its packed normal.
+/// A pose-A deposit a pose-B deposit is paired with: where it landed, its power's luminance
+/// (negative: pose A's power is), and its packed normal. Zero luminance stands for none.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Partner {
     /// Where it landed.
     pub position: Vec3,
-    /// Luminance of its power; zero stands for no deposit.
+    /// Luminance of its power; zero stands for no partner.
     pub luminance: f32,
     /// Octahedral encoding of its normal ([`Photon::normal_oct`]).
     pub normal_oct: u32,
@@ -54,70 +48,75 @@ impl Partner {
     }
 }
 
-/// The squared luminance pose B's `deposit` adds to a slot's correction variance, given the
-/// deposit of the same path and rank in pose A (if any) and the correction's squared floor
-/// radius `r2_floor`: its own square, plus twice the product with its partner's luminance
-/// where the two count as one.
+/// The partner of pose B's `deposit`: `candidate`, the deposit its path stored in the same
+/// order in pose A (within the first [`PAIRED_DEPOSITS`]), if it faces the same way, so that
+/// a disc gathers both or neither for their normals.
 #[inline]
-pub fn paired_square(deposit: &Photon, partner: Option<&Partner>, r2_floor: f32) -> f32 {
-    let own = crate::update::luminance(deposit.power);
-    let cross = partner
-        .filter(|a| {
-            let d2 = (a.position - Vec3::from(deposit.position)).length_squared();
-            a.normal_oct == deposit.normal_oct && d2 < PAIR_RADIUS * PAIR_RADIUS * r2_floor
-        })
-        .map_or(0.0, |a| 2.0 * a.luminance * own);
-    own * own + cross
+pub fn partner(deposit: &Photon, candidate: Option<&Partner>) -> Option<Partner> {
+    candidate
+        .filter(|a| a.luminance != 0.0 && a.normal_oct == deposit.normal_oct)
+        .copied()
+}
+
+/// What a deposit of power luminance `own` adds to the correction's variance in a disc that
+/// holds it: its square, and where its partner (`partner_in_disc`) lies in the same disc the
+/// cross term `2 a own`, which makes the pair count `(a + own)^2`, but never less than
+/// [`PAIR_FLOOR`] of their squares' sum.
+#[inline]
+pub fn variance_term(own: f32, partner_in_disc: Option<f32>) -> f32 {
+    own * own + partner_in_disc.map_or(0.0, |a| cross_term(a, own))
+}
+
+/// The share of its two squares a pair counts at least. Where few changed paths pass, a
+/// disc's variance rests on a handful of deposits; pairs that cancel exactly would then
+/// leave it near zero although a changed path could as well have landed there, and the slot
+/// would keep its stale history whole. On wedding-band's drag, pairs counted at nothing
+/// measured 5% to 9% above counting each deposit alone.
+pub const PAIR_FLOOR: f32 = 0.25;
+
+/// The cross term of a pair of luminances `a` (pose A) and `b` (pose B), floored
+/// ([`PAIR_FLOOR`]).
+#[inline]
+pub fn cross_term(a: f32, b: f32) -> f32 {
+    (2.0 * a * b).max(-(1.0 - PAIR_FLOOR) * (a * a + b * b))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn photon(x: f32, power: f32, normal_oct: u32) -> Photon {
+    fn photon(power: f32, normal_oct: u32) -> Photon {
         Photon {
-            position: [x, 0.0, 0.0],
+            position: [1.0, 0.0, 0.0],
             path: 7,
             power: [power; 3],
             normal_oct,
         }
     }
 
-    /// A disc holding both deposits of a pair sums the square of their sum: zero for a path
-    /// the move did not change, the difference's square for one it dimmed.
+    /// A disc holding both deposits of a pair sums the square of their sum (the difference's
+    /// square for a path the move dimmed), but not less than the floor's share of their
+    /// squares (a path the move did not change); a disc holding one counts its square alone.
     #[test]
-    fn a_pair_in_one_disc_counts_its_net_deposit() {
+    fn a_pair_counts_its_net_deposit_in_a_disc_that_holds_both() {
         for (a, b) in [(-2.0f32, 2.0f32), (-2.0, 1.5), (-0.5, 3.0)] {
-            let partner = Partner::of(&photon(1.0, a, 9));
-            let square = paired_square(&photon(1.2, b, 9), Some(&partner), 1.0);
+            let (pose_a, pose_b) = (photon(a, 9), photon(b, 9));
+            let pair = partner(&pose_b, Some(&Partner::of(&pose_a))).expect("they pair");
             // Luminance weights sum to one, so a grey power's luminance is the power.
-            let disc = partner.luminance * partner.luminance + square;
-            approx::assert_relative_eq!(disc, (a + b) * (a + b), max_relative = 1e-5);
+            let both = variance_term(a, None) + variance_term(b, Some(pair.luminance));
+            let floor = PAIR_FLOOR * (a * a + b * b);
+            approx::assert_relative_eq!(both, ((a + b) * (a + b)).max(floor), max_relative = 1e-5);
+            approx::assert_relative_eq!(variance_term(b, None), b * b, max_relative = 1e-6);
         }
     }
 
-    /// Deposits too far apart, facing another way, or without a partner count alone.
+    /// A deposit facing another way, or without one in pose A, has no partner.
     #[test]
-    fn unpaired_deposits_count_their_own_square() {
-        let partner = Partner::of(&photon(0.0, -2.0, 9));
-        let alone = 4.0;
-        // The floor's radius is 2, so pairs lie within 1 of each other.
-        assert_eq!(
-            paired_square(&photon(1.5, 2.0, 9), Some(&partner), 4.0),
-            alone
-        );
-        assert_eq!(
-            paired_square(&photon(0.5, 2.0, 8), Some(&partner), 4.0),
-            alone
-        );
-        assert_eq!(paired_square(&photon(0.5, 2.0, 9), None, 4.0), alone);
-        assert_eq!(
-            paired_square(&photon(0.5, 2.0, 9), Some(&Partner::default()), 4.0),
-            alone
-        );
-        assert_eq!(
-            paired_square(&photon(0.5, 2.0, 9), Some(&partner), 4.0),
-            4.0 - 8.0
-        );
+    fn only_a_deposit_facing_the_same_way_is_a_partner() {
+        let a = Partner::of(&photon(-2.0, 9));
+        assert_eq!(partner(&photon(2.0, 9), Some(&a)), Some(a));
+        assert_eq!(partner(&photon(2.0, 8), Some(&a)), None);
+        assert_eq!(partner(&photon(2.0, 9), None), None);
+        assert_eq!(partner(&photon(2.0, 9), Some(&Partner::default())), None);
     }
 }
