@@ -279,13 +279,13 @@ impl Lanes {
 /// What one slot finds in its disc.
 fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
     let mut found = Found::default();
+    let (x, _, r2) = disc(hp, map);
     for_photons_in_disc(hp, map, |i, k, p| {
         found.count += 1;
         found.weight += map.weights.map_or(1.0, |w| w[i]);
         found.flux += p.power;
         let partner = map.grid.partners.get(k).copied().unwrap_or_default();
-        let both = (Vec3::from_slice(&partner[..3]) - Vec3::from(hp.position)).length_squared()
-            < search_r2(hp, map.r2_floor);
+        let both = (Vec3::from_slice(&partner[..3]) - x).length_squared() < r2;
         let own = luminance(p.power.into());
         found.power_sq += variance_term(own, both.then_some(partner[3]));
     });

@@ -112,12 +112,12 @@ fn trace_photon(path: u32) -> Traced {
         return Traced(0u, false, stored);
     }
     // Pairing is a local correction's, whose passes test the movers' boxes.
-    let records_pairs = MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u;
-    let squares = MOVERS && (params.flags & PHOTON_PAIR_DEPOSITS) != 0u;
+    let records = MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u;
+    let pairs = MOVERS && (params.flags & PHOTON_PAIR_DEPOSITS) != 0u;
     // Pose A's deposits of this path (a fresh record pairs nothing), and which of its stored
     // deposits comes next.
     var pose_a: PathDeposits;
-    if squares && params.mask_offset + path < arrayLength(&partners) {
+    if pairs && params.mask_offset + path < arrayLength(&partners) {
         pose_a = partners[params.mask_offset + path];
     }
     var nth = 0u;
@@ -159,14 +159,14 @@ fn trace_photon(path: u32) -> Traced {
                 if EMISSION == EMISSION_REGION {
                     weights[slot] = emission.weight;
                 }
-                if squares {
+                if pairs {
                     let partner = pairing_partner(pose_a, nth, normal_oct);
                     for (var w = 0u; w < 4u; w++) {
                         weights[4u * slot + w] = partner[w];
                     }
                 }
             }
-            if records_pairs && nth < PAIRED_DEPOSITS {
+            if records && nth < PAIRED_DEPOSITS {
                 stored.deposits[nth] = vec4<f32>(position, luminance(deposit));
                 stored.normal_oct[nth] = normal_oct;
             }
