@@ -20,7 +20,7 @@ mod resolve;
 pub mod trace;
 
 use path_record::PathRecord;
-use photon_grid::{PhotonGrid, build_photon_grid};
+use photon_grid::{MapContents, PhotonGrid, build_photon_grid};
 use photon_pass::{Deposits, photon_pass_main};
 use photon_search::{PhotonMap, for_photons_in_disc};
 use ppm_core::check::check_hit_points;
@@ -62,6 +62,10 @@ pub struct CpuBackend {
     /// Per deposit, its pose-A partner (position, luminance; zero for none) where a pass
     /// paired its deposits ([`photon_flags::PAIR_DEPOSITS`]).
     partners: Option<Vec<[f32; 4]>>,
+    /// Deposits (indices into `photons`) the grid leaves out: both of each pair that cancels
+    /// (`ppm_core::update::pairing::Partner::cancels`), which would add nothing but rounding
+    /// to a gather (a third of a cornell-box drag step's correction).
+    cancelled: Vec<u32>,
     /// The last photon pass's `gather_r2_floor`.
     r2_floor: f32,
     /// The gather kind the last photon pass named (none since the scene was loaded or
@@ -165,6 +169,7 @@ impl SceneUpload for CpuBackend {
         self.last_pass_from = 0;
         self.weights = None;
         self.partners = None;
+        self.cancelled.clear();
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
         self.unconsumed = None;
@@ -210,6 +215,10 @@ impl CpuBackend {
         self.map_kind = Some(params.gather_kind);
         self.r2_floor = params.gather_r2_floor;
         if params.flags & photon_flags::ADD_TO_MAP != 0 {
+            // Pose A's deposits are the last pass's, this pass's follow them.
+            let from = self.last_pass_from as u32;
+            self.cancelled
+                .extend(deposits.cancelled.iter().map(|&i| from + i));
             self.last_pass_from = self.photons.len();
             if let Some(added) = deposits.partners {
                 let mut partners = self.partners.take().unwrap_or_default();
@@ -221,9 +230,11 @@ impl CpuBackend {
             }
             self.photons.extend(deposits.photons);
         } else {
+            // Pairs cancel in the map only where it holds both of them.
             self.last_pass_from = 0;
             self.photons = deposits.photons;
             self.partners = deposits.partners;
+            self.cancelled.clear();
         }
         self.passes_stored += 1;
         let unweighted = deposits.weights.is_none();
@@ -329,13 +340,13 @@ impl PhotonPass for CpuBackend {
 /// The last photon pass's grid, built now if it is not yet.
 fn indexed<'a>(
     index: &'a mut PhotonIndex,
-    (photons, partners): (&[Photon], Option<&[[f32; 4]]>),
+    contents: MapContents,
     hit_points: &[HitPoint],
     r2_floor: f32,
     pass: &'static str,
 ) -> Result<&'a PhotonGrid, BackendError> {
     if let PhotonIndex::Pending = index {
-        let grid = build_photon_grid(photons, partners, hit_points, r2_floor);
+        let grid = build_photon_grid(contents, hit_points, r2_floor);
         *index = PhotonIndex::Indexed(grid);
     }
     match index {
@@ -399,7 +410,11 @@ impl DynamicBackend for CpuBackend {
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         let grid = indexed(
             &mut self.grid,
-            (&self.photons, self.partners.as_deref()),
+            MapContents {
+                photons: &self.photons,
+                partners: self.partners.as_deref(),
+                left_out: &self.cancelled,
+            },
             &self.hit_points,
             self.r2_floor,
             "landing paths",
@@ -432,7 +447,11 @@ impl GatherPass for CpuBackend {
         self.unconsumed = None;
         let grid = indexed(
             &mut self.grid,
-            (&self.photons, self.partners.as_deref()),
+            MapContents {
+                photons: &self.photons,
+                partners: self.partners.as_deref(),
+                left_out: &self.cancelled,
+            },
             &self.hit_points,
             self.r2_floor,
             "gather",

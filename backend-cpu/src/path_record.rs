@@ -207,6 +207,7 @@ impl PathRecord {
             photons,
             weights: None,
             partners: None,
+            cancelled: Vec::new(),
             stats,
             paths: None,
         }

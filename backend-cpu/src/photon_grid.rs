@@ -1,6 +1,6 @@
 //! The per-pass photon map (ppm_core::grid): cells sized to the radii in use, photons copied
 //! into bucket order by a stable counting sort, so a gather reads them contiguously and sums
-//! them in a fixed order. Each photon's normal is decoded once here, not once per visible point
+//! them in a fixed order (pairs that cancel left out). Each photon's normal is decoded once here, not once per visible point
 //! that tests it.
 
 use glam::Vec3;
@@ -57,14 +57,31 @@ pub struct PhotonGrid {
     pub partners: Vec<[f32; 4]>,
 }
 
-/// Builds the grid over `photons` (and their pose-A `partners`, where a pass paired them) for
-/// the gather radii of `hit_points`' visible points (at least `sqrt(r2_floor)`).
+/// What a grid files: a map's deposits, their pose-A partners where a pass paired them
+/// ([`ppm_core::update::pairing`]), and the deposits it leaves out (indices; pairs that
+/// cancel, which add nothing to a gather).
+#[derive(Clone, Copy)]
+pub struct MapContents<'a> {
+    /// The deposits.
+    pub photons: &'a [Photon],
+    /// Each deposit's partner (position, luminance; zero for none), where a pass paired them.
+    pub partners: Option<&'a [[f32; 4]]>,
+    /// Deposits left out of the grid.
+    pub left_out: &'a [u32],
+}
+
+/// Builds the grid over `contents` for the gather radii of `hit_points`' visible points (at
+/// least `sqrt(r2_floor)`).
 pub fn build_photon_grid(
-    photons: &[Photon],
-    partners: Option<&[[f32; 4]]>,
+    contents: MapContents,
     hit_points: &[HitPoint],
     r2_floor: f32,
 ) -> PhotonGrid {
+    let MapContents {
+        photons,
+        partners,
+        left_out,
+    } = contents;
     let histogram = hit_points
         .par_iter()
         .filter(|h| h.is_valid())
@@ -84,10 +101,15 @@ pub fn build_photon_grid(
     } else {
         CELL_SCALE
     };
+    let mut filed = vec![true; photons.len()];
+    for &i in left_out {
+        filed[i as usize] = false;
+    }
+    let count = filed.iter().filter(|f| **f).count();
     let params = GridParams {
         cell_size: cell_size(&histogram) * scale,
-        bucket_count: bucket_count(photons.len() as u32),
-        photon_count: photons.len() as u32,
+        bucket_count: bucket_count(count as u32),
+        photon_count: count as u32,
         _pad0: 0,
     };
     let keys: Vec<u32> = photons
@@ -96,16 +118,17 @@ pub fn build_photon_grid(
         .map(|p| cell_key(cell_of(Vec3::from(p.position), params.cell_size)))
         .collect();
     let mask = params.bucket_count - 1;
+    let filed_keys = || keys.iter().enumerate().filter(|(i, _)| filed[*i]);
     let mut bucket_start = vec![0u32; params.bucket_count as usize + 1];
-    for &k in &keys {
+    for (_, &k) in filed_keys() {
         bucket_start[(k & mask) as usize + 1] += 1;
     }
     for i in 1..bucket_start.len() {
         bucket_start[i] += bucket_start[i - 1];
     }
     let mut next = bucket_start.clone();
-    let mut order = vec![0u32; photons.len()];
-    for (i, &k) in keys.iter().enumerate() {
+    let mut order = vec![0u32; count];
+    for (i, &k) in filed_keys() {
         let slot = &mut next[(k & mask) as usize];
         order[*slot as usize] = i as u32;
         *slot += 1;

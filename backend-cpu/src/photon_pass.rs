@@ -30,6 +30,10 @@ pub struct Deposits {
     /// Per deposit, the pose-A deposit it is paired with: position and luminance, zero
     /// luminance for none ([`photon_flags::PAIR_DEPOSITS`] in pose B only).
     pub partners: Option<Vec<[f32; 4]>>,
+    /// Both deposits of each pair that cancels ([`Partner::cancels`]), as indices into the
+    /// pose-A deposits followed by this pass's: they add nothing to a gather, which may leave
+    /// them out.
+    pub cancelled: Vec<u32>,
     /// Counters.
     pub stats: PhotonStats,
     /// The paths' segments, where the pass keeps them ([`PathRecord::wanted`]).
@@ -70,7 +74,7 @@ pub fn photon_pass_main(
         .zip(spare)
         .map(|(c, spare)| {
             let (mut deposits, mut weights, mut rays, mut culled) = (Vec::new(), Vec::new(), 0, 0);
-            let mut partners = Vec::new();
+            let (mut partners, mut cancelled) = (Vec::new(), Vec::new());
             let mut record = keep_paths.then(|| spare.unwrap_or_default().recycled(c * CHUNK));
             let end = ((c + 1) * CHUNK).min(params.photon_count);
             for local in c * CHUNK..end {
@@ -105,18 +109,24 @@ pub fn photon_pass_main(
                     weights.resize(weights.len() + deposits.len() - before, emission.weight);
                 }
                 if pairs {
-                    let stored = of_path(pose_a, path);
-                    partners.extend(deposits[before..].iter().enumerate().map(|(nth, d)| {
+                    let (first, stored) = of_path(pose_a, path);
+                    for (nth, d) in deposits[before..].iter().enumerate() {
                         let candidate = stored.get(nth).filter(|_| nth < PAIRED_DEPOSITS);
-                        partner(d, candidate.map(Partner::of).as_ref())
-                            .map_or([0.0; 4], |a| a.position.extend(a.luminance).into())
-                    }));
+                        let a = partner(d, candidate.map(Partner::of).as_ref());
+                        if a.is_some_and(|a| a.cancels(d)) {
+                            let own = pose_a.len() + before + nth;
+                            cancelled.extend([(first + nth) as u32, own as u32]);
+                        }
+                        partners
+                            .push(a.map_or([0.0; 4], |a| a.position.extend(a.luminance).into()));
+                    }
                 }
             }
             Traced {
                 deposits,
                 weights,
                 partners,
+                cancelled,
                 rays,
                 culled,
                 record,
@@ -129,7 +139,15 @@ pub fn photon_pass_main(
     let mut weights = Vec::new();
     let mut partners = Vec::new();
     let mut records = Vec::new();
+    let mut cancelled = Vec::new();
     for t in traced {
+        // A task numbered its own deposits from zero after pose A's.
+        let (offset, a) = (photons.len() as u32, pose_a.len() as u32);
+        cancelled.extend(
+            t.cancelled
+                .iter()
+                .map(|&i| if i < a { i } else { i + offset }),
+        );
         photons.extend(t.deposits);
         weights.extend(t.weights);
         partners.extend(t.partners);
@@ -146,6 +164,7 @@ pub fn photon_pass_main(
         photons,
         weights: source.keeps_weights().then_some(weights),
         partners: pairs.then_some(partners),
+        cancelled,
         stats,
         paths,
     }
@@ -156,16 +175,18 @@ struct Traced {
     deposits: Vec<Photon>,
     weights: Vec<f32>,
     partners: Vec<[f32; 4]>,
+    /// As [`Deposits::cancelled`], this task's own deposits numbered from pose A's count.
+    cancelled: Vec<u32>,
     rays: u64,
     culled: u64,
     record: Option<BatchRecord>,
 }
 
-/// Path `path`'s deposits among `deposits` (in path order).
-fn of_path(deposits: &[Photon], path: u32) -> &[Photon] {
+/// Path `path`'s deposits among `deposits` (in path order), and the index of the first.
+fn of_path(deposits: &[Photon], path: u32) -> (usize, &[Photon]) {
     let start = deposits.partition_point(|d| d.path < path);
     let end = start + deposits[start..].partition_point(|d| d.path == path);
-    &deposits[start..end]
+    (start, &deposits[start..end])
 }
 
 /// Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),

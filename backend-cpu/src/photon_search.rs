@@ -232,7 +232,8 @@ impl Lanes {
         for_cells_in(range, grid, |first, photons, key| {
             for (k, p) in photons.iter().enumerate().filter(|(_, p)| p.cell == key) {
                 // The deposit's square and, where its pose-A partner lies in the same disc,
-                // the cross term (ppm_core's variance_term, lane by lane).
+                // the cross term (ppm_core's variance_term, lane by lane; the grid holds no
+                // pair that cancels).
                 let (own_sq, cross, partner) = if SQUARES {
                     let own = luminance(p.power.into());
                     let a = grid.partners.get(first + k).copied().unwrap_or_default();
@@ -287,7 +288,8 @@ fn photons_in_disc(hp: &HitPoint, map: &PhotonMap) -> Found {
         let partner = map.grid.partners.get(k).copied().unwrap_or_default();
         let both = (Vec3::from_slice(&partner[..3]) - x).length_squared() < r2;
         let own = luminance(p.power.into());
-        found.power_sq += variance_term(own, both.then_some(partner[3]));
+        // The grid holds no pair that cancels (`MapContents::left_out`).
+        found.power_sq += variance_term(own, both.then_some(partner[3]), false);
     });
     found
 }
@@ -361,10 +363,19 @@ fn for_cells_in(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::photon_grid::build_photon_grid;
+    use crate::photon_grid::{MapContents, build_photon_grid};
     use ppm_core::geometry::{oct_encode, oct_faces};
     use ppm_core::layout::{Photon, hit_flags};
     use ppm_core::rng::{PassKind, StreamKey};
+
+    /// A map of `photons` alone, none paired or left out.
+    fn contents(photons: &[Photon]) -> MapContents<'_> {
+        MapContents {
+            photons,
+            partners: None,
+            left_out: &[],
+        }
+    }
 
     /// Photons on a plane (some on its underside) and a perpendicular wall at `scale`, one far
     /// away; visible points on the plane with radii spread over two orders of magnitude.
@@ -417,7 +428,8 @@ mod tests {
     /// The grid finds exactly the photons a scan of all of them finds, at any scale and with a
     /// deposit far from the rest (which must not starve the others' buckets), within each
     /// slot's radius or a pass's wider floor, or a slot's own wider correction disc, which
-    /// only a pass with a floor reads.
+    /// only a pass with a floor reads; never one it was told to leave out (with a floor, a
+    /// correction's pairs that cancel).
     #[test]
     fn the_grid_finds_what_a_brute_force_scan_finds() {
         let cases = [(1.0, 10.0), (1e-4, 1e-3), (1e4, 1e37), (1.0, 1e8)];
@@ -427,7 +439,15 @@ mod tests {
                 hp.correction_r2 = 0.04 * scale * scale;
             }
             let r2_floor = floor * scale * scale;
-            let grid = build_photon_grid(&photons, None, &hit_points, r2_floor);
+            let left_out: Vec<u32> = match floor > 0.0 {
+                true => (0..photons.len() as u32).filter(|i| i % 7 == 3).collect(),
+                false => Vec::new(),
+            };
+            let filed = MapContents {
+                left_out: &left_out,
+                ..contents(&photons)
+            };
+            let grid = build_photon_grid(filed, &hit_points, r2_floor);
             let map = PhotonMap {
                 grid: &grid,
                 weights: None,
@@ -439,6 +459,7 @@ mod tests {
                 found.sort_unstable();
                 let n = Vec3::from(hp.normal);
                 let expected: Vec<usize> = (0..photons.len())
+                    .filter(|&i| !left_out.contains(&(i as u32)))
                     .filter(|&i| {
                         let p = &photons[i];
                         let r2 = match floor > 0.0 {
@@ -474,7 +495,7 @@ mod tests {
             ];
         }
         for (hit_points, floor) in [(&scattered, 0.0), (&rows, 0.0), (&rows, 1e-4)] {
-            let grid = build_photon_grid(&photons, None, hit_points, floor);
+            let grid = build_photon_grid(contents(&photons), hit_points, floor);
             let map = PhotonMap {
                 grid: &grid,
                 weights: None,

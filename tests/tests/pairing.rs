@@ -1,7 +1,7 @@
 //! A local move's correction pairs each path's deposits in its two poses
 //! ([`ppm_core::update::pairing`]) on both backends: its variance counts what a path's deposits
-//! leave net (at least the floor's share of their squares), so a move that changes few paths
-//! costs the kept slots little history, where counting each deposit alone gave up much of it.
+//! leave net (nothing for a pair that cancels), so a move that changes few paths costs the
+//! kept slots little history, where counting each deposit alone gave up much of it.
 //!
 //! The scene is the furnace with a mover of two tiny triangles at the corners of a large box
 //! ([`tests::furnace_with_mover`]): most correction paths cross the box without meeting the
@@ -51,9 +51,9 @@ fn history_kept(backend: &mut dyn Backend, pair_deposits: bool) -> f64 {
 }
 
 /// Paths that cross the mover's box without meeting it come out the same in both poses, so
-/// a pair counts only the floor's quarter of its squares (`PAIR_FLOOR`): the kept slots give
-/// up less than half the history they gave up counted deposit by deposit. Both backends pair
-/// alike.
+/// their pairs cancel and count nothing (`Partner::cancels`): the kept slots give up less
+/// than a tenth of the history they gave up counted deposit by deposit (0.011 against 0.182
+/// when written). Both backends pair alike.
 #[test]
 fn paired_deposits_keep_the_history_a_small_move_did_not_change() {
     let mut kept = Vec::new();
@@ -64,7 +64,7 @@ fn paired_deposits_keep_the_history_a_small_move_did_not_change() {
         let alone = history_kept(backend.as_mut(), false);
         println!("{name}: history kept {paired:.4} paired, {alone:.4} deposit by deposit");
         assert!(
-            1.0 - paired < 0.5 * (1.0 - alone),
+            1.0 - paired < 0.1 * (1.0 - alone),
             "{name}: paired deposits kept {paired}, alone {alone}"
         );
         kept.push((name, paired, alone));

@@ -63,14 +63,17 @@ fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: 
         (*found).flux += p.power;
         let own = luminance(p.power);
         var both = false;
+        var cancels = false;
         var partner = 0.0;
         if PAIRED {
             let i = 4u * order[k];
-            let a = vec3<f32>(weights[i], weights[i + 1u], weights[i + 2u]) - hp.position;
+            let at = vec3<f32>(weights[i], weights[i + 1u], weights[i + 2u]);
+            let a = at - hp.position;
             partner = weights[i + 3u];
             both = dot(a, a) < r2;
+            cancels = all(at == p.position) && partner == -own;
         }
-        (*found).power_sq += variance_term(own, partner, both);
+        (*found).power_sq += variance_term(own, partner, both, cancels);
     }
 }
 

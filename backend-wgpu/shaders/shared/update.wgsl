@@ -59,9 +59,13 @@ fn pairing_partner(pose_a: PathDeposits, nth: u32, normal_oct: u32) -> vec4<f32>
 
 // ppm_core::update::pairing::variance_term: what a deposit of luminance `own` adds to a
 // disc's correction variance, its partner of luminance `partner` in the disc or not; the
-// cross term floored as ppm_core::update::pairing::cross_term floors it.
-fn variance_term(own: f32, partner: f32, both: bool) -> f32 {
-    let cross = max(2.0 * partner * own, -(1.0 - PAIR_FLOOR) * (partner * partner + own * own));
+// cross term floored as ppm_core::update::pairing::cross_term floors it, and a pair that
+// `cancels` (ppm_core::update::pairing::Partner::cancels) counting nothing.
+fn variance_term(own: f32, partner: f32, both: bool, cancels: bool) -> f32 {
+    var cross = max(2.0 * partner * own, -(1.0 - PAIR_FLOOR) * (partner * partner + own * own));
+    if cancels {
+        cross = -(partner * partner + own * own);
+    }
     return own * own + select(0.0, cross, both);
 }
 

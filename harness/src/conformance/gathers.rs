@@ -470,7 +470,8 @@ fn found_by_brute_force(
             weight += w;
             flux += Vec3::from(ph.power);
             let both = partner.filter(|a| inside(a.position)).map(|a| a.luminance);
-            power_sq += variance_term(luminance(ph.power), both);
+            let cancels = partner.is_some_and(|a| a.cancels(ph));
+            power_sq += variance_term(luminance(ph.power), both, cancels);
         }
     }
     let shrink = disc_shrink(hp.r2, r2);

@@ -13,8 +13,9 @@
 //! pose A ([`partner`]), if that one faces the same way, and carries its position and
 //! luminance. A disc that holds both adds the cross term `2 l_A l_B` to their squares, so it
 //! sums the square of their sum; a disc that holds one of them counts that one's square
-//! ([`variance_term`]). Pose A records its paths' first [`PAIRED_DEPOSITS`] stored deposits;
-//! later ones count alone, as before.
+//! ([`variance_term`]). A pair that cancels exactly ([`Partner::cancels`]: a path the move
+//! did not change, up to that deposit) counts nothing. Pose A records its paths' first
+//! [`PAIRED_DEPOSITS`] stored deposits; later ones count alone, as before.
 
 use crate::layout::Photon;
 use glam::Vec3;
@@ -46,6 +47,16 @@ impl Partner {
             normal_oct: photon.normal_oct,
         }
     }
+
+    /// Whether pose B's `deposit` is this deposit with its power negated, bit for bit: the
+    /// same position and the opposite luminance. Its path met no moved object in either pose
+    /// before it (the same random numbers trace the same path), so the pair's net deposit is
+    /// zero in every disc. A third of a cornell-box drag step's pairs cancel.
+    #[inline]
+    pub fn cancels(&self, deposit: &Photon) -> bool {
+        self.position == Vec3::from(deposit.position)
+            && self.luminance == -crate::update::luminance(deposit.power)
+    }
 }
 
 /// The partner of pose B's `deposit`: `candidate`, the deposit its path stored in the same
@@ -59,19 +70,27 @@ pub fn partner(deposit: &Photon, candidate: Option<&Partner>) -> Option<Partner>
 }
 
 /// What a deposit of power luminance `own` adds to the correction's variance in a disc that
-/// holds it: its square, and where its partner (`partner_in_disc`) lies in the same disc the
-/// cross term `2 a own`, which makes the pair count `(a + own)^2`, but never less than
-/// [`PAIR_FLOOR`] of their squares' sum.
+/// holds it: its square, and where its partner of luminance `a` lies in the same disc
+/// (`partner_in_disc`) the cross term `2 a own`, which makes the pair count `(a + own)^2`, but
+/// never less than [`PAIR_FLOOR`] of their squares' sum; a pair that `cancels`
+/// ([`Partner::cancels`], and then both lie in every disc that holds one) counts nothing.
 #[inline]
-pub fn variance_term(own: f32, partner_in_disc: Option<f32>) -> f32 {
-    own * own + partner_in_disc.map_or(0.0, |a| cross_term(a, own))
+pub fn variance_term(own: f32, partner_in_disc: Option<f32>, cancels: bool) -> f32 {
+    own * own
+        + partner_in_disc.map_or(0.0, |a| match cancels {
+            true => -(a * a + own * own),
+            false => cross_term(a, own),
+        })
 }
 
-/// The share of its two squares a pair counts at least. Where few changed paths pass, a
-/// disc's variance rests on a handful of deposits; pairs that cancel exactly would then
-/// leave it near zero although a changed path could as well have landed there, and the slot
-/// would keep its stale history whole. On wedding-band's drag, pairs counted at nothing
-/// measured 5% to 9% above counting each deposit alone.
+/// The share of its two squares a pair counts at least, unless it cancels exactly. Where few
+/// changed paths pass, a disc's variance rests on a handful of pairs; changed paths that land
+/// almost where they did, with the same power, would leave it near zero although another
+/// could as well have landed elsewhere, and the slot would keep its stale history whole. On
+/// wedding-band's drag, such pairs counted at nothing measured 5% to 9% above counting each
+/// deposit alone. A pair that cancels exactly is a path the move did not change: counted at
+/// nothing, it took cornell-box's drag 6% nearer the truth right after it
+/// (docs/error-vs-time.md, "Pairs that cancel count nothing").
 pub const PAIR_FLOOR: f32 = 0.25;
 
 /// The cross term of a pair of luminances `a` (pose A) and `b` (pose B), floored
@@ -103,11 +122,30 @@ mod tests {
             let (pose_a, pose_b) = (photon(a, 9), photon(b, 9));
             let pair = partner(&pose_b, Some(&Partner::of(&pose_a))).expect("they pair");
             // Luminance weights sum to one, so a grey power's luminance is the power.
-            let both = variance_term(a, None) + variance_term(b, Some(pair.luminance));
+            let both =
+                variance_term(a, None, false) + variance_term(b, Some(pair.luminance), false);
             let floor = PAIR_FLOOR * (a * a + b * b);
             approx::assert_relative_eq!(both, ((a + b) * (a + b)).max(floor), max_relative = 1e-5);
-            approx::assert_relative_eq!(variance_term(b, None), b * b, max_relative = 1e-6);
+            approx::assert_relative_eq!(variance_term(b, None, false), b * b, max_relative = 1e-6);
         }
+    }
+
+    /// A pair that cancels, pose B's deposit pose A's with its power negated, counts nothing
+    /// in a disc that holds both; moved or with another power, a pair does not cancel.
+    #[test]
+    fn a_pair_that_cancels_counts_nothing() {
+        let pose_a = Partner::of(&photon(-2.0, 9));
+        let same = photon(2.0, 9);
+        assert!(pose_a.cancels(&same));
+        let pair = variance_term(-2.0, None, false) + variance_term(2.0, Some(-2.0), true);
+        assert_eq!(pair, 0.0);
+        let moved = Photon {
+            position: [1.0, 1e-6, 0.0],
+            ..same
+        };
+        assert!(!pose_a.cancels(&moved));
+        assert!(!pose_a.cancels(&photon(1.5, 9)));
+        assert!(!pose_a.cancels(&photon(-2.0, 9)));
     }
 
     /// A deposit facing another way, or without one in pose A, has no partner.
