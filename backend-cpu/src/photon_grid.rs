@@ -1,7 +1,7 @@
 //! The per-pass photon map (ppm_core::grid): cells sized to the radii in use, photons copied
 //! into bucket order by a stable counting sort, so a gather reads them contiguously and sums
-//! them in a fixed order (pairs that cancel left out). Each photon's normal is decoded once here, not once per visible point
-//! that tests it.
+//! them in a fixed order (pairs that cancel left out). Each photon's normal is decoded once
+//! here, not once per visible point that tests it.
 
 use glam::Vec3;
 use ppm_core::geometry::oct_unfold;

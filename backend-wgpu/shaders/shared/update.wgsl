@@ -62,10 +62,8 @@ fn pairing_partner(pose_a: PathDeposits, nth: u32, normal_oct: u32) -> vec4<f32>
 // cross term floored as ppm_core::update::pairing::cross_term floors it, and a pair that
 // `cancels` (ppm_core::update::pairing::Partner::cancels) counting nothing.
 fn variance_term(own: f32, partner: f32, both: bool, cancels: bool) -> f32 {
-    var cross = max(2.0 * partner * own, -(1.0 - PAIR_FLOOR) * (partner * partner + own * own));
-    if cancels {
-        cross = -(partner * partner + own * own);
-    }
+    let squares = partner * partner + own * own;
+    let cross = select(max(2.0 * partner * own, -(1.0 - PAIR_FLOOR) * squares), -squares, cancels);
     return own * own + select(0.0, cross, both);
 }
 
