@@ -9,14 +9,16 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::geometry::{Frame, intersect_triangle, segment_meets_box};
 use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL};
 use ppm_core::textures::SurfaceTextures;
+use std::sync::Arc;
 
-/// The scene as the CPU passes read it: the same flat buffers a GPU backend binds.
+/// The scene as the CPU passes read it: the same flat buffers a GPU backend binds. Its
+/// triangles and tree are the compiled pose's own (shared, not copied).
 #[derive(Clone)]
 pub struct SceneData {
     /// Triangles in BVH leaf order.
-    pub triangles: Vec<GpuTriangle>,
+    pub triangles: Arc<Vec<GpuTriangle>>,
     /// obvhs's BVH over `triangles`.
-    pub bvh: Bvh2,
+    pub bvh: Arc<Bvh2>,
     /// Materials.
     pub materials: Vec<GpuMaterial>,
     /// Emitting triangles.
@@ -39,11 +41,11 @@ pub struct Hit {
 }
 
 impl SceneData {
-    /// The buffers of `scene`, copied.
+    /// The buffers of `scene`: its triangles and tree shared, the rest copied.
     pub fn new(scene: &CompiledScene) -> Self {
         Self {
-            triangles: scene.triangles.clone(),
-            bvh: scene.bvh.clone(),
+            triangles: Arc::clone(&scene.triangles),
+            bvh: Arc::clone(&scene.bvh),
             materials: scene.materials.clone(),
             lights: scene.lights.clone(),
             emitters: (0..scene.triangles.len() as u32)
@@ -61,9 +63,12 @@ impl SceneData {
             bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
         }
         let (a, b) = (&self.textures, &scene.textures);
-        same(&self.triangles, &scene.triangles)
-            && same(&self.bvh.nodes, &scene.bvh.nodes)
-            && self.bvh.primitive_indices == scene.bvh.primitive_indices
+        let shared =
+            Arc::ptr_eq(&self.triangles, &scene.triangles) && Arc::ptr_eq(&self.bvh, &scene.bvh);
+        (shared
+            || same(&self.triangles, &scene.triangles)
+                && same(&self.bvh.nodes, &scene.bvh.nodes)
+                && self.bvh.primitive_indices == scene.bvh.primitive_indices)
             && same(&self.materials, &scene.materials)
             && same(&self.lights, &scene.lights)
             && same(&a.uvs, &b.uvs)

@@ -7,9 +7,11 @@ use crate::layout::{
 use crate::scene::{Camera, MaterialKind, Scene};
 use crate::textures::{SurfaceTextures, compile_textures};
 use glam::{Vec3, Vec3A};
-use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
+use obvhs::bvh2::{Bvh2, node::Bvh2Node};
 use obvhs::{BvhBuildParams, triangle::Triangle};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 /// What a scene contains, so that passes and code paths it does not need are left out.
@@ -60,15 +62,19 @@ const BVH_PARAMS: BvhBuildParams = BvhBuildParams {
 };
 
 /// A scene flattened into GPU-layout buffers, plus the obvhs BVH for CPU traversal.
+///
+/// The triangles, nodes and tree are shared (`Arc`): a backend's or the driver's copy of a
+/// pose takes them without copying, and a move's refit writes new ones only for the pose it
+/// makes, so a small move in a large scene does not copy the scene for each reader.
 pub struct CompiledScene {
     /// Camera at the requested resolution.
     pub camera: GpuCamera,
     /// Triangles in BVH leaf order.
-    pub triangles: Vec<GpuTriangle>,
+    pub triangles: Arc<Vec<GpuTriangle>>,
     /// Flattened BVH nodes; node 0 is the root.
-    pub nodes: Vec<BvhNode>,
+    pub nodes: Arc<Vec<BvhNode>>,
     /// The BVH as obvhs built it; its primitive ids index `triangles` directly.
-    pub bvh: Bvh2,
+    pub bvh: Arc<Bvh2>,
     /// Materials.
     pub materials: Vec<GpuMaterial>,
     /// Emitting triangles with their selection distribution.
@@ -85,6 +91,8 @@ pub struct CompiledScene {
     /// [`tree_cost`] of the BVH when obvhs last built it from scratch: the bar a refitted tree
     /// is held to.
     pub bvh_built_cost: f32,
+    /// [`tree_cost`] of the BVH as it is: a refit updates it from the nodes it changes.
+    pub bvh_cost: f32,
     /// Levels of the deepest leaf (the root is level 1): bounds a traversal stack.
     pub bvh_depth: usize,
     /// The boxes of the objects a local move moves, in both poses: its photon passes store
@@ -93,6 +101,31 @@ pub struct CompiledScene {
     pub movers: Vec<GpuBounds>,
     /// Texture coordinates and images, empty for an untextured scene.
     pub textures: SurfaceTextures,
+    /// Each object's box as its triangles here are posed (`[min, max]`): a refit recomputes
+    /// the moved objects' alone, and `extent` is the box around them all.
+    pub object_bounds: Arc<Vec<[Vec3; 2]>>,
+    /// This pose's number, unique in the process.
+    pub pose: u64,
+    /// Where this pose differs from the one it was refitted from, if it was
+    /// ([`recompile_moved`](crate::refit::recompile_moved)): that pose's buffers become this
+    /// one's by copying these entries alone.
+    pub refit_from: Option<RefitWrites>,
+}
+
+/// The entries a refit wrote over the pose it started from.
+pub struct RefitWrites {
+    /// The pose refitted ([`CompiledScene::pose`]).
+    pub pose: u64,
+    /// Indices of the triangles rewritten.
+    pub triangles: Vec<u32>,
+    /// Indices of the nodes whose boxes changed (in both `nodes` and `bvh`).
+    pub nodes: Vec<u32>,
+}
+
+/// A number no other pose of this process holds.
+pub(crate) fn next_pose() -> u64 {
+    static POSES: AtomicU64 = AtomicU64::new(0);
+    POSES.fetch_add(1, Ordering::Relaxed)
 }
 
 /// Margin of the movers' boxes, relative to the scene's extent: ten times the ray offset,
@@ -122,7 +155,10 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         .collect();
     let start = Instant::now();
     let mut core_time = Duration::ZERO;
-    let bvh = build_bvh2_from_tris(&obvhs_tris, BVH_PARAMS, &mut core_time);
+    let mut bvh = build_bvh2_from_tris(&obvhs_tris, BVH_PARAMS, &mut core_time);
+    // What a move's refit walks from a moved triangle to the root (refit.rs).
+    bvh.init_primitives_to_nodes_if_uninit();
+    bvh.init_parents_if_uninit();
     let bvh_build_time = start.elapsed();
 
     // Lights in the scene's order, not the BVH's: a move rebuilds the BVH, and the paired
@@ -164,15 +200,15 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let nodes = flat_nodes(&bvh);
     let bvh_depth = tree_depth(&nodes);
     let bvh_built_cost = tree_cost(&bvh);
-    let (lo, hi) = bounds(&triangles);
-    let extent = (hi - lo).length();
+    let object_bounds = object_bounds(&triangles, scene.objects.len());
+    let extent = extent_of(&object_bounds);
     let glossy = materials.iter().any(crate::bsdf::chain_samples_lights);
     let anisotropic = materials.iter().any(crate::bsdf::is_anisotropic);
     CompiledScene {
         camera: gpu_camera(&scene.camera, width, height),
-        triangles,
-        nodes,
-        bvh,
+        triangles: Arc::new(triangles),
+        nodes: Arc::new(nodes),
+        bvh: Arc::new(bvh),
         materials,
         lights,
         features: SceneFeatures {
@@ -201,9 +237,13 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         light_power,
         bvh_build_time,
         bvh_built_cost,
+        bvh_cost: bvh_built_cost,
         bvh_depth,
         movers: Vec::new(),
         textures,
+        object_bounds: Arc::new(object_bounds),
+        pose: next_pose(),
+        refit_from: None,
     }
 }
 
@@ -226,15 +266,17 @@ pub fn mover_boxes(
 
 /// obvhs's nodes as the backends read them.
 pub(crate) fn flat_nodes(bvh: &Bvh2) -> Vec<BvhNode> {
-    bvh.nodes
-        .iter()
-        .map(|n| BvhNode {
-            min: n.aabb.min.into(),
-            first: n.first_index,
-            max: n.aabb.max.into(),
-            count: n.prim_count,
-        })
-        .collect()
+    bvh.nodes.iter().map(flat_node).collect()
+}
+
+/// One obvhs node in the GPU layout.
+pub(crate) fn flat_node(n: &Bvh2Node) -> BvhNode {
+    BvhNode {
+        min: n.aabb.min.into(),
+        first: n.first_index,
+        max: n.aabb.max.into(),
+        count: n.prim_count,
+    }
 }
 
 /// The summed half surface areas of a BVH's nodes: in proportion to the nodes a ray crossing
@@ -408,17 +450,34 @@ pub fn gpu_camera(c: &Camera, width: u32, height: u32) -> GpuCamera {
     }
 }
 
-pub(crate) fn bounds(triangles: &[GpuTriangle]) -> (Vec3, Vec3) {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+/// The smallest and largest corner of each object's triangles, as posed in `triangles`
+/// (`objects` entries; an object without triangles keeps an empty box).
+pub(crate) fn object_bounds(triangles: &[GpuTriangle], objects: usize) -> Vec<[Vec3; 2]> {
+    let mut boxes = vec![EMPTY_BOX; objects];
     for t in triangles {
-        let v0 = Vec3::from(t.v0);
-        for v in [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)] {
-            lo = lo.min(v);
-            hi = hi.max(v);
-        }
+        add_to_box(&mut boxes[t.object as usize], t);
     }
-    (lo, hi)
+    boxes
+}
+
+/// A box that contains nothing.
+pub(crate) const EMPTY_BOX: [Vec3; 2] = [Vec3::INFINITY, Vec3::NEG_INFINITY];
+
+/// Grows `b` to hold triangle `t`'s corners.
+pub(crate) fn add_to_box(b: &mut [Vec3; 2], t: &GpuTriangle) {
+    let v0 = Vec3::from(t.v0);
+    for v in [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)] {
+        b[0] = b[0].min(v);
+        b[1] = b[1].max(v);
+    }
+}
+
+/// The length of the diagonal of the box around `boxes`.
+pub(crate) fn extent_of(boxes: &[[Vec3; 2]]) -> f32 {
+    let [lo, hi] = boxes
+        .iter()
+        .fold(EMPTY_BOX, |[lo, hi], [a, b]| [lo.min(*a), hi.max(*b)]);
+    (hi - lo).length()
 }
 
 /// Ray direction through the image point `(px, py)` in pixels (`(0, 0)` is the top-left corner).

@@ -47,8 +47,8 @@ impl Scene {
     pub fn new(scene: &CompiledScene) -> Self {
         Self {
             camera: scene.camera,
-            triangles: scene.triangles.clone(),
-            bvh: scene.bvh.clone(),
+            triangles: Vec::clone(&scene.triangles),
+            bvh: Bvh2::clone(&scene.bvh),
             materials: scene.materials.clone(),
             lights: scene.lights.clone(),
             textures: scene.textures.clone(),

@@ -189,7 +189,7 @@ impl Renderer<'_> {
         // same in A and B until it crosses one.
         let movers = mover_boxes(&self.scene, &next, changed, self.extent);
         // Pose A's tree refitted to pose B, rebuilt only once it has grown (ppm_core::refit).
-        let mut compiled = recompile_moved(&self.compiled, &next, changed);
+        let mut compiled = recompile_moved(&self.compiled, &next, changed, self.spare.take());
         compiled.movers = movers.clone();
         self.compiled.movers = movers;
         let moved = Moved {
@@ -499,9 +499,11 @@ mod tests {
         }
     }
 
-    /// A drag copies each pose once: the copy a local move keeps for the next is the pose
-    /// the render now holds (triangles, tree and materials, byte for byte), after every move
-    /// of a drag; a restart drops it.
+    /// The pose a local move keeps for the next is the pose the render now holds
+    /// (triangles, tree and materials, byte for byte), after every move of a drag, and each
+    /// move after the first writes its pose into the buffers of the pose before last
+    /// (nothing else holds them: the backend and the host's traces share the current
+    /// pose's); a restart drops both.
     #[test]
     fn the_pose_kept_for_the_next_move_is_the_pose_rendered() {
         use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -519,16 +521,23 @@ mod tests {
         fn bytes<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
             bytemuck::cast_slice(v)
         }
+        let mut lent = 0;
         for _ in 0..3 {
             r.iteration().unwrap();
+            let spare = r.spare.as_ref().map(|s| s.triangles.as_ptr());
             r.move_objects(&[step], MoveMode::Local).unwrap();
+            lent += usize::from(spare == Some(r.compiled.triangles.as_ptr()));
             let (copy, _) = r.host_copy.as_ref().expect("the move kept its pose B");
             assert_eq!(copy.triangles, r.compiled.triangles);
             assert_eq!(bytes(&copy.bvh.nodes), bytes(&r.compiled.bvh.nodes));
             assert_eq!(copy.materials, r.compiled.materials);
         }
+        assert_eq!(
+            lent, 2,
+            "the second and third moves reuse the pose before last"
+        );
         r.move_objects(&[step], MoveMode::Restart).unwrap();
-        assert!(r.host_copy.is_none());
+        assert!(r.host_copy.is_none() && r.spare.is_none());
     }
 
     /// Near the move a slot keeps the floor disc; it widens with the distance at

@@ -78,9 +78,13 @@ pub struct Renderer<'a> {
     /// The current pose as the backend holds it: a local move uploads it again with the
     /// moved objects' boxes.
     compiled: CompiledScene,
-    /// A copy of the current pose for the host's traces ([`probe::HostPose`]): the last
-    /// local move's pose B, kept so that a drag copies each pose once, not twice; and the
-    /// direct-light pairs that move traced in it, which the next move's pose A reuses.
+    /// The pose before `compiled`, when `compiled` was refitted from it: its buffers become
+    /// the next pose's by rewriting what the two refits changed
+    /// ([`recompile_moved`](ppm_core::refit::recompile_moved)).
+    spare: Option<CompiledScene>,
+    /// The current pose for the host's traces ([`probe::HostPose`], sharing its buffers):
+    /// the last local move's pose B, kept with the direct-light pairs that move traced in
+    /// it, which the next move's pose A reuses.
     host_copy: Option<(SceneData, PairsInPose)>,
     counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
@@ -126,6 +130,7 @@ impl<'a> Renderer<'a> {
             materials: compiled.materials.clone(),
             extent: compiled.extent,
             compiled,
+            spare: None,
             host_copy: None,
             counters: Counters {
                 fresh: true,
@@ -176,7 +181,9 @@ impl<'a> Renderer<'a> {
         self.lights = compiled.lights.clone();
         self.materials = compiled.materials.clone();
         self.extent = compiled.extent;
-        self.compiled = compiled;
+        let refitted_from = compiled.refit_from.as_ref().map(|w| w.pose);
+        let before = std::mem::replace(&mut self.compiled, compiled);
+        self.spare = Some(before).filter(|b| refitted_from == Some(b.pose));
         self.host_copy = None;
     }
 

@@ -176,7 +176,7 @@ impl Renderer<'_> {
         // Negative photons in pose A, then (same random numbers) positive ones in pose B:
         // where nothing changed their paths coincide and the two cancel almost exactly.
         self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
-        let compiled = recompile_moved(&self.compiled, &next, &changed);
+        let compiled = recompile_moved(&self.compiled, &next, &changed, self.spare.take());
         dynamic(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
