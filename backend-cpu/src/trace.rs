@@ -7,7 +7,7 @@ use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use ppm_core::compile::CompiledScene;
 use ppm_core::geometry::{Frame, intersect_triangle, segment_meets_box};
-use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL};
+use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle};
 use ppm_core::textures::SurfaceTextures;
 use std::sync::Arc;
 
@@ -24,7 +24,7 @@ pub struct SceneData {
     /// Emitting triangles.
     pub lights: Vec<GpuLight>,
     /// Index in `triangles` of each emitting triangle.
-    pub emitters: Vec<u32>,
+    pub emitters: Arc<Vec<u32>>,
     /// Boxes the moving objects stay inside ([`CompiledScene::movers`]).
     pub movers: Vec<GpuBounds>,
     /// Texture coordinates and images (their texels shared, not copied).
@@ -48,9 +48,7 @@ impl SceneData {
             bvh: Arc::clone(&scene.bvh),
             materials: scene.materials.clone(),
             lights: scene.lights.clone(),
-            emitters: (0..scene.triangles.len() as u32)
-                .filter(|&i| scene.triangles[i as usize].light != NO_MATERIAL)
-                .collect(),
+            emitters: Arc::clone(&scene.emitters),
             movers: scene.movers.clone(),
             textures: scene.textures.clone(),
         }

@@ -121,6 +121,10 @@ pub struct SceneBuffers {
     pub camera_value: ppm_core::layout::GpuCamera,
     /// Emitting triangles.
     pub light_count: usize,
+    /// The pose the table holds ([`CompiledScene::pose`]).
+    pose: u64,
+    /// Where each kind starts in the table, as `index` holds it.
+    layout: SceneIndex,
 }
 
 /// Bytes of one scene-table texel: every record is a whole number of them.
@@ -206,6 +210,107 @@ impl SceneBuffers {
             texel_data: scene.textures.texels.clone(),
             camera_value: scene.camera,
             light_count: scene.lights.len(),
+            pose: scene.pose,
+            layout: index,
         })
+    }
+
+    /// Writes `scene` over these buffers in place, if they hold the pose it was refitted
+    /// from (or the same pose, its movers' boxes aside) with the same camera, materials,
+    /// lights and number of boxes: only what the refit wrote and the boxes travel, so a
+    /// drag step uploads what moved, not the scene. Returns whether it did; if not, nothing
+    /// was written.
+    pub fn update(&mut self, ctx: &GpuContext, scene: &CompiledScene) -> bool {
+        let writes = scene.refit_from.as_ref().filter(|w| w.pose == self.pose);
+        let layout = &self.layout;
+        let unchanged = scene.camera == self.camera_value
+            && scene.lights.len() == self.light_count
+            && scene.movers.len() as u32 == layout.mover_count
+            && !scene.nodes.is_empty();
+        if !unchanged || scene.pose != self.pose && writes.is_none() {
+            return false;
+        }
+        if let Some(writes) = writes {
+            let triangle_texels = (size_of::<GpuTriangle>() / TEXEL_BYTES) as u32;
+            for run in runs(&writes.triangles) {
+                let records = &scene.triangles[run.start as usize..run.end as usize];
+                let first = layout.triangles + run.start * triangle_texels;
+                self.table.write(ctx, first, bytemuck::cast_slice(records));
+            }
+            let node_texels = (size_of::<BvhNode>() / TEXEL_BYTES) as u32;
+            for run in runs(&writes.nodes) {
+                let records = &scene.nodes[run.start as usize..run.end as usize];
+                let first = layout.nodes + run.start * node_texels;
+                self.table.write(ctx, first, bytemuck::cast_slice(records));
+            }
+        }
+        self.table
+            .write(ctx, layout.movers, bytemuck::cast_slice(&scene.movers));
+        self.pose = scene.pose;
+        true
+    }
+}
+
+/// The runs of consecutive indices in `indices`, in increasing order.
+fn runs(indices: &[u32]) -> Vec<std::ops::Range<u32>> {
+    let mut sorted = indices.to_vec();
+    sorted.sort_unstable();
+    let mut runs: Vec<std::ops::Range<u32>> = Vec::new();
+    for i in sorted {
+        match runs.last_mut() {
+            Some(run) if run.end == i => run.end += 1,
+            Some(run) if run.end > i => {}
+            _ => runs.push(i..i + 1),
+        }
+    }
+    runs
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ppm_core::compile::compile_scene;
+    use ppm_core::refit::recompile_moved;
+
+    /// The table a drag step writes in place (the movers' boxes of the pose held, then a
+    /// refit of it) reads back as the table uploaded whole for the same pose; a pose
+    /// compiled anew is not written in place.
+    #[test]
+    fn a_drag_step_written_in_place_uploads_what_a_whole_upload_does() {
+        let Some(backend) =
+            crate::backend_or_skip("a_drag_step_written_in_place_uploads_what_a_whole_upload_does")
+        else {
+            return;
+        };
+        let ctx = &backend.ctx;
+        let mut scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+        let mut a = compile_scene(&scene, 16, 16);
+        let step = ppm_core::scene::Move {
+            translation: glam::Vec3::new(-20.0, 0.0, 10.0),
+            rotation: glam::Quat::from_rotation_y(0.1),
+            ..scene.moves[0]
+        };
+        let moved = [step.object];
+        let before = scene.clone();
+        scene.apply(&step);
+        let boxes = ppm_core::compile::mover_boxes(&before, &scene, &moved, a.extent);
+        a.movers = boxes.clone();
+        let mut held = SceneBuffers::new(ctx, &a, None).unwrap();
+        let mut b = recompile_moved(&a, &scene, &moved, None);
+        assert!(b.refit_from.is_some(), "a small step refits");
+        b.movers = boxes;
+        assert!(held.update(ctx, &a), "the same pose");
+        assert!(held.update(ctx, &b), "its refit");
+        let whole = SceneBuffers::new(ctx, &b, None).unwrap();
+        let texels = held
+            .layout
+            .textures
+            .max(whole.layout.movers + 2 * b.movers.len() as u32);
+        assert_eq!(held.layout, whole.layout);
+        assert_eq!(
+            held.table.contents(ctx, texels),
+            whole.table.contents(ctx, texels)
+        );
+        assert!(!held.update(ctx, &compile_scene(&scene, 16, 16)));
     }
 }

@@ -734,6 +734,13 @@ impl PhotonPass for WgpuBackend {
 
 impl DynamicBackend for WgpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        // A refit of the pose held, or the same pose with new movers' boxes: written in place.
+        if let Some(held) = self.scene.as_mut()
+            && held.update(&self.ctx, scene)
+        {
+            self.map = None;
+            return Ok(());
+        }
         let buffers = self.ctx.scoped("scene update", || {
             SceneBuffers::new(&self.ctx, scene, self.scene.as_ref())
         })??;

@@ -121,6 +121,38 @@ impl Table {
         Ok(table)
     }
 
+    /// Writes `bytes` (whole texels) into the table from texel `first` on, a queue write
+    /// per row it spans.
+    pub fn write(&self, ctx: &GpuContext, first: u32, bytes: &[u8]) {
+        let texel_bytes = self.texel.bytes() as usize;
+        let (mut texel, mut rest) = (first, bytes);
+        while rest.len() >= texel_bytes {
+            let (row, x) = (texel / ROW_TEXELS, texel % ROW_TEXELS);
+            let n = (ROW_TEXELS - x).min((rest.len() / texel_bytes) as u32);
+            let (now, later) = rest.split_at(n as usize * texel_bytes);
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d { x, y: row, z: 0 },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                now,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(now.len() as u32),
+                    rows_per_image: None,
+                },
+                wgpu::Extent3d {
+                    width: n,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+            );
+            (texel, rest) = (texel + n, later);
+        }
+    }
+
     /// Records the copy of the first `texels` texels of `buffer` into the table.
     pub fn record_copy(
         &self,
@@ -163,6 +195,34 @@ impl Table {
         }
     }
 
+    /// The first `texels` texels' words, read back (tests).
+    #[cfg(test)]
+    pub(crate) fn contents(&self, ctx: &GpuContext, texels: u32) -> Vec<u32> {
+        use crate::buffers::{read_back, storage_zeroed};
+        let words = self.texel.bytes() / 4;
+        let out = storage_zeroed(
+            ctx,
+            "table contents",
+            u64::from(self.capacity * self.texel.bytes()),
+        )
+        .expect("small");
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            self.texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &out,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(ROW_TEXELS * self.texel.bytes()),
+                    rows_per_image: None,
+                },
+            },
+            self.texture.size(),
+        );
+        ctx.queue.submit([encoder.finish()]);
+        read_back::<u32>(ctx, &out, (texels * words) as usize).expect("read back")
+    }
+
     /// The view kernels bind.
     pub fn view(&self) -> &wgpu::TextureView {
         &self.view
@@ -172,33 +232,7 @@ impl Table {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::buffers::{read_back, storage_init, storage_zeroed};
-
-    /// Copies the texels of `table` back into a buffer, row by row.
-    fn table_contents(ctx: &GpuContext, table: &Table, texels: u32) -> Vec<u32> {
-        let words = table.texel.bytes() / 4;
-        let out = storage_zeroed(
-            ctx,
-            "table contents",
-            u64::from(table.capacity * table.texel.bytes()),
-        )
-        .expect("small");
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.copy_texture_to_buffer(
-            table.texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &out,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(ROW_TEXELS * table.texel.bytes()),
-                    rows_per_image: None,
-                },
-            },
-            table.texture.size(),
-        );
-        ctx.queue.submit([encoder.finish()]);
-        read_back::<u32>(ctx, &out, (texels * words) as usize).expect("read back")
-    }
+    use crate::buffers::storage_init;
 
     /// A buffer of whole rows and a part is copied whole, the partial row included, for both
     /// texel kinds.
@@ -221,7 +255,7 @@ mod tests {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             table.record_copy(&mut encoder, &buffer, texels);
             ctx.queue.submit([encoder.finish()]);
-            let back = table_contents(ctx, &table, texels);
+            let back = table.contents(ctx, texels);
             let first_wrong = back.iter().zip(&data).position(|(a, b)| a != b);
             assert_eq!(first_wrong, None, "{texel:?}: first wrong word");
             assert_eq!(back.len(), data.len());
@@ -250,7 +284,7 @@ mod tests {
         let words: Vec<u32> = floats.iter().map(|f| f.to_bits()).collect();
         let table = Table::with_data(ctx, "floats", Texel::Words4, bytemuck::cast_slice(&words))
             .expect("fits");
-        assert_eq!(table_contents(ctx, &table, 2), words);
+        assert_eq!(table.contents(ctx, 2), words);
     }
 
     #[test]
@@ -277,5 +311,25 @@ mod tests {
             Err(e) => panic!("expected a limit error, got {e}"),
             Ok(_) => panic!("expected a limit error, got a table"),
         }
+    }
+
+    /// A write that starts near a row's end carries on at the next row's start, and leaves
+    /// every other texel as it was.
+    #[test]
+    fn a_write_spans_rows_and_touches_nothing_else() {
+        let Some(backend) = crate::backend_or_skip("a_write_spans_rows_and_touches_nothing_else")
+        else {
+            return;
+        };
+        let ctx = &backend.ctx;
+        let texels = 2 * ROW_TEXELS;
+        let mut data: Vec<u32> = (0..texels * 4).collect();
+        let table = Table::with_data(ctx, "table", Texel::Words4, bytemuck::cast_slice(&data))
+            .expect("fits");
+        let first = ROW_TEXELS - 3;
+        let written: Vec<u32> = (0..10 * 4).map(|i| 1_000_000 + i).collect();
+        table.write(ctx, first, bytemuck::cast_slice(&written));
+        data[(first * 4) as usize..(first * 4) as usize + written.len()].copy_from_slice(&written);
+        assert_eq!(table.contents(ctx, texels), data);
     }
 }

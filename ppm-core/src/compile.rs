@@ -75,6 +75,9 @@ pub struct CompiledScene {
     pub nodes: Arc<Vec<BvhNode>>,
     /// The BVH as obvhs built it; its primitive ids index `triangles` directly.
     pub bvh: Arc<Bvh2>,
+    /// Index in `triangles` of each emitting triangle (a refit, which moves no light and
+    /// keeps the leaf order, keeps them).
+    pub emitters: Arc<Vec<u32>>,
     /// Materials.
     pub materials: Vec<GpuMaterial>,
     /// Emitting triangles with their selection distribution.
@@ -195,6 +198,9 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             }
         })
         .collect();
+    let emitters = (0..triangles.len() as u32)
+        .filter(|&i| triangles[i as usize].light != NO_MATERIAL)
+        .collect();
     let textures = compile_textures(scene, &bvh.primitive_indices, &mut materials);
     let light_power = assign_light_distribution(&mut lights, &materials);
     let nodes = flat_nodes(&bvh);
@@ -209,6 +215,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         triangles: Arc::new(triangles),
         nodes: Arc::new(nodes),
         bvh: Arc::new(bvh),
+        emitters: Arc::new(emitters),
         materials,
         lights,
         features: SceneFeatures {

@@ -156,6 +156,7 @@ fn refit(
         triangles: Arc::new(triangles),
         nodes: Arc::new(nodes),
         bvh: Arc::new(bvh),
+        emitters: Arc::clone(&before.emitters),
         materials: before.materials.clone(),
         lights: before.lights.clone(),
         features: before.features,
