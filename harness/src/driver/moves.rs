@@ -119,11 +119,23 @@ impl Renderer<'_> {
                 .map_err(|why| BackendError::Unsupported(format!("move {i}: {why}")))?;
             next.apply(m);
         }
-        self.move_to(next, mode)
+        let moved: Vec<usize> = moves.iter().map(|m| m.object).collect();
+        self.move_among(next, mode, Some(&moved))
     }
 
     /// Moves to `next` (the same scene in another pose) the way `mode` says.
     pub fn move_to(&mut self, next: Scene, mode: MoveMode) -> Result<MoveReport, BackendError> {
+        self.move_among(next, mode, None)
+    }
+
+    /// [`Self::move_to`], where only the `candidates` objects may differ in `next` if the
+    /// caller knows them: a small move in a large scene then compares only their triangles.
+    pub fn move_among(
+        &mut self,
+        next: Scene,
+        mode: MoveMode,
+        candidates: Option<&[usize]>,
+    ) -> Result<MoveReport, BackendError> {
         let start = Instant::now();
         let mut report = MoveReport {
             mode,
@@ -137,7 +149,10 @@ impl Renderer<'_> {
             restarted: None,
             seconds: 0.0,
         };
-        let changed = self.scene.changed_objects(&next);
+        let changed = match candidates {
+            Some(objects) => self.scene.changed_among(&next, objects),
+            None => self.scene.changed_objects(&next),
+        };
         if changed.is_empty() {
             // Nothing moved: every slot keeps everything, in every mode.
             report.kept = self.backend.read_hit_points()?.len() as u64;

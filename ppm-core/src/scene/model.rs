@@ -322,6 +322,21 @@ impl Scene {
             .collect()
     }
 
+    /// [`Self::changed_objects`] among `objects` alone (the others known to be the same).
+    pub fn changed_among(&self, other: &Scene, objects: &[usize]) -> Vec<usize> {
+        let mut changed: Vec<usize> = objects
+            .iter()
+            .copied()
+            .filter(|&o| match (self.objects.get(o), other.objects.get(o)) {
+                (Some(a), Some(b)) => a.triangles != b.triangles,
+                _ => false,
+            })
+            .collect();
+        changed.sort_unstable();
+        changed.dedup();
+        changed
+    }
+
     /// Smallest and largest corner of the box around every object.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.objects
@@ -387,4 +402,37 @@ pub fn degenerate_triangle_count(scene: &Scene) -> usize {
         .flat_map(|o| &o.triangles)
         .filter(|t| triangle_area(t) == 0.0)
         .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::testing::{object, room};
+
+    /// Among the objects a move names, the changed ones are those `changed_objects` finds:
+    /// an object moved by nothing, or named twice, is not counted.
+    #[test]
+    fn the_changed_among_named_objects_are_the_changed_objects() {
+        let tile = |x: f32| {
+            quad_triangles([
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x, 0.0, 1.0),
+                Vec3::new(x + 1.0, 0.0, 1.0),
+                Vec3::new(x + 1.0, 0.0, 0.0),
+            ])
+            .to_vec()
+        };
+        let before = room(vec![object("a", 0, tile(0.0)), object("b", 0, tile(2.0))]);
+        let mut after = before.clone();
+        let shift = |object: usize, x: f32| Move {
+            object,
+            translation: Vec3::new(x, 0.0, 0.0),
+            rotation: glam::Quat::IDENTITY,
+        };
+        after.apply(&shift(1, 0.5));
+        after.apply(&shift(0, 0.0));
+        assert_eq!(before.changed_objects(&after), vec![1]);
+        assert_eq!(before.changed_among(&after, &[1, 0, 1]), vec![1]);
+        assert_eq!(before.changed_among(&after, &[0]), Vec::<usize>::new());
+    }
 }

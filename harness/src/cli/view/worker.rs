@@ -403,6 +403,9 @@ fn move_panes(
     heat: bool,
     at: Option<Instant>,
 ) {
+    // Without a pose of its own, only the moved objects may differ from the current pose.
+    let moved: Vec<usize> = moves.iter().map(|m| m.object).collect();
+    let candidates = pose.is_none().then_some(&moved[..]);
     let mut next = pose.unwrap_or_else(|| panes[0].renderer.scene().clone());
     for m in moves {
         // The window only sends moves of objects it picked; one the pose cannot take (a
@@ -417,7 +420,9 @@ fn move_panes(
         }
         let before = heat.then(|| pane.renderer.backend().read_hit_points());
         let t = Instant::now();
-        let moved = pane.renderer.move_to(next.clone(), pane.mode);
+        let moved = pane
+            .renderer
+            .move_among(next.clone(), pane.mode, candidates);
         pane.spent += t.elapsed().as_secs_f64();
         pane.moved = true;
         let moved = moved.and_then(|report| {
