@@ -216,10 +216,10 @@ impl SceneBuffers {
     }
 
     /// Writes `scene` over these buffers in place, if they hold the pose it was refitted
-    /// from (or the same pose, its movers' boxes aside) with the same camera, materials,
-    /// lights and number of boxes: only what the refit wrote and the boxes travel, so a
-    /// drag step uploads what moved, not the scene. Returns whether it did; if not, nothing
-    /// was written.
+    /// from (which shares its materials and lights) or the same pose ([`CompiledScene::pose`]
+    /// names them), with the same camera and number of movers' boxes: only what the refit
+    /// wrote and the boxes travel, so a drag step uploads what moved, not the scene.
+    /// Returns whether it did; if not, nothing was written.
     pub fn update(&mut self, ctx: &GpuContext, scene: &CompiledScene) -> bool {
         let writes = scene.refit_from.as_ref().filter(|w| w.pose == self.pose);
         let layout = &self.layout;

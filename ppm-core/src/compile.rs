@@ -106,8 +106,10 @@ pub struct CompiledScene {
     pub textures: SurfaceTextures,
     /// Each object's box as its triangles here are posed (`[min, max]`): a refit recomputes
     /// the moved objects' alone, and `extent` is the box around them all.
-    pub object_bounds: Arc<Vec<[Vec3; 2]>>,
-    /// This pose's number, unique in the process.
+    pub object_bounds: Vec<[Vec3; 2]>,
+    /// This pose's number, unique in the process. It names the pose's geometry, materials
+    /// and lights: a backend holding a pose of the same number rewrites only the movers'
+    /// boxes (and checks the camera), so whoever changes anything else compiles anew.
     pub pose: u64,
     /// Where this pose differs from the one it was refitted from, if it was
     /// ([`recompile_moved`](crate::refit::recompile_moved)): that pose's buffers become this
@@ -248,7 +250,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         bvh_depth,
         movers: Vec::new(),
         textures,
-        object_bounds: Arc::new(object_bounds),
+        object_bounds,
         pose: next_pose(),
         refit_from: None,
     }

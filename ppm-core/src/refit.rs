@@ -20,8 +20,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// How much more a refitted tree's boxes may cost than the last built one's
-/// ([`tree_cost`](crate::compile::tree_cost)) before a move rebuilds it: tracing slows in proportion, and a quarter is
-/// about what a rebuild of the largest canonical scene costs against a move.
+/// ([`tree_cost`](crate::compile::tree_cost)) before a move rebuilds it: tracing slows in
+/// proportion, and a quarter is about what a rebuild of the largest canonical scene costs
+/// against a move.
 pub const REFIT_LIMIT: f32 = 1.25;
 
 /// `before`, the flattened scene of the pose before a move, with the `changed` objects posed
@@ -143,7 +144,7 @@ fn refit(
     if bvh_cost > REFIT_LIMIT * before.bvh_built_cost {
         return None;
     }
-    let mut object_bounds = Vec::clone(&before.object_bounds);
+    let mut object_bounds = before.object_bounds.clone();
     for &o in changed {
         object_bounds[o] = EMPTY_BOX;
     }
@@ -168,7 +169,7 @@ fn refit(
         bvh_depth: before.bvh_depth,
         movers: Vec::new(),
         textures: before.textures.clone(),
-        object_bounds: Arc::new(object_bounds),
+        object_bounds,
         pose: next_pose(),
         refit_from: Some(RefitWrites {
             pose: before.pose,
