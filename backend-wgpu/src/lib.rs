@@ -18,7 +18,7 @@ mod passes;
 mod photon_grid;
 mod scan;
 mod specialise;
-mod table;
+pub mod table;
 
 /// The assembled WGSL of every pass.
 pub mod shaders {
@@ -1139,23 +1139,5 @@ impl Backend for WgpuBackend {
             ));
         }
         out
-    }
-}
-
-/// For test suites: the backend when an adapter exists. Without one the calling test is
-/// skipped with a loud message on stderr, unless `PPM_REQUIRE_WGPU=1` is set (as CI sets it),
-/// which turns the missing adapter into a failure.
-pub fn backend_or_skip(test: &str) -> Option<WgpuBackend> {
-    match WgpuBackend::new() {
-        Ok(backend) => Some(backend),
-        Err(e) if std::env::var("PPM_REQUIRE_WGPU").as_deref() == Ok("1") => {
-            panic!("{test}: PPM_REQUIRE_WGPU=1 but the wgpu backend cannot start: {e}")
-        }
-        Err(e) => {
-            eprintln!(
-                "\n!!!! SKIPPED {test}: no wgpu adapter ({e}); set PPM_REQUIRE_WGPU=1 to make this fail !!!!\n"
-            );
-            None
-        }
     }
 }

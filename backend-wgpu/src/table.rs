@@ -31,7 +31,8 @@ pub enum Texel {
 }
 
 impl Texel {
-    fn bytes(self) -> u32 {
+    /// Bytes per texel.
+    pub fn bytes(self) -> u32 {
         match self {
             Texel::Words4 => 16,
             Texel::Word => 4,
@@ -195,9 +196,8 @@ impl Table {
         }
     }
 
-    /// The first `texels` texels' words, read back (tests).
-    #[cfg(test)]
-    pub(crate) fn contents(&self, ctx: &GpuContext, texels: u32) -> Vec<u32> {
+    /// The first `texels` texels' words, read back: for tests and debugging, never a pass.
+    pub fn contents(&self, ctx: &GpuContext, texels: u32) -> Vec<u32> {
         use crate::buffers::{read_back, storage_zeroed};
         let words = self.texel.bytes() / 4;
         let out = storage_zeroed(
@@ -226,110 +226,5 @@ impl Table {
     /// The view kernels bind.
     pub fn view(&self) -> &wgpu::TextureView {
         &self.view
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::buffers::storage_init;
-
-    /// A buffer of whole rows and a part is copied whole, the partial row included, for both
-    /// texel kinds.
-    #[test]
-    fn a_copy_fills_whole_rows_and_the_partial_last_row() {
-        let Some(backend) =
-            crate::backend_or_skip("a_copy_fills_whole_rows_and_the_partial_last_row")
-        else {
-            return;
-        };
-        let ctx = &backend.ctx;
-        for (texel, texels) in [
-            (Texel::Words4, ROW_TEXELS + 17),
-            (Texel::Word, 2 * ROW_TEXELS + 1),
-        ] {
-            let words = texels * texel.bytes() / 4;
-            let data: Vec<u32> = (0..words).map(|i| i.wrapping_mul(2_654_435_761)).collect();
-            let buffer = storage_init(ctx, "source", &data);
-            let table = Table::new(ctx, "table", texel, texels).expect("fits");
-            let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            table.record_copy(&mut encoder, &buffer, texels);
-            ctx.queue.submit([encoder.finish()]);
-            let back = table.contents(ctx, texels);
-            let first_wrong = back.iter().zip(&data).position(|(a, b)| a != b);
-            assert_eq!(first_wrong, None, "{texel:?}: first wrong word");
-            assert_eq!(back.len(), data.len());
-        }
-    }
-
-    /// Records written at creation read back as written, floats bit for bit.
-    #[test]
-    fn data_written_at_creation_reads_back_bit_for_bit() {
-        let Some(backend) =
-            crate::backend_or_skip("data_written_at_creation_reads_back_bit_for_bit")
-        else {
-            return;
-        };
-        let ctx = &backend.ctx;
-        let floats = [
-            f32::NAN,
-            -0.0,
-            f32::INFINITY,
-            1e-45,
-            -3.5,
-            f32::MAX,
-            0.1,
-            7.0,
-        ];
-        let words: Vec<u32> = floats.iter().map(|f| f.to_bits()).collect();
-        let table = Table::with_data(ctx, "floats", Texel::Words4, bytemuck::cast_slice(&words))
-            .expect("fits");
-        assert_eq!(table.contents(ctx, 2), words);
-    }
-
-    #[test]
-    fn a_table_beyond_the_texture_limit_is_refused_naming_it() {
-        let Some(backend) =
-            crate::backend_or_skip("a_table_beyond_the_texture_limit_is_refused_naming_it")
-        else {
-            return;
-        };
-        let ctx = &backend.ctx;
-        let rows = ctx.limits().max_texture_dimension_2d;
-        match Table::new(
-            ctx,
-            "huge",
-            Texel::Word,
-            (rows + 1).saturating_mul(ROW_TEXELS),
-        ) {
-            Err(BackendError::Limit(m)) => {
-                assert!(
-                    m.contains("huge") && m.contains("max_texture_dimension_2d"),
-                    "{m}"
-                )
-            }
-            Err(e) => panic!("expected a limit error, got {e}"),
-            Ok(_) => panic!("expected a limit error, got a table"),
-        }
-    }
-
-    /// A write that starts near a row's end carries on at the next row's start, and leaves
-    /// every other texel as it was.
-    #[test]
-    fn a_write_spans_rows_and_touches_nothing_else() {
-        let Some(backend) = crate::backend_or_skip("a_write_spans_rows_and_touches_nothing_else")
-        else {
-            return;
-        };
-        let ctx = &backend.ctx;
-        let texels = 2 * ROW_TEXELS;
-        let mut data: Vec<u32> = (0..texels * 4).collect();
-        let table = Table::with_data(ctx, "table", Texel::Words4, bytemuck::cast_slice(&data))
-            .expect("fits");
-        let first = ROW_TEXELS - 3;
-        let written: Vec<u32> = (0..10 * 4).map(|i| 1_000_000 + i).collect();
-        table.write(ctx, first, bytemuck::cast_slice(&written));
-        data[(first * 4) as usize..(first * 4) as usize + written.len()].copy_from_slice(&written);
-        assert_eq!(table.contents(ctx, texels), data);
     }
 }

@@ -2,8 +2,11 @@
 //! weights, densities and values within float rounding (WGSL's sine and cosine are not
 //! correctly rounded, so directions get an absolute allowance).
 
+use backend_wgpu::{GpuContext, WgpuBackend};
 use ppm_core::bsdf::{BsdfCase, BsdfOutcome, test_cases};
 use ppm_core::layout::material_kind;
+use std::process::ExitCode;
+use test_support::{Need, Suite};
 
 /// Allowed difference of a direction's components and of relative weights and densities.
 const TOLERANCE: f32 = 2e-5;
@@ -46,13 +49,8 @@ fn fields(o: &BsdfOutcome) -> [f32; 15] {
     ]
 }
 
-#[test]
 fn the_wgsl_bsdf_reproduces_the_core_s_on_every_case() {
-    let Some(gpu) =
-        backend_wgpu::backend_or_skip("the_wgsl_bsdf_reproduces_the_core_s_on_every_case")
-    else {
-        return;
-    };
+    let gpu = WgpuBackend::new().unwrap();
     let cases = test_cases();
     let got = gpu.bsdf_vectors(&cases).unwrap();
     assert_eq!(got.len(), cases.len());
@@ -66,4 +64,15 @@ fn the_wgsl_bsdf_reproduces_the_core_s_on_every_case() {
             );
         }
     }
+}
+
+fn main() -> ExitCode {
+    let adapter = Need::wgpu(|| GpuContext::new().map(drop).map_err(|e| e.to_string()));
+    Suite::new()
+        .test_needing(
+            &[&adapter],
+            "the_wgsl_bsdf_reproduces_the_core_s_on_every_case",
+            the_wgsl_bsdf_reproduces_the_core_s_on_every_case,
+        )
+        .run()
 }

@@ -1,7 +1,10 @@
 //! update.wgsl's gather rule reproduces ppm_core::update::gather's on every test case, kind
 //! for kind, within a few units in the last place (WGSL may fuse or reorder a multiply-add).
 
+use backend_wgpu::{GpuContext, WgpuBackend};
 use ppm_core::update::gather::{SlotState, test_cases};
+use std::process::ExitCode;
+use test_support::{Need, Suite};
 
 /// Units in the last place allowed between the two rules, per field.
 const ULPS: u32 = 4;
@@ -31,13 +34,8 @@ fn fields(s: &SlotState) -> [f32; 10] {
     ]
 }
 
-#[test]
 fn the_wgsl_gather_rule_reproduces_the_core_s_on_every_kind() {
-    let Some(gpu) =
-        backend_wgpu::backend_or_skip("the_wgsl_gather_rule_reproduces_the_core_s_on_every_kind")
-    else {
-        return;
-    };
+    let gpu = WgpuBackend::new().unwrap();
     let cases = test_cases();
     let got = gpu.gather_rule_vectors(&cases).unwrap();
     assert_eq!(got.len(), cases.len());
@@ -62,4 +60,15 @@ fn the_wgsl_gather_rule_reproduces_the_core_s_on_every_kind() {
         unchanged_kinds.is_empty(),
         "kinds that changed no slot: {unchanged_kinds:x?}"
     );
+}
+
+fn main() -> ExitCode {
+    let adapter = Need::wgpu(|| GpuContext::new().map(drop).map_err(|e| e.to_string()));
+    Suite::new()
+        .test_needing(
+            &[&adapter],
+            "the_wgsl_gather_rule_reproduces_the_core_s_on_every_kind",
+            the_wgsl_gather_rule_reproduces_the_core_s_on_every_kind,
+        )
+        .run()
 }

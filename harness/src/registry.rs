@@ -50,11 +50,7 @@ impl Registry {
             .with(
                 "wgpu",
                 "WGSL compute shaders on the best wgpu adapter (a GPU, or lavapipe on the CPU)",
-                || {
-                    let b = WgpuBackend::new()?;
-                    eprintln!("wgpu adapter: {}", b.adapter_name());
-                    Ok(Box::new(b))
-                },
+                || Ok(Box::new(WgpuBackend::new()?)),
             )
     }
 

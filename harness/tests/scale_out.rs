@@ -5,7 +5,8 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, ExitCode, Output};
+use test_support::{Need, Suite};
 
 fn ppm(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ppm"))
@@ -45,12 +46,6 @@ fn same_bytes(a: &Path, b: &Path) -> bool {
     std::fs::read(a).unwrap() == std::fs::read(b).unwrap()
 }
 
-/// Whether the wgpu backend can start here (skipped loudly otherwise, unless required).
-fn wgpu_available(test: &str) -> bool {
-    backend_wgpu::backend_or_skip(test).is_some()
-}
-
-#[test]
 fn reference_shards_merge_into_one_run_bit_for_bit() {
     let dir = scratch("reference");
     let reference = |spp: &str, extra: &[&str], out: &Path| {
@@ -119,7 +114,6 @@ fn reference_shards_merge_into_one_run_bit_for_bit() {
     assert!(not_shard.contains("whole.exr: not a shard"), "{not_shard}");
 }
 
-#[test]
 fn render_shards_average_by_their_iterations() {
     let dir = scratch("render");
     let render = |shard: &str, passes: &str, extra: &[&str], out: &Path| {
@@ -183,36 +177,35 @@ fn render_args<'a>(backend: &'a str, passes: &'a str, out: &'a str) -> Vec<&'a s
     ]
 }
 
-#[test]
-fn a_resumed_render_equals_an_uninterrupted_one_on_both_backends() {
-    let dir = scratch("resume");
-    for backend in ["cpu", "wgpu"] {
-        if backend == "wgpu"
-            && !wgpu_available("a_resumed_render_equals_an_uninterrupted_one_on_both_backends")
-        {
-            continue;
-        }
-        let (full, part, resumed) = (
-            s(&dir.join(format!("full-{backend}.exr"))),
-            s(&dir.join(format!("part-{backend}.exr"))),
-            s(&dir.join(format!("resumed-{backend}.exr"))),
-        );
-        let checkpoint = s(&dir.join(format!("checkpoint-{backend}")));
-        ok(&render_args(backend, "7", &full));
-        let mut first = render_args(backend, "3", &part);
-        first.extend(["--checkpoint", &checkpoint]);
-        ok(&first);
-        let mut rest = render_args(backend, "7", &resumed);
-        rest.extend(["--resume", &checkpoint]);
-        ok(&rest);
-        assert!(
-            same_bytes(Path::new(&full), Path::new(&resumed)),
-            "{backend}: the resumed image is the uninterrupted one"
-        );
-        let report = std::fs::read_to_string(dir.join(format!("resumed-{backend}.json"))).unwrap();
-        assert!(report.contains("\"passes\": 7"), "{report}");
-    }
-    // Another setting, or a torn checkpoint, is refused before anything renders.
+/// A render stopped after 3 of 7 iterations and resumed from its checkpoint writes the image
+/// of the uninterrupted render, bit for bit; returns the folder that holds the checkpoint.
+fn a_resumed_render_equals_an_uninterrupted_one(backend: &str) -> PathBuf {
+    let dir = scratch(&format!("resume-{backend}"));
+    let (full, part, resumed) = (
+        s(&dir.join(format!("full-{backend}.exr"))),
+        s(&dir.join(format!("part-{backend}.exr"))),
+        s(&dir.join(format!("resumed-{backend}.exr"))),
+    );
+    let checkpoint = s(&dir.join(format!("checkpoint-{backend}")));
+    ok(&render_args(backend, "7", &full));
+    let mut first = render_args(backend, "3", &part);
+    first.extend(["--checkpoint", &checkpoint]);
+    ok(&first);
+    let mut rest = render_args(backend, "7", &resumed);
+    rest.extend(["--resume", &checkpoint]);
+    ok(&rest);
+    assert!(
+        same_bytes(Path::new(&full), Path::new(&resumed)),
+        "{backend}: the resumed image is the uninterrupted one"
+    );
+    let report = std::fs::read_to_string(dir.join(format!("resumed-{backend}.json"))).unwrap();
+    assert!(report.contains("\"passes\": 7"), "{report}");
+    dir
+}
+
+/// Resuming with another setting, or from a torn checkpoint, is refused before anything
+/// renders.
+fn a_checkpoint_of_other_settings_or_torn_is_refused(dir: &Path) {
     let checkpoint = dir.join("checkpoint-cpu");
     let out = s(&dir.join("x.exr"));
     let mut other = render_args("cpu", "7", &out);
@@ -230,7 +223,6 @@ fn a_resumed_render_equals_an_uninterrupted_one_on_both_backends() {
 
 /// Ctrl-C (as a scheduler's preemption sends SIGTERM) keeps the state; resuming it finishes
 /// the render exactly as if it had never stopped.
-#[test]
 fn an_interrupted_render_resumes_bit_for_bit() {
     let dir = scratch("interrupt");
     let (full, stopped, resumed) = (
@@ -260,4 +252,37 @@ fn an_interrupted_render_resumes_bit_for_bit() {
     rest.extend(["--resume", checkpoint.to_str().unwrap()]);
     ok(&rest);
     assert!(same_bytes(Path::new(&full), Path::new(&resumed)));
+}
+
+fn main() -> ExitCode {
+    let adapter = Need::wgpu(|| {
+        backend_wgpu::GpuContext::new()
+            .map(drop)
+            .map_err(|e| e.to_string())
+    });
+    Suite::new()
+        .test(
+            "reference_shards_merge_into_one_run_bit_for_bit",
+            reference_shards_merge_into_one_run_bit_for_bit,
+        )
+        .test(
+            "render_shards_average_by_their_iterations",
+            render_shards_average_by_their_iterations,
+        )
+        .test("a_resumed_render_equals_an_uninterrupted_one::cpu", || {
+            let dir = a_resumed_render_equals_an_uninterrupted_one("cpu");
+            a_checkpoint_of_other_settings_or_torn_is_refused(&dir);
+        })
+        .test_needing(
+            &[&adapter],
+            "a_resumed_render_equals_an_uninterrupted_one::wgpu",
+            || {
+                a_resumed_render_equals_an_uninterrupted_one("wgpu");
+            },
+        )
+        .test(
+            "an_interrupted_render_resumes_bit_for_bit",
+            an_interrupted_render_resumes_bit_for_bit,
+        )
+        .run()
 }

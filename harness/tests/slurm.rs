@@ -2,12 +2,13 @@
 //! `scripts/slurm/cluster.sh`): a 4-task array of reference shards and the merge that depends
 //! on it give one single-process run's image, bit for bit.
 //!
-//! Needs root and Slurm installed (`scripts/slurm/cluster.sh install`); otherwise skipped with
-//! a loud message, unless `PPM_REQUIRE_SLURM=1` (as `.ci/run` sets it) makes that a failure.
+//! Needs root and Slurm installed (`scripts/slurm/cluster.sh install`); otherwise shown as
+//! ignored, unless `PPM_REQUIRE_SLURM=1` (as `.ci/run` sets it) makes that a failure.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, ExitCode};
 use std::time::{Duration, Instant};
+use test_support::{Need, Suite};
 
 fn scripts() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/slurm")
@@ -19,29 +20,8 @@ struct Cluster {
 }
 
 impl Cluster {
-    fn start(test: &str) -> Option<Self> {
-        let root = Command::new("id")
-            .arg("-u")
-            .output()
-            .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
-        let installed = Command::new("sh")
-            .args(["-c", "command -v slurmctld && command -v munged"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-        if !(root && installed) {
-            let why = if root {
-                "Slurm is not installed"
-            } else {
-                "not root"
-            };
-            if std::env::var("PPM_REQUIRE_SLURM").as_deref() == Ok("1") {
-                panic!("{test}: PPM_REQUIRE_SLURM=1 but {why}");
-            }
-            eprintln!(
-                "\n!!!! SKIPPED {test}: {why} (scripts/slurm/cluster.sh install, as root); set PPM_REQUIRE_SLURM=1 to make this fail !!!!\n"
-            );
-            return None;
-        }
+    /// Starts the cluster (the suite has checked that this process can).
+    fn start() -> Self {
         let state = std::env::temp_dir().join(format!("ppm-slurm-test-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&state);
         let started = Command::new(scripts().join("cluster.sh"))
@@ -50,8 +30,8 @@ impl Cluster {
             .status()
             .unwrap();
         let cluster = Self { state };
-        assert!(started.success(), "{test}: the cluster did not start");
-        Some(cluster)
+        assert!(started.success(), "the cluster did not start");
+        cluster
     }
 
     fn conf(&self) -> PathBuf {
@@ -68,12 +48,8 @@ impl Drop for Cluster {
     }
 }
 
-#[test]
 fn a_slurm_array_of_reference_shards_merges_into_one_run_bit_for_bit() {
-    let test = "a_slurm_array_of_reference_shards_merges_into_one_run_bit_for_bit";
-    let Some(cluster) = Cluster::start(test) else {
-        return;
-    };
+    let cluster = Cluster::start();
     let out = std::env::temp_dir().join(format!("ppm-slurm-out-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let ppm = env!("CARGO_BIN_EXE_ppm");
@@ -169,4 +145,14 @@ fn logs(out: &Path) -> String {
         text += &std::fs::read_to_string(entry.path()).unwrap_or_default();
     }
     text
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test_needing(
+            &[&Need::slurm()],
+            "a_slurm_array_of_reference_shards_merges_into_one_run_bit_for_bit",
+            a_slurm_array_of_reference_shards_merges_into_one_run_bit_for_bit,
+        )
+        .run()
 }

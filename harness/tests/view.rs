@@ -2,8 +2,8 @@
 //! matches `ppm render`, a scripted drag shows the new pose and not the old one, a comparison
 //! shows both modes, a close writes the render, and a missing display is a clear error.
 //!
-//! Without Xvfb these tests skip with a loud message, unless `PPM_REQUIRE_WGPU=1` (as CI sets
-//! it, with Xvfb installed by `.ci/run`) turns that into a failure.
+//! Without Xvfb or a wgpu adapter these tests show as ignored, unless `PPM_REQUIRE_WGPU=1` (as CI
+//! sets it, with Xvfb installed by `.ci/run`) turns that into a failure.
 
 mod common;
 
@@ -15,9 +15,11 @@ use ppm_core::metrics::block_relative_rmse;
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::scene::{Move, Scene};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
+use test_support::{Need, Suite, figure};
 
 /// Image size of every test: small, so that lavapipe and two cores render it in seconds.
 const SIZE: u32 = 64;
@@ -29,27 +31,9 @@ struct VirtualDisplay {
 }
 
 impl VirtualDisplay {
-    /// Starts Xvfb on a free display number; `None` (after the loud skip message) when Xvfb
-    /// is not installed.
-    fn start(test: &str) -> Option<Self> {
+    /// Starts Xvfb on a free display number (the suite has checked that it is installed).
+    fn start() -> Self {
         static NEXT: AtomicU32 = AtomicU32::new(0);
-        let installed = Command::new("Xvfb")
-            .arg("-help")
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok();
-        if !installed {
-            if std::env::var("PPM_REQUIRE_WGPU").as_deref() == Ok("1") {
-                panic!(
-                    "{test}: PPM_REQUIRE_WGPU=1 but Xvfb is not installed (apt-get install xvfb)"
-                );
-            }
-            eprintln!(
-                "\n!!!! SKIPPED {test}: no Xvfb to open a window on; set PPM_REQUIRE_WGPU=1 to make this fail !!!!\n"
-            );
-            return None;
-        }
         for _ in 0..50 {
             let n = 140 + (std::process::id() % 400) + NEXT.fetch_add(1, Ordering::SeqCst);
             if Path::new(&format!("/tmp/.X{n}-lock")).exists() {
@@ -72,10 +56,10 @@ impl VirtualDisplay {
             let start = Instant::now();
             while start.elapsed() < Duration::from_secs(10) {
                 if socket.exists() {
-                    return Some(Self {
+                    return Self {
                         server,
                         display: format!(":{n}"),
-                    });
+                    };
                 }
                 if let Ok(Some(_)) = server.try_wait() {
                     break;
@@ -85,7 +69,7 @@ impl VirtualDisplay {
             let _ = server.kill();
             let _ = server.wait();
         }
-        panic!("{test}: no free display for Xvfb");
+        panic!("no free display for Xvfb");
     }
 
     fn ppm(&self, args: &[&str]) -> Command {
@@ -219,63 +203,56 @@ fn rendered(scene: &Scene, iterations: u32, dir: &Path, name: &str) -> Image {
     png_image(&path)
 }
 
-#[test]
-fn a_screenshot_matches_ppm_render_on_both_backends() {
-    let Some(display) = VirtualDisplay::start("a_screenshot_matches_ppm_render_on_both_backends")
-    else {
-        return;
-    };
-    for backend in ["cpu", "wgpu"] {
-        let dir = scratch(&format!("matches-{backend}"));
-        view(
-            &display,
-            &dir,
-            backend,
-            "[[step]]\nafter_iterations = 6\nscreenshot = true\n",
-            &[],
-        );
-        let render = dir.join("render.exr");
-        let size = SIZE.to_string();
-        checked(
-            display
-                .ppm(&[
-                    "render",
-                    "cornell-box",
-                    "--backend",
-                    backend,
-                    "--width",
-                    &size,
-                    "--height",
-                    &size,
-                    "--passes",
-                    "6",
-                    "-o",
-                    &render.display().to_string(),
-                ])
-                .output()
-                .unwrap(),
-            "ppm render",
-        );
-        let shown = pane(&dir.join("shots/screenshot-000.png"), 0);
-        let expected = png_image(&render.with_extension("png"));
-        let error = block_relative_rmse(&shown, &expected, 8);
-        eprintln!("{backend}: screenshot against ppm render, 8x8 block relative rmse {error:.5}");
-        // Same seed, same backend, same iterations: only the 8-bit encoding may differ.
-        assert!(error < 0.005, "{backend}: {error}");
-        // The render the window wrote on exit is the render's too.
-        let json = std::fs::read_to_string(dir.join("view.json")).unwrap();
-        assert!(json.contains("\"interrupted\": false"), "{json}");
-        assert!(json.contains("\"passes\": 6"), "{json}");
-    }
+/// The window's screenshot after 6 iterations on `backend` is `ppm render`'s image of the same
+/// 6, up to the 8-bit encoding.
+fn a_screenshot_matches_ppm_render(backend: &str) {
+    let display = VirtualDisplay::start();
+    let dir = scratch(&format!("matches-{backend}"));
+    view(
+        &display,
+        &dir,
+        backend,
+        "[[step]]\nafter_iterations = 6\nscreenshot = true\n",
+        &[],
+    );
+    let render = dir.join("render.exr");
+    let size = SIZE.to_string();
+    checked(
+        display
+            .ppm(&[
+                "render",
+                "cornell-box",
+                "--backend",
+                backend,
+                "--width",
+                &size,
+                "--height",
+                &size,
+                "--passes",
+                "6",
+                "-o",
+                &render.display().to_string(),
+            ])
+            .output()
+            .unwrap(),
+        "ppm render",
+    );
+    let shown = pane(&dir.join("shots/screenshot-000.png"), 0);
+    let expected = png_image(&render.with_extension("png"));
+    let error = block_relative_rmse(&shown, &expected, 8);
+    figure!("{backend}: screenshot against ppm render, 8x8 block relative rmse {error:.5}");
+    // Same seed, same backend, same iterations: only the 8-bit encoding may differ.
+    assert!(error < 0.005, "{backend}: {error}");
+    // The render the window wrote on exit is the render's too.
+    let json = std::fs::read_to_string(dir.join("view.json")).unwrap();
+    assert!(json.contains("\"interrupted\": false"), "{json}");
+    assert!(json.contains("\"passes\": 6"), "{json}");
 }
 
 /// The short block dragged in five small steps: the screenshot after the drag shows the new
 /// pose (it is closer to a long render of the new pose than of the old one, by far).
-#[test]
-fn a_scripted_drag_moves_the_object_on_screen() {
-    let Some(display) = VirtualDisplay::start("a_scripted_drag_moves_the_object_on_screen") else {
-        return;
-    };
+fn a_scripted_drag_moves_the_object_on_screen(backend: &str) {
+    let display = VirtualDisplay::start();
     let step = Vec3::new(-10.0, 0.0, -10.0);
     let mut script = String::from("[[step]]\nafter_iterations = 10\nscreenshot = true\n");
     for _ in 0..5 {
@@ -289,39 +266,34 @@ fn a_scripted_drag_moves_the_object_on_screen() {
         translation: step * 5.0,
         rotation: glam::Quat::IDENTITY,
     });
-    let dir = scratch("drag");
+    let dir = scratch(&format!("drag-{backend}"));
     let old = rendered(&scene, 120, &dir, "old");
     let new = rendered(&moved, 120, &dir, "new");
-    for backend in ["cpu", "wgpu"] {
-        view(&display, &dir, backend, &script, &["--mode", "local"]);
-        let before = pane(&dir.join("shots/screenshot-000.png"), 0);
-        let after = pane(&dir.join("shots/screenshot-001.png"), 0);
-        let (to_new, to_old) = (
-            block_relative_rmse(&after, &new, 8),
-            block_relative_rmse(&after, &old, 8),
-        );
-        let before_to_old = block_relative_rmse(&before, &old, 8);
-        eprintln!(
-            "{backend}: after the drag {to_new:.4} from the new pose, {to_old:.4} from the old; before it {before_to_old:.4} from the old"
-        );
-        assert!(
-            to_new < 0.5 * to_old,
-            "{backend}: {to_new} against {to_old}"
-        );
-        assert!(
-            before_to_old < to_old,
-            "{backend}: the first screenshot shows the old pose"
-        );
-    }
+    view(&display, &dir, backend, &script, &["--mode", "local"]);
+    let before = pane(&dir.join("shots/screenshot-000.png"), 0);
+    let after = pane(&dir.join("shots/screenshot-001.png"), 0);
+    let (to_new, to_old) = (
+        block_relative_rmse(&after, &new, 8),
+        block_relative_rmse(&after, &old, 8),
+    );
+    let before_to_old = block_relative_rmse(&before, &old, 8);
+    figure!(
+        "{backend}: after the drag {to_new:.4} from the new pose, {to_old:.4} from the old; before it {before_to_old:.4} from the old"
+    );
+    assert!(
+        to_new < 0.5 * to_old,
+        "{backend}: {to_new} against {to_old}"
+    );
+    assert!(
+        before_to_old < to_old,
+        "{backend}: the first screenshot shows the old pose"
+    );
 }
 
 /// `--compare restart,local`: both panes show the new pose after a move, each its own render
 /// (written as NAME-MODE.exr).
-#[test]
 fn a_comparison_shows_both_modes() {
-    let Some(display) = VirtualDisplay::start("a_comparison_shows_both_modes") else {
-        return;
-    };
+    let display = VirtualDisplay::start();
     let script = "[[step]]\nafter_iterations = 10\nobject = \"short-block\"\ntranslate = [-50.0, 0.0, -50.0]\n\
                   [[step]]\nafter_iterations = 20\nscreenshot = true\n";
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
@@ -348,7 +320,7 @@ fn a_comparison_shows_both_modes() {
             block_relative_rmse(image, &new, 8),
             block_relative_rmse(image, &old, 8),
         );
-        eprintln!("{mode}: {to_new:.4} from the new pose, {to_old:.4} from the old");
+        figure!("{mode}: {to_new:.4} from the new pose, {to_old:.4} from the old");
         assert!(to_new < 0.5 * to_old, "{mode}: {to_new} against {to_old}");
         let json = std::fs::read_to_string(dir.join(format!("view-{mode}.json"))).unwrap();
         assert!(json.contains("\"passes\": 30"), "{mode}: {json}");
@@ -361,11 +333,8 @@ fn a_comparison_shows_both_modes() {
 
 /// A camera step starts the render over from the new view: the screenshot after it shows
 /// that view, not the old one.
-#[test]
 fn a_camera_step_shows_the_new_view() {
-    let Some(display) = VirtualDisplay::start("a_camera_step_shows_the_new_view") else {
-        return;
-    };
+    let display = VirtualDisplay::start();
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
     let mut turned = scene.clone();
     turned.camera.eye += Vec3::new(150.0, 60.0, 0.0);
@@ -385,17 +354,14 @@ fn a_camera_step_shows_the_new_view() {
         block_relative_rmse(&after, &new, 8),
         block_relative_rmse(&after, &old, 8),
     );
-    eprintln!("after the camera step: {to_new:.4} from the new view, {to_old:.4} from the old");
+    figure!("after the camera step: {to_new:.4} from the new view, {to_old:.4} from the old");
     assert!(to_new < 0.5 * to_old, "{to_new} against {to_old}");
 }
 
 /// Ctrl-C in the middle of a session writes the render as it stood, marked interrupted, and
 /// exits with 130 as `ppm render` does.
-#[test]
 fn an_interrupt_writes_the_render() {
-    let Some(display) = VirtualDisplay::start("an_interrupt_writes_the_render") else {
-        return;
-    };
+    let display = VirtualDisplay::start();
     let dir = scratch("interrupt");
     let script = dir.join("script.toml");
     std::fs::write(
@@ -427,7 +393,6 @@ fn an_interrupt_writes_the_render() {
     assert!(out.exists() && out.with_extension("png").exists());
 }
 
-#[test]
 fn without_a_display_the_error_says_what_to_do() {
     let out = Command::new(env!("CARGO_BIN_EXE_ppm"))
         .args(["view", "cornell-box"])
@@ -440,4 +405,52 @@ fn without_a_display_the_error_says_what_to_do() {
     for needed in ["DISPLAY", "WAYLAND_DISPLAY", "xvfb-run", "ppm render"] {
         assert!(stderr.contains(needed), "{needed}: {stderr}");
     }
+}
+
+fn main() -> ExitCode {
+    let (display, adapter) = (
+        Need::display(),
+        Need::wgpu(|| {
+            backend_wgpu::GpuContext::new()
+                .map(drop)
+                .map_err(|e| e.to_string())
+        }),
+    );
+    // The window draws with wgpu whichever backend renders.
+    let window = [&display, &adapter];
+    let mut suite = Suite::new();
+    for backend in ["cpu", "wgpu"] {
+        suite = suite
+            .test_needing(
+                &window,
+                format!("a_screenshot_matches_ppm_render::{backend}"),
+                move || a_screenshot_matches_ppm_render(backend),
+            )
+            .test_needing(
+                &window,
+                format!("a_scripted_drag_moves_the_object_on_screen::{backend}"),
+                move || a_scripted_drag_moves_the_object_on_screen(backend),
+            );
+    }
+    suite
+        .test_needing(
+            &window,
+            "a_comparison_shows_both_modes",
+            a_comparison_shows_both_modes,
+        )
+        .test_needing(
+            &window,
+            "a_camera_step_shows_the_new_view",
+            a_camera_step_shows_the_new_view,
+        )
+        .test_needing(
+            &window,
+            "an_interrupt_writes_the_render",
+            an_interrupt_writes_the_render,
+        )
+        .test(
+            "without_a_display_the_error_says_what_to_do",
+            without_a_display_the_error_says_what_to_do,
+        )
+        .run()
 }

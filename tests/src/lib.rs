@@ -11,36 +11,86 @@ use ppm_core::layout::{EyePassParams, GpuBounds};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::{Material, MaterialKind, Move, Object, Scene};
+use std::sync::OnceLock;
+pub use test_support::{Need, Suite, figure};
 
-/// The backends a cross-backend test runs on, by name: each one [`Registry::in_tree`]
-/// registers that starts here, so a backend registered there joins every test that calls
-/// this. One that cannot start (wgpu without an adapter) is skipped with a loud message, or
-/// fails the test where `PPM_REQUIRE_<NAME>=1` (CI sets `PPM_REQUIRE_WGPU=1`).
-pub fn backends(test: &str) -> Vec<(String, Box<dyn Backend + Send>)> {
-    let registry = Registry::in_tree();
-    let started = registry.names().into_iter().filter_map(|name| {
-        let required = format!("PPM_REQUIRE_{}", name.to_uppercase());
-        match registry.start(name) {
-            Ok(backend) => Some((name.to_owned(), backend)),
-            Err(e) if std::env::var(&required).as_deref() == Ok("1") => {
-                panic!("{test}: {required}=1 but backend '{name}' cannot start: {e}")
-            }
-            Err(e) => {
-                eprintln!(
-                    "\n!!!! SKIPPED {test} on '{name}': it cannot start ({e}); set {required}=1 to make this fail !!!!\n"
-                );
-                None
-            }
-        }
-    });
-    started.collect()
+/// The wgpu adapter that wgpu-only tests need ([`Need::wgpu`]), probed once per binary by
+/// opening a device.
+pub fn wgpu() -> &'static Need {
+    static NEED: OnceLock<Need> = OnceLock::new();
+    NEED.get_or_init(|| {
+        Need::wgpu(|| {
+            backend_wgpu::GpuContext::new()
+                .map(drop)
+                .map_err(|e| e.to_string())
+        })
+    })
 }
 
-/// [`backends`] besides the CPU backend, the reference each is compared with.
-pub fn compared_with_cpu(test: &str) -> Vec<(String, Box<dyn Backend + Send>)> {
-    let mut all = backends(test);
-    all.retain(|(name, _)| name != "cpu");
-    all
+/// What running on the in-tree backend `name` needs: nothing for the CPU backend, an adapter
+/// for wgpu, and for any other that it starts (`PPM_REQUIRE_<NAME>=1` requires it).
+fn backend_need(name: &str) -> Option<Need> {
+    match name {
+        "cpu" => None,
+        "wgpu" => Some(wgpu().clone()),
+        other => {
+            let started = other.to_owned();
+            Some(Need::new(
+                format!("the {other} backend"),
+                format!("PPM_REQUIRE_{}", other.to_uppercase()),
+                "what that backend needs",
+                move || {
+                    Registry::in_tree()
+                        .start(&started)
+                        .map(drop)
+                        .map_err(|e| e.to_string())
+                },
+            ))
+        }
+    }
+}
+
+/// A test of one backend: its registry name and the backend, started.
+pub type BackendTest = fn(&str, Box<dyn Backend + Send>);
+
+/// Cross-backend tests as one test per backend, so that the summary counts each backend's
+/// case on its own and shows one that cannot start here as ignored.
+pub trait BackendTrials {
+    /// Adds `NAME::BACKEND` for every backend [`Registry::in_tree`] registers, so a backend
+    /// registered there joins every test added so.
+    fn on_every_backend(self, name: &str, test: BackendTest) -> Self;
+    /// As [`BackendTrials::on_every_backend`], for every backend but the CPU's, which is the
+    /// reference each is compared with.
+    fn against_the_cpu(self, name: &str, test: BackendTest) -> Self;
+}
+
+impl BackendTrials for Suite {
+    fn on_every_backend(self, name: &str, test: BackendTest) -> Self {
+        backend_trials(self, name, test, true)
+    }
+
+    fn against_the_cpu(self, name: &str, test: BackendTest) -> Self {
+        backend_trials(self, name, test, false)
+    }
+}
+
+fn backend_trials(mut suite: Suite, name: &str, test: BackendTest, with_cpu: bool) -> Suite {
+    let registry = Registry::in_tree();
+    for backend in registry.names() {
+        if backend == "cpu" && !with_cpu {
+            continue;
+        }
+        let need = backend_need(backend);
+        let needs: Vec<&Need> = need.iter().collect();
+        let backend = backend.to_owned();
+        suite = suite.test_needing(&needs, format!("{name}::{backend}"), move || {
+            let started = Registry::in_tree()
+                .start(&backend)
+                .unwrap_or_else(|e| panic!("backend '{backend}' cannot start: {e}"));
+            test(&backend, started)
+        });
+    }
+    suite
 }
 
 /// Renders `scene` at `frame` for `params.passes` iterations on the CPU backend in a pool of

@@ -9,6 +9,8 @@ use ppm_core::layout::{
     GatherParams, GpuBounds, HitPoint, PhotonPassParams, gather_kind, photon_flags,
 };
 use ppm_core::passes::{Backend, BackendError};
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 
 const PHOTONS: u32 = 20_000;
 /// A local correction's gather: deferred, flux only.
@@ -83,64 +85,72 @@ fn corrected(backend: &mut dyn Backend, added: bool) -> Vec<HitPoint> {
     backend.read_hit_points().unwrap()
 }
 
-#[test]
-fn one_gather_of_an_added_pass_equals_a_gather_of_each() {
-    for (name, mut backend) in
-        tests::backends("one_gather_of_an_added_pass_equals_a_gather_of_each")
-    {
-        let backend = backend.as_mut();
-        let (before, apart, added) = {
-            load(backend);
-            let before = backend.read_hit_points().unwrap();
-            (before, corrected(backend, false), corrected(backend, true))
-        };
-        let (mut changed, mut worst) = (0, 0.0_f32);
-        for ((b, x), y) in before.iter().zip(&apart).zip(&added) {
-            changed += usize::from(b.tau != x.tau);
-            for c in 0..3 {
-                let scale = x.tau[c].abs().max(1e-6);
-                worst = worst.max((x.tau[c] - y.tau[c]).abs() / scale);
-            }
-            assert!((x.emitted - y.emitted).abs() <= 1e-5 * x.emitted.abs().max(1.0));
+fn one_gather_of_an_added_pass_equals_a_gather_of_each(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
+    let backend = backend.as_mut();
+    let (before, apart, added) = {
+        load(backend);
+        let before = backend.read_hit_points().unwrap();
+        (before, corrected(backend, false), corrected(backend, true))
+    };
+    let (mut changed, mut worst) = (0, 0.0_f32);
+    for ((b, x), y) in before.iter().zip(&apart).zip(&added) {
+        changed += usize::from(b.tau != x.tau);
+        for c in 0..3 {
+            let scale = x.tau[c].abs().max(1e-6);
+            worst = worst.max((x.tau[c] - y.tau[c]).abs() / scale);
         }
-        println!("{name}: {changed} slots corrected, largest relative difference {worst:e}");
-        assert!(
-            changed > 20,
-            "{name}: the correction must change slots to test anything"
-        );
-        assert!(worst < 1e-4, "{name}: {worst}");
+        assert!((x.emitted - y.emitted).abs() <= 1e-5 * x.emitted.abs().max(1.0));
     }
+    figure!("{name}: {changed} slots corrected, largest relative difference {worst:e}");
+    assert!(
+        changed > 20,
+        "{name}: the correction must change slots to test anything"
+    );
+    assert!(worst < 1e-4, "{name}: {worst}");
 }
 
-#[test]
-fn a_pass_with_nothing_to_add_to_is_refused() {
-    for (name, mut backend) in tests::backends("a_pass_with_nothing_to_add_to_is_refused") {
-        let backend = backend.as_mut();
-        load(backend);
-        let add = pass(2, 1.0, photon_flags::ADD_TO_MAP);
-        // The last pass was gathered.
-        let refused = backend.photon_pass(&add, &PhotonSource::Lights);
-        assert!(
-            matches!(refused, Err(BackendError::OutOfOrder { .. })),
-            "{name}: {refused:?}"
-        );
-        // The last pass named another floor.
-        let other = PhotonPassParams {
-            gather_r2_floor: FLOOR * 2.0,
-            ..pass(1, -1.0, 0)
-        };
-        backend.photon_pass(&other, &PhotonSource::Lights).unwrap();
-        let refused = backend.photon_pass(&add, &PhotonSource::Lights);
-        assert!(
-            matches!(refused, Err(BackendError::OutOfOrder { .. })),
-            "{name}: {refused:?}"
-        );
-        backend
-            .photon_pass(&pass(1, -1.0, 0), &PhotonSource::Lights)
-            .unwrap();
-        assert!(
-            backend.photon_pass(&add, &PhotonSource::Lights).is_ok(),
-            "{name}"
-        );
-    }
+fn a_pass_with_nothing_to_add_to_is_refused(name: &str, mut backend: Box<dyn Backend + Send>) {
+    let backend = backend.as_mut();
+    load(backend);
+    let add = pass(2, 1.0, photon_flags::ADD_TO_MAP);
+    // The last pass was gathered.
+    let refused = backend.photon_pass(&add, &PhotonSource::Lights);
+    assert!(
+        matches!(refused, Err(BackendError::OutOfOrder { .. })),
+        "{name}: {refused:?}"
+    );
+    // The last pass named another floor.
+    let other = PhotonPassParams {
+        gather_r2_floor: FLOOR * 2.0,
+        ..pass(1, -1.0, 0)
+    };
+    backend.photon_pass(&other, &PhotonSource::Lights).unwrap();
+    let refused = backend.photon_pass(&add, &PhotonSource::Lights);
+    assert!(
+        matches!(refused, Err(BackendError::OutOfOrder { .. })),
+        "{name}: {refused:?}"
+    );
+    backend
+        .photon_pass(&pass(1, -1.0, 0), &PhotonSource::Lights)
+        .unwrap();
+    assert!(
+        backend.photon_pass(&add, &PhotonSource::Lights).is_ok(),
+        "{name}"
+    );
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .on_every_backend(
+            "one_gather_of_an_added_pass_equals_a_gather_of_each",
+            one_gather_of_an_added_pass_equals_a_gather_of_each,
+        )
+        .on_every_backend(
+            "a_pass_with_nothing_to_add_to_is_refused",
+            a_pass_with_nothing_to_add_to_is_refused,
+        )
+        .run()
 }

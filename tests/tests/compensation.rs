@@ -18,6 +18,8 @@ use ppm_core::passes::Backend;
 use ppm_core::region::emitting_region;
 use ppm_core::scene::Scene;
 use std::ops::ControlFlow;
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 use tests::{around, luminance, objects_seen};
 
 fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
@@ -118,18 +120,17 @@ fn cancel(neg_index: u32, pos_index: u32) -> (Image, Image) {
     (before, after)
 }
 
-#[test]
 fn a_negative_then_positive_region_pass_in_an_unchanged_scene_leaves_the_image() {
     // Same random numbers: the paths coincide and cancel up to the nonlinearity of eqs 5-7.
     let (before, after) = cancel(0, 0);
     let change = (mean_luminance(&after) / mean_luminance(&before) - 1.0).abs();
     let rmse = relative_rmse(&after, &before);
-    println!("common numbers: mean change {change:.2e}, relative RMSE {rmse:.2e}");
+    figure!("common numbers: mean change {change:.2e}, relative RMSE {rmse:.2e}");
     assert!(change < 2e-3 && rmse < 2e-2, "change {change}, rmse {rmse}");
     // Independent numbers: the two passes differ sample by sample but agree in expectation.
     let (before, after) = cancel(0, 1);
     let change = (mean_luminance(&after) / mean_luminance(&before) - 1.0).abs();
-    println!(
+    figure!(
         "independent numbers: mean change {change:.2e}, relative RMSE {:.2e}",
         relative_rmse(&after, &before)
     );
@@ -141,7 +142,6 @@ fn a_negative_then_positive_region_pass_in_an_unchanged_scene_leaves_the_image()
 /// poses are the same: negative and positive ordinary passes with the same random numbers,
 /// deferred and applied once, leave `n`, `r2` and `emitted` and move no `tau` beyond
 /// rounding.
-#[test]
 fn a_move_to_the_same_pose_leaves_the_statistics() {
     let (scene, p) = cornell(64, 40_000);
     for mode in [
@@ -202,13 +202,12 @@ fn a_move_to_the_same_pose_leaves_the_statistics() {
             worst = worst.max((a.tau[c] - b.tau[c]).abs() / b.tau[c].max(1e-30));
         }
     }
-    println!("largest relative change of tau: {worst:.2e}");
+    figure!("largest relative change of tau: {worst:.2e}");
     assert!(worst < 1e-5, "tau moved by {worst}");
 }
 
 /// More negative photons than a hit point holds: every hit point stays finite, no flux
 /// channel goes negative, and no radius grows past its initial value.
-#[test]
 fn clamps_hold_when_negative_photons_outnumber_the_count() {
     let (scene, p) = cornell(48, 2_000);
     let mut backend = CpuBackend::new();
@@ -262,7 +261,6 @@ fn clamps_hold_when_negative_photons_outnumber_the_count() {
 /// the truth of the new pose as iterations continue, with either estimator: `sppm` against the path-traced
 /// reference, `ppm` against a long `ppm` render of the new pose (it converges to the
 /// radiance at its pixel centres, not to the pixel averages of the path tracer).
-#[test]
 fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
     for estimator in [Estimator::Sppm, Estimator::Ppm] {
         let (scene, mut p) = cornell(64, 30_000);
@@ -300,7 +298,7 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
                 "{moved:?}"
             );
             let errors = errors_every(&mut render, &truth, 3, 8);
-            println!(
+            figure!(
                 "{estimator:?} {mode:?}: stale frame 0: {stale:.4}; after the move, every 8 iterations: {errors:?}"
             );
             assert!(
@@ -314,9 +312,10 @@ fn after_a_move_compensating_modes_converge_towards_the_new_pose() {
 /// The harness's same-seed comparison passes on a compensated frame: every backend runs the
 /// same move as the CPU (area, thesis and difference modes: compensation, testing and guided
 /// photons; local mode: its resets) and agrees with it.
-#[test]
-fn every_backend_agrees_with_the_cpu_on_a_compensated_frame() {
-    let test = "every_backend_agrees_with_the_cpu_on_a_compensated_frame";
+fn every_backend_agrees_with_the_cpu_on_a_compensated_frame(
+    name: &str,
+    mut other: Box<dyn Backend + Send>,
+) {
     let (scene, mut p) = cornell(48, 20_000);
     p.direct_samples = 8;
     let dynamic = MoveParams {
@@ -352,40 +351,37 @@ fn every_backend_agrees_with_the_cpu_on_a_compensated_frame() {
         MoveMode::Difference,
         MoveMode::Local,
     ];
-    for (name, mut other) in tests::compared_with_cpu(test) {
-        for mode in modes {
-            let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
-            let (theirs, other_move) = run(other.as_mut(), mode);
-            assert_eq!(
-                (cpu_move.updated, cpu_move.direct_corrected),
-                (other_move.updated, other_move.direct_corrected),
-                "{mode:?}: different hit points reset"
-            );
-            assert_eq!(
-                cpu_move.culled_share, other_move.culled_share,
-                "{mode:?}: different difference paths culled"
-            );
-            assert_eq!(
-                cpu_move.culled_share.is_some(),
-                mode == MoveMode::Local,
-                "{mode:?}: {cpu_move:?}"
-            );
-            let report = harness::diff::same_seed::compare(&cpu, &theirs, &p, 5);
-            println!(
-                "{name} {mode:?}: recorded {} vs {} paths\n{}",
-                cpu_move.recorded_paths,
-                other_move.recorded_paths,
-                harness::diff::same_seed::format(&report)
-            );
-            assert!(report.agree, "{mode:?}");
-        }
+    for mode in modes {
+        let (cpu, cpu_move) = run(&mut CpuBackend::new(), mode);
+        let (theirs, other_move) = run(other.as_mut(), mode);
+        assert_eq!(
+            (cpu_move.updated, cpu_move.direct_corrected),
+            (other_move.updated, other_move.direct_corrected),
+            "{mode:?}: different hit points reset"
+        );
+        assert_eq!(
+            cpu_move.culled_share, other_move.culled_share,
+            "{mode:?}: different difference paths culled"
+        );
+        assert_eq!(
+            cpu_move.culled_share.is_some(),
+            mode == MoveMode::Local,
+            "{mode:?}: {cpu_move:?}"
+        );
+        let report = harness::diff::same_seed::compare(&cpu, &theirs, &p, 5);
+        figure!(
+            "{name} {mode:?}: recorded {} vs {} paths\n{}",
+            cpu_move.recorded_paths,
+            other_move.recorded_paths,
+            harness::diff::same_seed::format(&report)
+        );
+        assert!(report.agree, "{mode:?}");
     }
 }
 
 /// Local mode resets every pixel the tall block newly covers (no eye path met the block there
 /// before the move: the box that holds it in every pose finds them), keeps most others, and
 /// keeps the direct light of those whose rays stayed clear of the box as it was.
-#[test]
 fn a_local_move_resets_the_pixels_the_object_newly_covers() {
     const SIZE: u32 = 64;
     let (scene, p) = cornell(SIZE, 20_000);
@@ -404,7 +400,7 @@ fn a_local_move_resets_the_pixels_the_object_newly_covers() {
     let mut render = warmed(&mut backend, a, &p, 8);
     let before = render.backend().read_hit_points().unwrap();
     let moved = render.move_to(b, MoveMode::Local).unwrap();
-    println!("{moved:?}; {} pixels newly covered", newly.len());
+    figure!("{moved:?}; {} pixels newly covered", newly.len());
     let slots = render.backend().read_hit_points().unwrap();
     for &i in &newly {
         let hp = &slots[i as usize];
@@ -433,7 +429,7 @@ fn a_local_move_resets_the_pixels_the_object_newly_covers() {
             weighed += usize::from(new.iterations < old.iterations);
         }
     }
-    println!("{untouched} untouched, {unchanged} unchanged, {weighed} weighed down");
+    figure!("{untouched} untouched, {unchanged} unchanged, {weighed} weighed down");
     assert!(
         moved.kept > moved.updated && untouched > 0 && unchanged > 0 && weighed > 0,
         "{moved:?}: {untouched} untouched, {unchanged} unchanged, {weighed} weighed down"
@@ -444,8 +440,10 @@ fn a_local_move_resets_the_pixels_the_object_newly_covers() {
 /// light; their last visible points gather the photons), while the slots the move reset
 /// iterate every time; once those hold as many iterations as the kept ones, no slot rests.
 /// On every backend.
-#[test]
-fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up() {
+fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up(
+    _: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
     use ppm_core::layout::HitPoint;
     const WARM: u32 = 4;
     let (scene, p) = cornell(32, 10_000);
@@ -500,17 +498,13 @@ fn after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up() {
             "{name}"
         );
     };
-    let test = "after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up";
-    for (_, mut backend) in tests::backends(test) {
-        check(backend.as_mut());
-    }
+    check(backend.as_mut());
 }
 
 /// Local mode moves several objects at once: both blocks of the Cornell box move, the pixels
 /// either newly covers are reset, the frame converges to the path-traced truth of the new
 /// pose, and both backends reset the same slots.
-#[test]
-fn local_mode_moves_several_objects_at_once() {
+fn local_mode_moves_several_objects_at_once(name: &str, mut other: Box<dyn Backend + Send>) {
     use ppm_core::scene::Move;
     const SIZE: u32 = 48;
     let (mut scene, p) = cornell(SIZE, 20_000);
@@ -555,7 +549,7 @@ fn local_mode_moves_several_objects_at_once() {
             );
         }
         let errors = errors_every(&mut render, &truth, 2, 12);
-        println!("{name}: {moved:?}; error every 12 iterations {errors:?}");
+        figure!("{name}: {moved:?}; error every 12 iterations {errors:?}");
         assert!(
             errors[2] < errors[1] && errors[1] < errors[0],
             "{name}: {errors:?}"
@@ -563,20 +557,17 @@ fn local_mode_moves_several_objects_at_once() {
         moved
     };
     let cpu = run(&mut CpuBackend::new());
-    for (name, mut other) in tests::compared_with_cpu("local_mode_moves_several_objects_at_once") {
-        let theirs = run(other.as_mut());
-        assert_eq!(
-            (cpu.updated, cpu.direct_corrected),
-            (theirs.updated, theirs.direct_corrected),
-            "{name}"
-        );
-    }
+    let theirs = run(other.as_mut());
+    assert_eq!(
+        (cpu.updated, cpu.direct_corrected),
+        (theirs.updated, theirs.direct_corrected),
+        "{name}"
+    );
 }
 
 /// Local mode's culling skips in pose B only the difference paths that store nothing there:
 /// after a move of the tall block the statistics are bit for bit those of the same move with
 /// every path traced in both poses.
-#[test]
 fn culling_leaves_a_local_move_bit_for_bit() {
     let (scene, p) = cornell(64, 20_000);
     let run = |cull_uncrossed: bool| {
@@ -595,7 +586,7 @@ fn culling_leaves_a_local_move_bit_for_bit() {
     };
     let (culled, culled_rays, with) = run(true);
     let (traced, traced_rays, without) = run(false);
-    println!(
+    figure!(
         "culled share {:?}; photon rays {culled_rays} with culling, {traced_rays} without",
         culled.culled_share
     );
@@ -613,12 +604,12 @@ fn culling_leaves_a_local_move_bit_for_bit() {
 /// With independent seeds, every backend's locally compensated frames and the CPU's are samples
 /// of the same estimator: no tile's radiance, radius, count or direct light differs
 /// significantly (Welch's t over runs, Holm-corrected at 1%).
-#[test]
-fn every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds() {
+fn every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds(
+    name: &str,
+    mut other: Box<dyn Backend + Send>,
+) {
     use harness::diff::independent;
     const RUNS: u32 = 6;
-    let test =
-        "every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds";
     let (scene, p) = cornell(32, 10_000);
     let runs = |backend: &mut dyn Backend, first_seed: u32| {
         (first_seed..first_seed + RUNS)
@@ -640,18 +631,15 @@ fn every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_indepen
             .collect::<Vec<_>>()
     };
     let cpu = runs(&mut CpuBackend::new(), 0);
-    for (name, mut other) in tests::compared_with_cpu(test) {
-        let other = runs(other.as_mut(), 1000);
-        let report = independent::compare(("cpu", &cpu), (&name, &other), &p, 3);
-        println!("{}", independent::format(&report));
-        assert!(report.agree, "{}", independent::format(&report));
-    }
+    let other = runs(other.as_mut(), 1000);
+    let report = independent::compare(("cpu", &cpu), (name, &other), &p, 3);
+    figure!("{}", independent::format(&report));
+    assert!(report.agree, "{}", independent::format(&report));
 }
 
 /// Local mode keeps the pixels whose eye rays crossed the box the tall block sweeps but met
 /// the block in neither pose (the floor and wall seen past it), which a test against the box
 /// alone would reset, and resets every pixel that saw the block before the move.
-#[test]
 fn a_local_move_keeps_the_pixels_that_only_saw_past_the_object() {
     const SIZE: u32 = 64;
     let (scene, p) = cornell(SIZE, 20_000);
@@ -697,7 +685,7 @@ fn a_local_move_keeps_the_pixels_that_only_saw_past_the_object() {
     let mut backend = CpuBackend::new();
     let mut render = warmed(&mut backend, a, &p, 8);
     let moved = render.move_to(b, MoveMode::Local).unwrap();
-    println!(
+    figure!(
         "{moved:?}; {} past the block, {} on it",
         past.len(),
         saw.len()
@@ -757,8 +745,10 @@ fn mirrored_paths_meeting(
 /// pixel a quarter of whose eye paths meet the ring in its new pose (directly, or mirrored
 /// by the other rings: at 128x128 two pixels are found only by its probe), and keeps slots
 /// whose mirrored paths only crossed the ring's box. Both backends reset the same slots.
-#[test]
-fn a_local_move_probes_mirrored_paths_in_the_new_pose() {
+fn a_local_move_probes_mirrored_paths_in_the_new_pose(
+    name: &str,
+    mut other: Box<dyn Backend + Send>,
+) {
     const SIZE: u32 = 128;
     let scene = scenes::builtin("wedding-band").unwrap().load().unwrap();
     let mut p = RenderParams::for_scene(&scene);
@@ -787,7 +777,7 @@ fn a_local_move_probes_mirrored_paths_in_the_new_pose() {
             .zip(&reset)
             .filter(|(hp, r)| hp.flags & hit_flags::EYE_CHAINED != 0 && !**r)
             .count();
-        println!(
+        figure!(
             "{}: {moved:?}; {chained_kept} mirrored slots kept",
             render.backend().name()
         );
@@ -804,21 +794,17 @@ fn a_local_move_probes_mirrored_paths_in_the_new_pose() {
         "kept, yet meet the ring in pose B: {missed:?}"
     );
     assert!(chained_kept > 0, "the probe kept no mirrored slot");
-    let test = "a_local_move_probes_mirrored_paths_in_the_new_pose";
-    for (name, mut other) in tests::compared_with_cpu(test) {
-        let (theirs, _) = run(other.as_mut());
-        let differ = cpu.iter().zip(&theirs).filter(|(c, o)| c != o).count();
-        assert!(
-            differ * 1000 <= cpu.len(),
-            "{name}: {differ} slots reset on one backend only"
-        );
-    }
+    let (theirs, _) = run(other.as_mut());
+    let differ = cpu.iter().zip(&theirs).filter(|(c, o)| c != o).count();
+    assert!(
+        differ * 1000 <= cpu.len(),
+        "{name}: {differ} slots reset on one backend only"
+    );
 }
 
 /// The paired passes of a move trace both poses with the same random numbers, which must pick
 /// the same point of the same light in both: every pose of every built-in scene lists its
 /// lights alike, whatever order the rebuilt BVH puts the triangles in.
-#[test]
 fn every_pose_lists_the_lights_alike() {
     for builtin in scenes::BUILTIN {
         let scene = builtin.load().unwrap();
@@ -831,4 +817,22 @@ fn every_pose_lists_the_lights_alike() {
             );
         }
     }
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test("a_negative_then_positive_region_pass_in_an_unchanged_scene_leaves_the_image", a_negative_then_positive_region_pass_in_an_unchanged_scene_leaves_the_image)
+        .test("a_move_to_the_same_pose_leaves_the_statistics", a_move_to_the_same_pose_leaves_the_statistics)
+        .test("clamps_hold_when_negative_photons_outnumber_the_count", clamps_hold_when_negative_photons_outnumber_the_count)
+        .test("after_a_move_compensating_modes_converge_towards_the_new_pose", after_a_move_compensating_modes_converge_towards_the_new_pose)
+        .against_the_cpu("every_backend_agrees_with_the_cpu_on_a_compensated_frame", every_backend_agrees_with_the_cpu_on_a_compensated_frame)
+        .test("a_local_move_resets_the_pixels_the_object_newly_covers", a_local_move_resets_the_pixels_the_object_newly_covers)
+        .on_every_backend("after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up", after_a_local_move_kept_slots_rest_until_the_reset_ones_catch_up)
+        .against_the_cpu("local_mode_moves_several_objects_at_once", local_mode_moves_several_objects_at_once)
+        .test("culling_leaves_a_local_move_bit_for_bit", culling_leaves_a_local_move_bit_for_bit)
+        .against_the_cpu("every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds", every_backend_agrees_with_the_cpu_on_a_locally_compensated_frame_with_independent_seeds)
+        .test("a_local_move_keeps_the_pixels_that_only_saw_past_the_object", a_local_move_keeps_the_pixels_that_only_saw_past_the_object)
+        .against_the_cpu("a_local_move_probes_mirrored_paths_in_the_new_pose", a_local_move_probes_mirrored_paths_in_the_new_pose)
+        .test("every_pose_lists_the_lights_alike", every_pose_lists_the_lights_alike)
+        .run()
 }

@@ -14,20 +14,19 @@ use ppm_core::image::Image;
 use ppm_core::layout::*;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::*;
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 
-/// Every in-tree backend ([`tests::backends`]) passes both tiers.
-#[test]
-fn every_backend_passes_conformance() {
+/// Every in-tree backend passes both tiers.
+fn every_backend_passes_conformance(name: &str, _: Box<dyn Backend + Send>) {
     let registry = harness::registry::Registry::in_tree();
-    for (name, _) in tests::backends("every_backend_passes_conformance") {
-        let verdict = run_conformance(
-            &mut || registry.start(&name).map(|b| b as Box<dyn Backend>),
-            &ConformanceOptions::quick(),
-            Tier::Dynamic,
-        );
-        println!("{verdict}");
-        assert!(verdict.passed(), "{verdict}");
-    }
+    let verdict = run_conformance(
+        &mut || registry.start(name).map(|b| b as Box<dyn Backend>),
+        &ConformanceOptions::quick(),
+        Tier::Dynamic,
+    );
+    figure!("{verdict}");
+    assert!(verdict.passed(), "{verdict}");
 }
 
 /// The CPU backend with one fault.
@@ -219,7 +218,6 @@ fn cornell_params() -> (ppm_core::scene::Scene, RenderParams) {
     (scene, p)
 }
 
-#[test]
 fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let (scene, p) = cornell_params();
     let reference = record(&mut CpuBackend::new(), &scene, 0, &p).unwrap();
@@ -233,7 +231,7 @@ fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     .unwrap();
     let good = same_seed::compare(&reference, &honest, &p, 5);
     let bad = same_seed::compare(&reference, &broken, &p, 5);
-    println!("{}", harness::diff::same_seed::format(&bad));
+    figure!("{}", harness::diff::same_seed::format(&bad));
     insta::assert_snapshot!(
         "same_seed_table_broken",
         harness::diff::same_seed::format(&bad)
@@ -260,7 +258,6 @@ fn same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten() {
 /// A gather that goes wrong at the third iteration: the same-seed recordings part there, the
 /// state saved just before it replays that iteration alone on both backends (they part at
 /// once), and the honest backend's replay ends exactly where its uninterrupted run did.
-#[test]
 fn the_state_before_the_first_divergence_replays_it_alone() {
     let (scene, p) = cornell_params();
     let faulty = || Broken(CpuBackend::new(), Fault::DropsOneInTen { from_pass: 2 });
@@ -291,7 +288,6 @@ fn the_state_before_the_first_divergence_replays_it_alone() {
     );
 }
 
-#[test]
 fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     let (scene, p) = cornell_params();
     let reference = runs_of(&mut CpuBackend::new(), &scene, &p, 4, 0).unwrap();
@@ -306,7 +302,7 @@ fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     .unwrap();
     let good = independent::compare(("cpu", &reference), ("cpu", &honest), &p, 5);
     let bad = independent::compare(("cpu", &reference), ("broken", &broken), &p, 5);
-    println!("{}", harness::diff::independent::format(&bad));
+    figure!("{}", harness::diff::independent::format(&bad));
     insta::assert_snapshot!(
         "independent_table_broken",
         harness::diff::independent::format(&bad)
@@ -315,7 +311,6 @@ fn independent_mode_catches_a_gather_that_drops_one_photon_in_ten() {
     assert!(!bad.agree, "the broken gather went unnoticed");
 }
 
-#[test]
 fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
     let verdict = run_conformance(
         &mut || {
@@ -327,7 +322,7 @@ fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
         &ConformanceOptions::quick(),
         Tier::Dynamic,
     );
-    println!("{verdict}");
+    figure!("{verdict}");
     assert!(!verdict.check("agreement/same-seed").unwrap().passed);
     assert!(!verdict.check("agreement/independent").unwrap().passed);
     // Its gather is consistent with the photons it reads back (the fault hides them), and its
@@ -339,7 +334,6 @@ fn conformance_fails_the_broken_backend_on_both_agreement_checks() {
 /// A backend whose compensation photons carry positive power renders every still frame as
 /// the CPU does, so the still-frame checks pass it; both moves checks fail it, and the gather
 /// check at the first negative kind.
-#[test]
 fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
     let verdict = run_conformance(
         &mut || {
@@ -351,7 +345,7 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
         &ConformanceOptions::quick(),
         Tier::Dynamic,
     );
-    println!("{verdict}");
+    figure!("{verdict}");
     assert!(!verdict.check("moves/same-seed").unwrap().passed);
     assert!(!verdict.check("moves/independent").unwrap().passed);
     let kinds = verdict.check("gather-kinds").unwrap();
@@ -378,7 +372,7 @@ fn fails_on_moves_only(fault: Fault, step: &str) {
         &ConformanceOptions::quick(),
         Tier::Dynamic,
     );
-    println!("{verdict}");
+    figure!("{verdict}");
     assert!(
         !verdict.check("moves/same-seed").unwrap().passed,
         "{verdict}"
@@ -395,21 +389,18 @@ fn fails_on_moves_only(fault: Fault, step: &str) {
 
 /// A backend that skips the reset of an emptied slot's normaliser (no still pass empties a
 /// slot) fails at the first kind that empties slots.
-#[test]
 fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves() {
     fails_on_moves_only(Fault::SkipsEmptiedReset, "thesis compensation");
 }
 
 /// A backend that ignores [`photon_flags::ADD_TO_MAP`] fails where local mode's deferred
 /// correction is applied.
-#[test]
 fn conformance_fails_a_backend_that_ignores_add_to_map() {
     fails_on_moves_only(Fault::IgnoresAddToMap, "local apply");
 }
 
 /// A backend that ignores [`photon_flags::PAIR_DEPOSITS`] fails where local mode's correction
 /// is applied: its variance, and so the history a kept slot keeps, is not the contract's.
-#[test]
 fn conformance_fails_a_backend_that_ignores_pairing() {
     fails_on_moves_only(Fault::IgnoresPairing, "local apply");
 }
@@ -417,14 +408,13 @@ fn conformance_fails_a_backend_that_ignores_pairing() {
 /// A backend without dynamic passes passes the static tier, fails the dynamic tier on
 /// `dynamic-passes` alone among the checks both tiers share, and renders a moving scene: each
 /// of its moves restarts, saying why.
-#[test]
 fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
     let make = &mut || -> Result<Box<dyn Backend>, BackendError> {
         Ok(Box::new(Broken(CpuBackend::new(), Fault::StillFramesOnly)))
     };
     let options = ConformanceOptions::quick();
     let still = run_conformance(make, &options, Tier::Static);
-    println!("{still}");
+    figure!("{still}");
     assert!(still.passed(), "{still}");
     assert!(
         still.check("moves/same-seed").is_none(),
@@ -471,7 +461,6 @@ fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
 /// A gather that goes wrong for one kind alone fails the gather checks naming that kind: every
 /// kind, in turn (the ordinary one fails the static `gather-formulas`, the others the dynamic
 /// `gather-kinds`).
-#[test]
 fn the_gather_checks_name_the_one_kind_a_backend_gets_wrong() {
     use gather_kind::*;
     let check = |name: &str| {
@@ -502,10 +491,59 @@ fn the_gather_checks_name_the_one_kind_a_backend_gets_wrong() {
             "gather-kinds"
         };
         let failed = check(name)(make, &ConformanceOptions::quick()).unwrap_err();
-        println!("{kind:#x}: {failed}");
+        figure!("{kind:#x}: {failed}");
         assert!(
             failed.contains(&format!("kind {kind:#x} (")),
             "{kind:#x}: {failed}"
         );
     }
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .on_every_backend(
+            "every_backend_passes_conformance",
+            every_backend_passes_conformance,
+        )
+        .test(
+            "same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten",
+            same_seed_mode_catches_a_gather_that_drops_one_photon_in_ten,
+        )
+        .test(
+            "the_state_before_the_first_divergence_replays_it_alone",
+            the_state_before_the_first_divergence_replays_it_alone,
+        )
+        .test(
+            "independent_mode_catches_a_gather_that_drops_one_photon_in_ten",
+            independent_mode_catches_a_gather_that_drops_one_photon_in_ten,
+        )
+        .test(
+            "conformance_fails_the_broken_backend_on_both_agreement_checks",
+            conformance_fails_the_broken_backend_on_both_agreement_checks,
+        )
+        .test(
+            "conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves",
+            conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves,
+        )
+        .test(
+            "conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves",
+            conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves,
+        )
+        .test(
+            "conformance_fails_a_backend_that_ignores_add_to_map",
+            conformance_fails_a_backend_that_ignores_add_to_map,
+        )
+        .test(
+            "conformance_fails_a_backend_that_ignores_pairing",
+            conformance_fails_a_backend_that_ignores_pairing,
+        )
+        .test(
+            "a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves",
+            a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves,
+        )
+        .test(
+            "the_gather_checks_name_the_one_kind_a_backend_gets_wrong",
+            the_gather_checks_name_the_one_kind_a_backend_gets_wrong,
+        )
+        .run()
 }

@@ -2,9 +2,10 @@
 
 use ppm_core::params::RenderParams;
 use ppm_core::passes::ReadBack;
+use std::process::ExitCode;
+use tests::Suite;
 use tests::{render_cpu, render_on};
 
-#[test]
 fn cpu_buffers_are_bit_identical_across_thread_counts() {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
     let mut params = RenderParams::for_scene(&scene);
@@ -31,7 +32,6 @@ fn cpu_buffers_are_bit_identical_across_thread_counts() {
     }
 }
 
-#[test]
 fn a_different_seed_gives_different_photons() {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
     let mut params = RenderParams::for_scene(&scene);
@@ -48,12 +48,8 @@ fn a_different_seed_gives_different_photons() {
 /// The wgpu backend on a device held to WebGPU's baseline limits renders, bit for bit, what
 /// it renders with the adapter's own: no pass binds or needs more than any WebGPU device
 /// offers (four storage textures and eight storage buffers per stage, among others).
-#[test]
 fn wgpu_renders_the_same_buffers_within_baseline_limits() {
-    let test = "wgpu_renders_the_same_buffers_within_baseline_limits";
-    let Some(mut adapter_limits) = backend_wgpu::backend_or_skip(test) else {
-        return;
-    };
+    let mut adapter_limits = backend_wgpu::WgpuBackend::new().unwrap();
     let mut baseline = backend_wgpu::GpuContext::baseline()
         .and_then(backend_wgpu::WgpuBackend::on)
         .expect("the passes fit baseline WebGPU limits");
@@ -77,4 +73,22 @@ fn wgpu_renders_the_same_buffers_within_baseline_limits() {
     let (a, b) = (buffers(&mut adapter_limits), buffers(&mut baseline));
     assert!(!a.1.is_empty(), "the render deposited photons");
     assert!(a == b, "baseline limits changed the buffers");
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test(
+            "cpu_buffers_are_bit_identical_across_thread_counts",
+            cpu_buffers_are_bit_identical_across_thread_counts,
+        )
+        .test(
+            "a_different_seed_gives_different_photons",
+            a_different_seed_gives_different_photons,
+        )
+        .test_needing(
+            &[tests::wgpu()],
+            "wgpu_renders_the_same_buffers_within_baseline_limits",
+            wgpu_renders_the_same_buffers_within_baseline_limits,
+        )
+        .run()
 }

@@ -9,6 +9,8 @@ use harness::driver::{Budget, Observer, ObserverResult, Progress, Renderer, Sche
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::{Material, MaterialKind, Object, Scene};
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 
 fn cornell() -> Scene {
     scenes::builtin("cornell-box").unwrap().load().unwrap()
@@ -108,10 +110,19 @@ fn assert_far_vertex_changes_nothing(backend: &mut dyn Backend) {
     assert!(far.deposited > plain.deposited, "{far:?} {plain:?}");
 }
 
-#[test]
-fn a_vertex_at_1e8_starves_no_gather_on_any_backend() {
-    for (name, mut backend) in tests::backends("a_vertex_at_1e8_starves_no_gather_on_any_backend") {
-        println!("{name}");
-        assert_far_vertex_changes_nothing(backend.as_mut());
-    }
+fn a_vertex_at_1e8_starves_no_gather_on_any_backend(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
+    figure!("{name}");
+    assert_far_vertex_changes_nothing(backend.as_mut());
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .on_every_backend(
+            "a_vertex_at_1e8_starves_no_gather_on_any_backend",
+            a_vertex_at_1e8_starves_no_gather_on_any_backend,
+        )
+        .run()
 }

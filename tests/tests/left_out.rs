@@ -5,18 +5,15 @@
 
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use std::process::ExitCode;
+use tests::Suite;
 
 fn listed(lines: &[String], start: &str) -> bool {
     lines.iter().any(|l| l.starts_with(start))
 }
 
-#[test]
 fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
-    let Some(mut backend) = backend_wgpu::backend_or_skip(
-        "a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it",
-    ) else {
-        return;
-    };
+    let mut backend = backend_wgpu::WgpuBackend::new().unwrap();
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
     let mut p = RenderParams::for_scene(&scene);
     p.width = 32;
@@ -62,13 +59,7 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
 /// specular code is not compiled, ordinary photon passes carry no mover-box tests, and the
 /// report says so. Through a still warm-up and a local move, the specialised build renders
 /// the general build's image bit for bit, on a diffuse scene and on one with mirrors.
-#[test]
 fn specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_same_image() {
-    let test =
-        "specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_same_image";
-    if backend_wgpu::backend_or_skip(test).is_none() {
-        return;
-    }
     for (name, specular) in [("cornell-box", false), ("wedding-band", true)] {
         let scene = scenes::builtin(name).unwrap().load().unwrap();
         let mut p = RenderParams::for_scene(&scene);
@@ -148,4 +139,19 @@ fn specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_sa
             "{general_left_out:?}"
         );
     }
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test_needing(
+            &[tests::wgpu()],
+            "a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it",
+            a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it,
+        )
+        .test_needing(
+            &[tests::wgpu()],
+            "specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_same_image",
+            specialised_pipelines_leave_out_what_the_scene_cannot_reach_and_render_the_same_image,
+        )
+        .run()
 }

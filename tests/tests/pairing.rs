@@ -7,12 +7,15 @@
 //! ([`tests::furnace_with_mover`]): most correction paths cross the box without meeting the
 //! mover, so they are the same in both poses and their deposits cancel.
 
+use backend_cpu::CpuBackend;
 use glam::Vec3;
 use harness::driver::Renderer;
 use ppm_core::layout::{HitPoint, hit_flags};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
+use std::process::ExitCode;
 use tests::furnace_with_mover;
+use tests::{BackendTrials, Suite, figure};
 
 /// The share of their history the kept slots keep through a small local move after eight
 /// iterations (their summed `emitted` after over before), pairing deposits or not.
@@ -53,27 +56,31 @@ fn history_kept(backend: &mut dyn Backend, pair_deposits: bool) -> f64 {
 /// Paths that cross the mover's box without meeting it come out the same in both poses, so
 /// their pairs cancel and count nothing (`Partner::cancels`): the kept slots give up less
 /// than a tenth of the history they gave up counted deposit by deposit (0.011 against 0.182
-/// when written). Both backends pair alike.
-#[test]
-fn paired_deposits_keep_the_history_a_small_move_did_not_change() {
-    let mut kept = Vec::new();
-    for (name, mut backend) in
-        tests::backends("paired_deposits_keep_the_history_a_small_move_did_not_change")
-    {
-        let paired = history_kept(backend.as_mut(), true);
-        let alone = history_kept(backend.as_mut(), false);
-        println!("{name}: history kept {paired:.4} paired, {alone:.4} deposit by deposit");
-        assert!(
-            1.0 - paired < 0.1 * (1.0 - alone),
-            "{name}: paired deposits kept {paired}, alone {alone}"
-        );
-        kept.push((name, paired, alone));
-    }
-    let (_, cpu_paired, cpu_alone) = kept[0];
-    for (name, paired, alone) in &kept {
-        assert!(
-            (paired - cpu_paired).abs() < 0.01 && (alone - cpu_alone).abs() < 0.01,
-            "{name} kept {paired} and {alone}, the CPU {cpu_paired} and {cpu_alone}"
-        );
-    }
+/// when written). Every backend pairs as the CPU backend does.
+fn paired_deposits_keep_the_history_a_small_move_did_not_change(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
+    let paired = history_kept(backend.as_mut(), true);
+    let alone = history_kept(backend.as_mut(), false);
+    figure!("{name}: history kept {paired:.4} paired, {alone:.4} deposit by deposit");
+    assert!(
+        1.0 - paired < 0.1 * (1.0 - alone),
+        "{name}: paired deposits kept {paired}, alone {alone}"
+    );
+    let mut cpu = CpuBackend::new();
+    let (cpu_paired, cpu_alone) = (history_kept(&mut cpu, true), history_kept(&mut cpu, false));
+    assert!(
+        (paired - cpu_paired).abs() < 0.01 && (alone - cpu_alone).abs() < 0.01,
+        "{name} kept {paired} and {alone}, the CPU {cpu_paired} and {cpu_alone}"
+    );
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .on_every_backend(
+            "paired_deposits_keep_the_history_a_small_move_did_not_change",
+            paired_deposits_keep_the_history_a_small_move_did_not_change,
+        )
+        .run()
 }

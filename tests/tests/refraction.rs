@@ -16,6 +16,8 @@ use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use scenes::analytic::{furnace_radiance, water_furnace};
 use std::ops::ControlFlow;
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 
 const SIZE: u32 = 32;
 const ALBEDO: f32 = 0.5;
@@ -52,7 +54,7 @@ fn worst_block(image: &Image) -> f64 {
 
 fn assert_two_everywhere(name: &str, image: &Image) {
     let worst = worst_block(image);
-    println!("{name}: worst 8x8 block off the closed form by {worst:.4}");
+    figure!("{name}: worst 8x8 block off the closed form by {worst:.4}");
     assert!(
         worst < BLOCK_TOLERANCE,
         "{name}: an 8x8 block is off the closed form 2 by {worst:.4}"
@@ -100,19 +102,17 @@ fn render_still(backend: &mut dyn Backend) -> Image {
     tests::render_on(backend, &scene(), 0, &params(&scene())).image
 }
 
-#[test]
-fn the_water_furnace_is_two_through_the_water_on_every_backend() {
-    let test = "the_water_furnace_is_two_through_the_water_on_every_backend";
-    for (name, mut backend) in tests::backends(test) {
-        let image = render_still(backend.as_mut());
-        assert_two_everywhere(&name, &image);
-        render_with_a_move(backend.as_mut(), &name);
-    }
+fn the_water_furnace_is_two_through_the_water_on_every_backend(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
+    let image = render_still(backend.as_mut());
+    assert_two_everywhere(name, &image);
+    render_with_a_move(backend.as_mut(), name);
 }
 
 /// The ground truth agrees: the path tracer, which scales radiance through refraction on its
 /// own (it shares no transport code with the passes), finds 2 in every block too.
-#[test]
 fn the_reference_path_tracer_finds_two_through_the_water() {
     let compiled = compile_scene(&scene(), SIZE, SIZE);
     let budget = ReferenceBudget {
@@ -122,4 +122,17 @@ fn the_reference_path_tracer_finds_two_through_the_water() {
     let reference = render_reference(&compiled, 3, budget, &mut |_, _| ControlFlow::Continue(()));
     assert!(reference.error.is_none(), "{:?}", reference.error);
     assert_two_everywhere("reference", &reference.image);
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .on_every_backend(
+            "the_water_furnace_is_two_through_the_water_on_every_backend",
+            the_water_furnace_is_two_through_the_water_on_every_backend,
+        )
+        .test(
+            "the_reference_path_tracer_finds_two_through_the_water",
+            the_reference_path_tracer_finds_two_through_the_water,
+        )
+        .run()
 }

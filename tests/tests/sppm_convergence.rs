@@ -12,6 +12,8 @@ use ppm_core::params::{Estimator, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
 use std::ops::ControlFlow;
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 
 const SIZE: u32 = 48;
 const FEW: u32 = 8;
@@ -33,7 +35,7 @@ fn truth(scene: &Scene) -> Image {
     };
     let reference = render_reference(&compiled, 7, budget, &mut |_, _| ControlFlow::Continue(()));
     assert!(reference.error.is_none(), "{:?}", reference.error);
-    println!("reference noise {:.4}", reference.noise());
+    figure!("reference noise {:.4}", reference.noise());
     reference.image
 }
 
@@ -63,7 +65,7 @@ fn errors(
     };
     let few = measure(&mut render, FEW);
     let many = measure(&mut render, MANY - FEW);
-    println!(
+    figure!(
         "{} {estimator:?}: after {FEW} iterations pixel {:.4} block {:.4}; after {MANY} pixel {:.4} block {:.4}",
         render.backend().name(),
         few.0,
@@ -91,7 +93,6 @@ fn assert_converges(name: &str, [few, many]: [(f64, f64); 2]) {
     );
 }
 
-#[test]
 fn sppm_error_against_the_truth_falls_with_iterations_on_the_cpu() {
     let scene = cornell_frame1();
     let truth = truth(&scene);
@@ -108,13 +109,25 @@ fn sppm_error_against_the_truth_falls_with_iterations_on_the_cpu() {
     );
 }
 
-#[test]
-fn sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends() {
-    let test = "sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends";
+fn sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
     let scene = cornell_frame1();
     let truth = truth(&scene);
-    for (name, mut backend) in tests::compared_with_cpu(test) {
-        let sppm = errors(backend.as_mut(), &scene, Estimator::Sppm, &truth);
-        assert_converges(&format!("{name} sppm"), sppm);
-    }
+    let sppm = errors(backend.as_mut(), &scene, Estimator::Sppm, &truth);
+    assert_converges(&format!("{name} sppm"), sppm);
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test(
+            "sppm_error_against_the_truth_falls_with_iterations_on_the_cpu",
+            sppm_error_against_the_truth_falls_with_iterations_on_the_cpu,
+        )
+        .against_the_cpu(
+            "sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends",
+            sppm_error_against_the_truth_falls_with_iterations_on_the_other_backends,
+        )
+        .run()
 }

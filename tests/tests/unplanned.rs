@@ -17,6 +17,8 @@ use ppm_core::passes::Backend;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{Move, Scene};
 use std::ops::ControlFlow;
+use std::process::ExitCode;
+use tests::{BackendTrials, Suite, figure};
 use tests::{around, luminance, objects_seen};
 
 fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
@@ -52,8 +54,10 @@ fn truth(scene: &Scene, size: u32, spp: u32) -> Image {
 /// and every one whose centre ray meets it after, is reset; nine in ten of the pixels that
 /// see neither it nor its neighbourhood in either pose are kept; both backends reset the
 /// same slots.
-#[test]
-fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest() {
+fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest(
+    name: &str,
+    mut other: Box<dyn Backend + Send>,
+) {
     const SIZE: u32 = 48;
     let (scene, p) = cornell(SIZE, 20_000);
     let block = scene.object_index("short-block").unwrap() as u32;
@@ -98,7 +102,7 @@ fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest() {
             "{name}: kept, yet see the block: {missed:?}"
         );
         let kept_apart = apart.iter().filter(|&&i| !reset[i]).count();
-        println!(
+        figure!(
             "{name}: {report:?}; {kept_apart} of {} apart kept",
             apart.len()
         );
@@ -110,15 +114,12 @@ fn a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest() {
         reset
     };
     let cpu = run(&mut CpuBackend::new());
-    let test = "a_move_nobody_declared_resets_what_sees_it";
-    for (name, mut other) in tests::compared_with_cpu(test) {
-        let theirs = run(other.as_mut());
-        let differ = cpu.iter().zip(&theirs).filter(|(a, b)| a != b).count();
-        assert!(
-            differ * 200 <= cpu.len(),
-            "{name}: {differ} slots reset on one backend only"
-        );
-    }
+    let theirs = run(other.as_mut());
+    let differ = cpu.iter().zip(&theirs).filter(|(a, b)| a != b).count();
+    assert!(
+        differ * 200 <= cpu.len(),
+        "{name}: {differ} slots reset on one backend only"
+    );
 }
 
 /// Three moves of two objects, at iterations nobody declared (the second moves both at once).
@@ -151,7 +152,6 @@ fn path(scene: &Scene) -> MovePath {
 /// Along a path of unplanned moves, local mode converges to the truth of the final pose: its
 /// 8x8-block error against the path tracer falls between 8 and 64 iterations after the last
 /// move, to well below what the start pose's truth is from the final one's.
-#[test]
 fn a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose() {
     const SIZE: u32 = 32;
     let (scene, p) = cornell(SIZE, 10_000);
@@ -181,7 +181,7 @@ fn a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose() {
         block_relative_rmse(&outcome.image, &truth, 8)
     };
     let (few, many) = (render(8), render(64));
-    println!("block error: start pose {start_off:.4}; 8 iterations {few:.4}; 64 {many:.4}");
+    figure!("block error: start pose {start_off:.4}; 8 iterations {few:.4}; 64 {many:.4}");
     assert!(many < few, "{few} then {many}");
     assert!(
         many < 0.04 && many < start_off / 3.0,
@@ -192,8 +192,7 @@ fn a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose() {
 /// The same path on both backends: with the same seed they trace the same paths up to
 /// rounding (the images agree within 2% relative RMSE, the moves reset the same slots
 /// within 1%).
-#[test]
-fn every_backend_follows_a_path_as_the_cpu_does() {
+fn every_backend_follows_a_path_as_the_cpu_does(name: &str, mut backend: Box<dyn Backend + Send>) {
     const SIZE: u32 = 32;
     let (scene, p) = cornell(SIZE, 10_000);
     let path = path(&scene);
@@ -210,31 +209,28 @@ fn every_backend_follows_a_path_as_the_cpu_does() {
         .unwrap()
     };
     let cpu = follow(&mut CpuBackend::new());
-    for (name, mut backend) in
-        tests::compared_with_cpu("every_backend_follows_a_path_as_the_cpu_does")
-    {
-        let other = follow(backend.as_mut());
-        let differ = relative_rmse(&other.image, &cpu.image);
-        println!("{name}: relative RMSE against the cpu: {differ:.4}");
-        assert!(differ < 0.02, "{name}: {differ}");
-        for (c, o) in cpu.moves.iter().zip(&other.moves) {
-            let (c, o) = (c.updated as f64, o.updated as f64);
-            assert!(
-                (c - o).abs() <= 0.01 * c.max(o) + 2.0,
-                "{name}: {c} against {o} reset"
-            );
-        }
+    let other = follow(backend.as_mut());
+    let differ = relative_rmse(&other.image, &cpu.image);
+    figure!("{name}: relative RMSE against the cpu: {differ:.4}");
+    assert!(differ < 0.02, "{name}: {differ}");
+    for (c, o) in cpu.moves.iter().zip(&other.moves) {
+        let (c, o) = (c.updated as f64, o.updated as f64);
+        assert!(
+            (c - o).abs() <= 0.01 * c.max(o) + 2.0,
+            "{name}: {c} against {o} reset"
+        );
     }
 }
 
 /// With independent seeds, the CPU and wgpu backends' frames after the same path of unplanned
 /// moves are samples of the same estimator: no tile's radiance, radius, count or direct light
 /// differs significantly (Welch's t over 6 runs each, Holm-corrected at 1%).
-#[test]
-fn every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds() {
+fn every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
     use harness::diff::{OTHER_SEED_OFFSET, independent, runs_of_schedule};
     const RUNS: u32 = 6;
-    let test = "every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds";
     let (scene, p) = cornell(32, 10_000);
     let schedule = Schedule::path(&path(&scene), MoveMode::Local, Budget::iterations(4));
     let runs = |backend: &mut dyn Backend, offset: u32| {
@@ -242,12 +238,10 @@ fn every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds() {
         runs_of_schedule(backend, &scene, &p, &moves, &schedule, RUNS, offset).unwrap()
     };
     let cpu = runs(&mut CpuBackend::new(), 0);
-    for (name, mut backend) in tests::compared_with_cpu(test) {
-        let other = runs(backend.as_mut(), OTHER_SEED_OFFSET);
-        let report = independent::compare(("cpu", &cpu), (&name, &other), &p, 3);
-        println!("{}", independent::format(&report));
-        assert!(report.agree, "{}", independent::format(&report));
-    }
+    let other = runs(backend.as_mut(), OTHER_SEED_OFFSET);
+    let report = independent::compare(("cpu", &cpu), (name, &other), &p, 3);
+    figure!("{}", independent::format(&report));
+    assert!(report.agree, "{}", independent::format(&report));
 }
 
 /// Largest pixel luminance of an image.
@@ -265,8 +259,7 @@ fn brightest(image: &Image) -> f32 {
 /// later, and right after it (the corrections' own doing, before any new eye sample) no
 /// pixel brighter than twice the brighter of the truth's brightest and the image's before
 /// the move. Every backend (those besides the CPU on fewer cases: lavapipe is slow).
-#[test]
-fn no_move_blows_a_pixel_up() {
+fn no_move_blows_a_pixel_up(name: &str, mut backend: Box<dyn Backend + Send>) {
     const SIZE: u32 = 24;
     let modes = [
         MoveMode::Local,
@@ -274,9 +267,13 @@ fn no_move_blows_a_pixel_up() {
         MoveMode::Area,
         MoveMode::Thesis,
     ];
-    let mut others = tests::compared_with_cpu("no_move_blows_a_pixel_up");
-    for name in ["cornell-box", "cornell-bunny", "wedding-band"] {
-        let scene = scenes::builtin(name).unwrap().load().unwrap();
+    // The CPU backend, the fast one, over more warm-ups and seeds.
+    let runs: &[(u32, u32)] = match name {
+        "cpu" => &[(1, 0), (2, 1), (3, 0), (5, 1), (8, 0)],
+        _ => &[(1, 2), (4, 2)],
+    };
+    for scene_name in ["cornell-box", "cornell-bunny", "wedding-band"] {
+        let scene = scenes::builtin(scene_name).unwrap().load().unwrap();
         let mut p = RenderParams::for_scene(&scene);
         (p.width, p.height, p.photons_per_pass) = (SIZE, SIZE, 5_000);
         let random = MovePath::random(&scene, 1, 9, After::Iterations(0), After::Iterations(0));
@@ -297,10 +294,7 @@ fn no_move_blows_a_pixel_up() {
                     }
                     let before = brightest(&render.resolve().unwrap());
                     render.move_to(target.clone(), mode).unwrap();
-                    let what = format!(
-                        "{name} {} {mode:?} warm-up {warm} seed {seed}",
-                        render.backend().name()
-                    );
+                    let what = format!("{scene_name} {name} {mode:?} warm-up {warm} seed {seed}");
                     let moved = render.resolve().unwrap();
                     let ratio = brightest(&moved) / truth.max(before);
                     worst = worst.max(ratio);
@@ -319,15 +313,12 @@ fn no_move_blows_a_pixel_up() {
                 }
             }
         };
-        for (warm, seed) in [(1, 0), (2, 1), (3, 0), (5, 1), (8, 0)] {
-            check(&mut CpuBackend::new(), warm, seed);
+        for &(warm, seed) in runs {
+            check(backend.as_mut(), warm, seed);
         }
-        for (_, other) in &mut others {
-            for warm in [1, 4] {
-                check(other.as_mut(), warm, 2);
-            }
-        }
-        println!("{name}: brightest pixel right after a move at most {worst:.3} times the bound");
+        figure!(
+            "{scene_name} {name}: brightest pixel right after a move at most {worst:.3} times the bound"
+        );
     }
 }
 
@@ -337,8 +328,10 @@ fn no_move_blows_a_pixel_up() {
 /// one a slot whose direct sum a move restarted draws next is its own, so a re-trace that drew
 /// the run's global stratum instead found 94% of the visible points moved at every move after
 /// the first (the report's path runs measured 61,250 of 65,536 slots reset).
-#[test]
-fn every_move_of_a_path_keeps_what_it_did_not_change() {
+fn every_move_of_a_path_keeps_what_it_did_not_change(
+    _: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
     const SIZE: u32 = 32;
     let (scene, p) = cornell(SIZE, 5_000);
     let step = rigid(&scene, "short-block", 4.0, [6.0, 0.0, -4.0]);
@@ -363,13 +356,37 @@ fn every_move_of_a_path_keeps_what_it_did_not_change() {
                 "{} {mode:?}: {resets:?} slots reset",
                 render.backend().name()
             );
-            println!("{what}");
+            figure!("{what}");
             let slots = u64::from(SIZE * SIZE);
             assert!(resets[0] > 0 && resets[0] < slots / 4, "{what}");
             assert!(resets.iter().all(|&r| r <= 2 * resets[0]), "{what}");
         }
     };
-    for (_, mut backend) in tests::backends("every_move_of_a_path_keeps_what_it_did_not_change") {
-        check(backend.as_mut());
-    }
+    check(backend.as_mut());
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .against_the_cpu(
+            "a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest",
+            a_move_nobody_declared_resets_what_sees_it_and_keeps_the_rest,
+        )
+        .test(
+            "a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose",
+            a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose,
+        )
+        .against_the_cpu(
+            "every_backend_follows_a_path_as_the_cpu_does",
+            every_backend_follows_a_path_as_the_cpu_does,
+        )
+        .against_the_cpu(
+            "every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds",
+            every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds,
+        )
+        .on_every_backend("no_move_blows_a_pixel_up", no_move_blows_a_pixel_up)
+        .on_every_backend(
+            "every_move_of_a_path_keeps_what_it_did_not_change",
+            every_move_of_a_path_keeps_what_it_did_not_change,
+        )
+        .run()
 }

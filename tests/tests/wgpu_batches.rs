@@ -5,14 +5,11 @@
 
 use harness::diff::{record, same_seed};
 use ppm_core::params::RenderParams;
+use std::process::ExitCode;
+use tests::{Suite, figure};
 
-#[test]
 fn a_photon_pass_split_into_batches_matches_the_unsplit_pass() {
-    let Some(mut whole) =
-        backend_wgpu::backend_or_skip("a_photon_pass_split_into_batches_matches_the_unsplit_pass")
-    else {
-        return;
-    };
+    let mut whole = backend_wgpu::WgpuBackend::new().unwrap();
     let mut split = backend_wgpu::WgpuBackend::new().unwrap();
     // 64 KiB holds 2,048 deposits: a pass of 20,000 photons takes about ten batches.
     split.set_photon_buffer_limit(64 * 1024);
@@ -31,7 +28,7 @@ fn a_photon_pass_split_into_batches_matches_the_unsplit_pass() {
         split.last_pass_batches()
     );
     let report = same_seed::compare(&a, &b, &p, 5);
-    println!("{}", harness::diff::same_seed::format(&report));
+    figure!("{}", harness::diff::same_seed::format(&report));
     assert!(report.agree);
     let n = report.fields.iter().find(|f| f.field == "n").unwrap();
     assert_eq!(
@@ -40,4 +37,14 @@ fn a_photon_pass_split_into_batches_matches_the_unsplit_pass() {
     );
     let cpu = record(&mut backend_cpu::CpuBackend::new(), &scene, 0, &p).unwrap();
     assert!(same_seed::compare(&cpu, &b, &p, 5).agree);
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test_needing(
+            &[tests::wgpu()],
+            "a_photon_pass_split_into_batches_matches_the_unsplit_pass",
+            a_photon_pass_split_into_batches_matches_the_unsplit_pass,
+        )
+        .run()
 }

@@ -17,11 +17,19 @@ use std::path::PathBuf;
 pub struct BackendChoice(pub String);
 
 impl BackendChoice {
-    /// The backend, started.
+    /// The backend, started; a wgpu backend names its adapter on stderr, since the same
+    /// command runs on a GPU or on lavapipe.
     pub fn start(&self) -> Result<Box<dyn Backend + Send>> {
-        super::registry()
+        let mut backend = super::registry()
             .start(&self.0)
-            .with_context(|| format!("the {} backend cannot start", self.0))
+            .with_context(|| format!("the {} backend cannot start", self.0))?;
+        if let Some(wgpu) = backend
+            .as_any_mut()
+            .and_then(|b| b.downcast_mut::<backend_wgpu::WgpuBackend>())
+        {
+            eprintln!("wgpu adapter: {}", wgpu.adapter_name());
+        }
+        Ok(backend)
     }
 
     /// Its name.
