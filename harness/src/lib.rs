@@ -19,7 +19,6 @@ pub mod reference;
 pub mod registry;
 pub mod report;
 pub mod shard;
-pub mod stats;
 pub mod stress;
 
 use ppm_core::scene::{Scene, SceneError};

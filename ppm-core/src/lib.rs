@@ -37,5 +37,6 @@ pub mod rng;
 pub mod sampling;
 pub mod scene;
 pub mod screen_cover;
+pub mod stats;
 pub mod textures;
 pub mod update;

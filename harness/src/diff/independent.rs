@@ -9,10 +9,10 @@
 //! approximation of a tile mean, which averages hundreds of pixels.
 
 use super::heat_map;
-use crate::stats::{holm_rejections, t_two_sided_p, welch_t};
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::RenderParams;
+use ppm_core::stats::{holm_rejections, t_two_sided_p, welch_t};
 use serde::Serialize;
 use std::fmt::Write as _;
 

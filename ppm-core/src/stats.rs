@@ -1,5 +1,7 @@
-//! The statistics behind the independent-seed comparison: Welch's two-sample t-test and
-//! Holm's correction across many tests, so the whole comparison has a stated false-alarm rate.
+//! The statistics behind the project's tests of agreement: Welch's two-sample t-test and
+//! Holm's correction across many tests, so that a comparison of backends with independent
+//! seeds has a stated false-alarm rate; Pearson's chi-square tail and Sidak's correction, for
+//! the goodness-of-fit tests of the BSDF samplers (`ppm-core/tests/bsdf_sampling`).
 
 /// Mean and unbiased variance of a sample.
 pub fn mean_variance(xs: &[f64]) -> (f64, f64) {
@@ -106,6 +108,65 @@ pub fn ln_gamma(x: f64) -> f64 {
     0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + sum.ln()
 }
 
+/// The chance that a chi-square variable with `dof` degrees of freedom exceeds `statistic`:
+/// the regularised upper incomplete gamma function `Q(dof / 2, statistic / 2)`, by a series
+/// below `a + 1` and a continued fraction above (Press et al., "Numerical Recipes", 6.2).
+pub fn chi_square_p(statistic: f64, dof: usize) -> f64 {
+    let (a, x) = (dof as f64 / 2.0, statistic / 2.0);
+    if x.is_nan() || x == f64::INFINITY {
+        return 0.0;
+    }
+    if x <= 0.0 {
+        return 1.0;
+    }
+    // ln(x^a e^-x / Gamma(a)), the factor both expansions share.
+    let front = a * x.ln() - x - ln_gamma(a);
+    if x < a + 1.0 {
+        // P(a, x) = x^a e^-x / Gamma(a + 1) * sum x^k / ((a + 1) ... (a + k)).
+        let (mut term, mut sum, mut denominator) = (1.0 / a, 1.0 / a, a);
+        for _ in 0..100_000 {
+            denominator += 1.0;
+            term *= x / denominator;
+            sum += term;
+            if term < sum * 1e-16 {
+                break;
+            }
+        }
+        return (1.0 - sum * front.exp()).max(0.0);
+    }
+    // Q(a, x) = x^a e^-x / Gamma(a) * 1 / (x + 1 - a - 1 (1 - a) / (x + 3 - a - ...)), by the
+    // modified Lentz method.
+    let tiny = 1e-300;
+    let mut b = x + 1.0 - a;
+    let (mut c, mut d) = (1.0 / tiny, 1.0 / b);
+    let mut fraction = d;
+    for i in 1..100_000 {
+        let an = -(i as f64) * (i as f64 - a);
+        b += 2.0;
+        d = an * d + b;
+        if d.abs() < tiny {
+            d = tiny;
+        }
+        c = b + an / c;
+        if c.abs() < tiny {
+            c = tiny;
+        }
+        d = 1.0 / d;
+        let step = d * c;
+        fraction *= step;
+        if (step - 1.0).abs() < 1e-16 {
+            break;
+        }
+    }
+    (front.exp() * fraction).clamp(0.0, 1.0)
+}
+
+/// The level each of `tests` independent tests must meet for all of them together to reject
+/// a right sampler with chance `alpha` (Sidak's correction).
+pub fn sidak(alpha: f64, tests: usize) -> f64 {
+    1.0 - (1.0 - alpha).powf(1.0 / tests as f64)
+}
+
 /// Holm's step-down correction: which of `p_values` are rejected at family-wise rate `alpha`.
 pub fn holm_rejections(p_values: &[f64], alpha: f64) -> Vec<bool> {
     let mut order: Vec<usize> = (0..p_values.len()).collect();
@@ -163,5 +224,45 @@ mod tests {
         assert_eq!(r, vec![true, false, false, false]);
         let r = holm_rejections(&[0.001, 0.012, 0.02], 0.05);
         assert_eq!(r, vec![true, true, true]);
+    }
+
+    #[test]
+    fn the_chi_square_tail_meets_known_quantiles() {
+        // Even degrees of freedom have a closed form: Q(k, y) = e^-y sum_{j < k} y^j / j!.
+        for (dof, statistic) in [
+            (2usize, 9.21),
+            (4, 3.0),
+            (10, 23.2),
+            (100, 135.8),
+            (1000, 1107.0),
+        ] {
+            let y = statistic / 2.0;
+            let (mut term, mut sum) = (1.0f64, 1.0f64);
+            for j in 1..dof / 2 {
+                term *= y / j as f64;
+                sum += term;
+            }
+            let closed = (sum.ln() - y).exp();
+            let p = chi_square_p(statistic, dof);
+            assert!(
+                (p - closed).abs() <= 1e-10 * closed.max(1e-3),
+                "{dof}: {p} {closed}"
+            );
+        }
+        // Upper 5% and 1% quantiles of odd degrees of freedom (R's `qchisq`).
+        for (dof, statistic, p) in [
+            (1usize, 3.841_458_820_694_124, 0.05),
+            (1, 6.634_896_601_021_214, 0.01),
+            (3, 11.344_866_730_144_37, 0.01),
+            (25, 44.314_104_896_219_16, 0.01),
+        ] {
+            let got = chi_square_p(statistic, dof);
+            assert!((got - p).abs() < 1e-9, "{dof}: {got} against {p}");
+        }
+        assert_eq!(chi_square_p(0.0, 5), 1.0);
+        assert_eq!(chi_square_p(f64::INFINITY, 5), 0.0);
+        assert!((ln_gamma(0.5) - std::f64::consts::PI.sqrt().ln()).abs() < 1e-14);
+        assert!((ln_gamma(10.0) - 362_880f64.ln()).abs() < 1e-12);
+        assert!((sidak(0.01, 1) - 0.01).abs() < 1e-15);
     }
 }
