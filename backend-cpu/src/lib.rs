@@ -7,8 +7,7 @@
 
 #![warn(missing_docs)]
 
-pub mod chain_light;
-pub mod direct_light;
+mod direct_light;
 mod eye_pass;
 mod gather_pass;
 mod hit_point_update;

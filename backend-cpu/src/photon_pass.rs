@@ -10,6 +10,7 @@ use ppm_core::geometry::oct_encode;
 use ppm_core::layout::{Photon, PhotonPassParams, first_hit, photon_flags};
 use ppm_core::passes::PhotonStats;
 use ppm_core::rng::StreamKey;
+use ppm_core::trace::PoseQueries;
 use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};

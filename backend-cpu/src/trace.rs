@@ -1,14 +1,18 @@
 //! Ray queries against the scene: obvhs traverses its BVH, ppm-core's test intersects triangles.
-//! Public so that other CPU code over a compiled scene (the harness's reference path tracer)
+//! [`SceneData`] answers ppm-core's [`PoseQueries`] so, faster on the CPU than the flattened
+//! tree's walk ([`ppm_core::trace::FlatPose`], the WGSL twin, which finds the same surfaces);
+//! public so that other CPU code over a compiled scene (the harness's reference path tracer)
 //! asks the same questions of the same geometry.
 
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 use obvhs::ray::{Ray, RayHit};
 use ppm_core::compile::CompiledScene;
-use ppm_core::geometry::{Frame, intersect_triangle, segment_meets_box};
+use ppm_core::geometry::{intersect_triangle, segment_meets_box};
 use ppm_core::layout::{GpuBounds, GpuLight, GpuMaterial, GpuTriangle};
 use ppm_core::textures::SurfaceTextures;
+pub use ppm_core::trace::Hit;
+use ppm_core::trace::PoseQueries;
 use std::sync::Arc;
 
 /// The scene as the CPU passes read it: the same flat buffers a GPU backend binds. Its
@@ -29,15 +33,6 @@ pub struct SceneData {
     pub movers: Vec<GpuBounds>,
     /// Texture coordinates and images (their texels shared, not copied).
     pub textures: SurfaceTextures,
-}
-
-/// The nearest surface a ray meets.
-#[derive(Clone, Copy, Debug)]
-pub struct Hit {
-    /// Distance along the (unit) direction.
-    pub t: f32,
-    /// Index into [`SceneData::triangles`].
-    pub triangle: u32,
 }
 
 impl SceneData {
@@ -82,10 +77,11 @@ impl SceneData {
             .iter()
             .any(|b| segment_meets_box(origin, dir, tmax, b.min.into(), b.max.into()))
     }
+}
 
-    /// Nearest hit with `tmin < t < tmax`.
+impl PoseQueries for SceneData {
     #[inline]
-    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+    fn closest_hit(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
         let mut hit = RayHit::none();
         let found = self.bvh.ray_traverse(ray, &mut hit, |r, id| {
@@ -97,45 +93,84 @@ impl SceneData {
         })
     }
 
-    /// The nearest hit with `0 < t` when it is on an emitting triangle, `None` otherwise: the
-    /// emitters tested one by one, then one shadow query up to the nearest. Cheaper than
-    /// [`Self::closest_hit`] when emitters are few and most rays meet none.
     #[inline]
-    pub fn closest_hit_if_emitter(&self, origin: Vec3, dir: Vec3) -> Option<Hit> {
-        let nearest = self
-            .emitters
-            .iter()
-            .map(|&i| Hit {
-                t: intersect_triangle(origin, dir, &self.triangles[i as usize], 0.0, f32::INFINITY),
-                triangle: i,
-            })
-            .reduce(|a, b| if b.t < a.t { b } else { a })?;
-        (nearest.t < f32::INFINITY && !self.occluded(origin, dir, nearest.t)).then_some(nearest)
-    }
-
-    /// The material of triangle `hit.triangle` at `position`, its colour scaled by its
-    /// texture there, and that factor (one where it has none).
-    #[inline]
-    pub fn surface(&self, hit: &Hit, position: Vec3) -> (GpuMaterial, Vec3) {
-        let tri = &self.triangles[hit.triangle as usize];
-        let material = &self.materials[tri.material as usize];
-        self.textures.shaded(material, hit.triangle, tri, position)
-    }
-
-    /// The frame of `material`'s lobe at `hit`, seen from the side of `facing`
-    /// ([`SurfaceTextures::frame`](ppm_core::textures::SurfaceTextures::frame)).
-    #[inline]
-    pub fn frame(&self, hit: &Hit, material: &GpuMaterial, facing: Vec3) -> Frame {
-        let tri = &self.triangles[hit.triangle as usize];
-        self.textures.frame(material, hit.triangle, tri, facing)
-    }
-
-    /// Whether anything lies between `origin` and `origin + dir * tmax`.
-    #[inline]
-    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
         !self.bvh.ray_traverse_miss(ray, |r, id| {
             intersect_triangle(origin, dir, &self.triangles[id], r.tmin, r.tmax)
         })
+    }
+
+    fn triangles(&self) -> &[GpuTriangle] {
+        &self.triangles
+    }
+
+    fn materials(&self) -> &[GpuMaterial] {
+        &self.materials
+    }
+
+    fn lights(&self) -> &[GpuLight] {
+        &self.lights
+    }
+
+    fn emitters(&self) -> &[u32] {
+        &self.emitters
+    }
+
+    fn textures(&self) -> &SurfaceTextures {
+        &self.textures
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ppm_core::compile::compile_scene;
+    use ppm_core::rng::{PassKind, StreamKey};
+    use ppm_core::trace::FlatPose;
+
+    /// obvhs's walk (this backend's) and the flattened tree's (ppm-core's, the WGSL twin)
+    /// find the same nearest surface at the same distance, and the same blocked segments, on
+    /// random rays through scenes of a few triangles and of 70,000 (cornell-bunny's tree).
+    #[test]
+    fn obvhs_and_the_flattened_tree_find_the_same_surfaces() {
+        for name in ["cornell-box", "cornell-bunny", "wedding-band"] {
+            let compiled = compile_scene(&scenes::builtin(name).unwrap().load().unwrap(), 8, 8);
+            let (ours, flat) = (SceneData::new(&compiled), FlatPose::new(&compiled));
+            let (lo, hi) = compiled.object_bounds.iter().fold(
+                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                |(lo, hi), [a, b]| (lo.min(*a), hi.max(*b)),
+            );
+            let (mut hits, mut blocked) = (0, 0);
+            for i in 0..20_000 {
+                let key = StreamKey {
+                    seed: 1,
+                    kind: PassKind::Eye,
+                    pass_index: 0,
+                    path: i,
+                };
+                let u = |d| key.uniform(d);
+                let origin = lo + (hi - lo) * Vec3::new(u(0), u(1), u(2));
+                let dir = Vec3::new(u(3) - 0.5, u(4) - 0.5, u(5) - 0.5).normalize();
+                let tmax = (hi - lo).length() * u(6);
+                let (a, b) = (
+                    ours.closest_hit(origin, dir, f32::INFINITY),
+                    flat.closest_hit(origin, dir, f32::INFINITY),
+                );
+                assert_eq!(a.map(|h| h.t), b.map(|h| h.t), "{name}, ray {i}");
+                hits += usize::from(a.is_some());
+                let occluded = ours.occluded(origin, dir, tmax);
+                assert_eq!(
+                    occluded,
+                    flat.occluded(origin, dir, tmax),
+                    "{name}, ray {i}"
+                );
+                blocked += usize::from(occluded);
+            }
+            assert!(
+                hits > 5_000 && blocked > 1_000,
+                "{name}: {hits} hits, {blocked} blocked"
+            );
+        }
     }
 }

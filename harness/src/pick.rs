@@ -1,11 +1,11 @@
 //! What lies under a pixel, and where a drag takes it: the viewer's picking, over the same
-//! flattened scene and BVH the passes trace (`backend_cpu::trace`).
+//! flattened scene and BVH the passes trace ([`ppm_core::trace`]).
 
-use backend_cpu::trace::SceneData;
 use glam::Vec3;
-use ppm_core::compile::{camera_ray, compile_scene};
+use ppm_core::compile::{CompiledScene, camera_ray, compile_scene};
 use ppm_core::layout::GpuCamera;
 use ppm_core::scene::Scene;
+use ppm_core::trace::{FlatPose, PoseQueries};
 
 /// An object under a pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,32 +18,29 @@ pub struct Picked {
 
 /// Rays through the pixels of one pose of a scene, seen by its camera at one image size.
 pub struct Picker {
-    camera: GpuCamera,
-    data: SceneData,
+    pose: CompiledScene,
 }
 
 impl Picker {
     /// Flattens `scene` (its BVH included) for rays at `width` x `height`.
     pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
-        let compiled = compile_scene(scene, width, height);
         Self {
-            camera: compiled.camera,
-            data: SceneData::new(&compiled),
+            pose: compile_scene(scene, width, height),
         }
     }
 
     /// The ray through image point `(px, py)` (pixels, `(0, 0)` the top-left corner): origin
     /// and unit direction.
     pub fn ray(&self, px: f32, py: f32) -> (Vec3, Vec3) {
-        ray(&self.camera, px, py)
+        ray(&self.pose.camera, px, py)
     }
 
     /// The object whose surface is nearest along the ray through `(px, py)`, if any.
     pub fn pick(&self, px: f32, py: f32) -> Option<Picked> {
         let (origin, dir) = self.ray(px, py);
-        let hit = self.data.closest_hit(origin, dir, f32::INFINITY)?;
+        let hit = FlatPose::new(&self.pose).closest_hit(origin, dir, f32::INFINITY)?;
         Some(Picked {
-            object: self.data.triangles[hit.triangle as usize].object as usize,
+            object: self.pose.triangles[hit.triangle as usize].object as usize,
             point: origin + dir * hit.t,
         })
     }
@@ -107,7 +104,7 @@ mod tests {
 
     /// The pixel where `point` appears, by projecting it with the picker's own camera.
     fn project(picker: &Picker, point: Vec3, width: u32, height: u32) -> (f32, f32) {
-        let c = &picker.camera;
+        let c = &picker.pose.camera;
         let (eye, f, r, u) = (
             Vec3::from(c.eye),
             Vec3::from(c.forward),

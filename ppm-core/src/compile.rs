@@ -65,7 +65,9 @@ const BVH_PARAMS: BvhBuildParams = BvhBuildParams {
 ///
 /// The triangles, nodes and tree are shared (`Arc`): a backend's or the driver's copy of a
 /// pose takes them without copying, and a move's refit writes new ones only for the pose it
-/// makes, so a small move in a large scene does not copy the scene for each reader.
+/// makes, so a small move in a large scene does not copy the scene for each reader. A clone
+/// shares them too (a refit reuses a spare pose's buffers only where nothing else holds them).
+#[derive(Clone)]
 pub struct CompiledScene {
     /// Camera at the requested resolution.
     pub camera: GpuCamera,
@@ -118,6 +120,7 @@ pub struct CompiledScene {
 }
 
 /// The entries a refit wrote over the pose it started from.
+#[derive(Clone)]
 pub struct RefitWrites {
     /// The pose refitted ([`CompiledScene::pose`]).
     pub pose: u64,

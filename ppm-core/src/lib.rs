@@ -6,21 +6,27 @@
 //! - [`update`]: the progressive update formulas in their stable forms.
 //! - [`rng`], [`sampling`], [`geometry`], [`bsdf`]: math that exists once here and once in
 //!   WGSL; [`bsdf`] is what every material does with light.
+//! - [`trace`], [`eye_path`], [`direct_light`]: the per-item functions of the passes (ray
+//!   queries over the flattened tree, an eye path, a slot's direct light), one home in Rust,
+//!   each the twin of a WGSL function; backends run them over their slots.
 //! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
 //!   ([`scene::path`]), and the flattening into buffers; [`textures`]: the colour a
 //!   texture gives a surface point. Files are the `scenes` crate's.
 //! - [`grid`]: the photon hash grid's cell and bucket mapping; [`screen_cover`]: the pixels a
 //!   mesh may cover, and [`reach`]: where a slot's paths and light may pass, for local mode's
 //!   resets and corrections.
-//! - [`params`], [`image`], [`metrics`]: render settings, images, and the distances error
-//!   reports measure; [`limits`]: the sizes refused before anything is allocated or traced.
+//! - [`params`], [`image`], [`metrics`], [`stats`]: render settings, images, the distances
+//!   error reports measure and the statistics of the tests of agreement; [`limits`]: the
+//!   sizes refused before anything is allocated or traced.
 
 #![warn(missing_docs)]
 
 pub mod bsdf;
 pub mod check;
 pub mod compile;
+pub mod direct_light;
 pub mod emission;
+pub mod eye_path;
 pub mod geometry;
 pub mod grid;
 pub mod image;
@@ -39,4 +45,5 @@ pub mod scene;
 pub mod screen_cover;
 pub mod stats;
 pub mod textures;
+pub mod trace;
 pub mod update;

@@ -11,6 +11,7 @@ use ppm_core::layout::{EyePassParams, GpuBounds};
 use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::{Material, MaterialKind, Move, Object, Scene};
+use ppm_core::trace::PoseQueries;
 use std::sync::OnceLock;
 pub use test_support::{Need, Suite, figure};
 

@@ -17,6 +17,7 @@ use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::region::emitting_region;
 use ppm_core::scene::Scene;
+use ppm_core::trace::PoseQueries;
 use std::ops::ControlFlow;
 use std::process::ExitCode;
 use tests::{BackendTrials, Suite, figure};

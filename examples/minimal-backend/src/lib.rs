@@ -3,13 +3,14 @@
 //! the `static` tier of the contract (README, "Writing a backend"): copy it, then make each
 //! pass fast. Every pass follows docs/algorithm.md section 1, and draws its random numbers
 //! exactly as the passes key them ([`ppm_core::rng`]), so a same-seed render matches the CPU
-//! backend's slot by slot.
+//! backend's slot by slot. The per-item work is ppm-core's, traced through the compiled
+//! pose's flattened tree ([`FlatPose`]), as a GPU backend traces it.
 //!
 //! What each trait asks, and where this file answers it:
 //! - [`SceneUpload`]: keep the compiled scene (its buffers are already GPU-shaped).
-//! - [`EyePass`]: one eye path per slot to its visible point ([`paths::eye_path`]).
+//! - [`EyePass`]: one eye path per slot to its visible point ([`slot_eye_path`]).
 //! - [`DirectLight`]: emission seen plus light from the lights, and what the eye path's
-//!   glossy bounces found ([`paths::direct_light`]).
+//!   glossy bounces found ([`slot_direct_light`]).
 //! - [`PhotonPass`]: photons from the lights, their deposits in path order
 //!   ([`paths::photon_path`]); a move's other photon sources are refused.
 //! - [`GatherPass`]: each slot's photons within its radius, folded in by
@@ -27,25 +28,28 @@ use glam::Vec3;
 use ppm_core::bsdf;
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
+use ppm_core::direct_light::slot_direct_light;
 use ppm_core::emission::PhotonSource;
+use ppm_core::eye_path::slot_eye_path;
 use ppm_core::geometry::oct_faces;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
-    ResolveParams, direct_accumulate, eye_flags,
+    ResolveParams, eye_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload, check_gather_kind,
 };
 use ppm_core::rng::{StreamKey, random_bits};
+use ppm_core::trace::FlatPose;
 use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, search_r2};
 use ppm_core::update::radiance;
 
 /// The backend's state: the scene, one hit point per slot, and the current photon map.
 #[derive(Default)]
 pub struct MinimalBackend {
-    scene: Option<paths::Scene>,
+    scene: Option<CompiledScene>,
     hit_points: Vec<HitPoint>,
     /// What each slot's eye path found at glossy bounces, for the direct-light pass.
     chain_light: Vec<ChainLight>,
@@ -69,9 +73,9 @@ impl MinimalBackend {
 
 /// The loaded scene, or the error for a pass called before `load_scene`.
 fn loaded<'a>(
-    scene: &'a Option<paths::Scene>,
+    scene: &'a Option<CompiledScene>,
     pass: &'static str,
-) -> Result<&'a paths::Scene, BackendError> {
+) -> Result<&'a CompiledScene, BackendError> {
     scene.as_ref().ok_or(BackendError::OutOfOrder {
         pass,
         needs: "load_scene",
@@ -80,7 +84,7 @@ fn loaded<'a>(
 
 impl SceneUpload for MinimalBackend {
     fn load_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        self.scene = Some(paths::Scene::new(scene));
+        self.scene = Some(scene.clone());
         self.hit_points.clear();
         self.photons.clear();
         self.map_kind = None;
@@ -113,9 +117,9 @@ impl EyePass for MinimalBackend {
             .zip(&mut self.chain_light)
             .enumerate()
         {
-            let (rays, found) = paths::eye_path(params, scene, slot as u32, hp);
-            *chain = found;
-            stats.rays += rays;
+            let path = slot_eye_path(params, camera, &FlatPose::new(scene), slot as u32, hp);
+            *chain = path.chain.unwrap_or(ChainLight::NONE);
+            stats.rays += path.rays;
             stats.hit_points += u64::from(hp.is_valid());
         }
         check_hit_points("eye", &self.hit_points)?;
@@ -133,15 +137,7 @@ impl DirectLight for MinimalBackend {
             .zip(&self.chain_light)
             .enumerate()
         {
-            let (estimate, rays) = paths::direct_light(params, scene, hp, chain, slot as u32);
-            stats.rays += rays;
-            if params.accumulate == direct_accumulate::ADD {
-                hp.direct = [0, 1, 2].map(|c| hp.direct[c] + estimate[c]);
-                hp.iterations += 1;
-            } else {
-                hp.direct = estimate;
-                hp.iterations = 1;
-            }
+            stats.rays += slot_direct_light(params, &FlatPose::new(scene), hp, chain, slot as u32);
         }
         check_hit_points("direct light", &self.hit_points)?;
         Ok(stats)

@@ -15,9 +15,10 @@
 //! moves' errors then cancel along a drag (their sum is one estimate of the whole change)
 //! instead of adding up.
 
-use super::probe::{EyePath, HostPose, ProbeSettings, Traced, Watch, camera_segment, eye_path};
-use backend_cpu::direct_light::slot_direct;
+use super::probe::{HostPose, ProbeSettings, Traced, eye_path};
 use glam::Vec3;
+use ppm_core::direct_light::slot_direct;
+use ppm_core::eye_path::{EyePath, Watch, camera_segment};
 use ppm_core::layout::{DirectLightParams, HitPoint, direct_accumulate};
 use ppm_core::reach::{Aabb, segments_may_meet};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
@@ -196,8 +197,10 @@ impl Pair {
 
     /// The direct light that `path` brings to the eye in `pose`.
     fn direct(&self, (scene, _): &Traced, path: &EyePath) -> Vec3 {
-        let visible = path.visible.unwrap_or(HitPoint::empty(self.pixel));
-        slot_direct(&self.light, scene, &visible, &path.chain, self.slot).0
+        let visible = path
+            .visible
+            .map_or(HitPoint::empty(self.pixel), |v| v.hit_point(self.pixel));
+        slot_direct(&self.light, *scene, &visible, &path.chain, self.slot).0
     }
 
     /// Its direct light in pose `after` less that in `before`, and the pair in pose `after`.
@@ -215,12 +218,12 @@ impl Pair {
         known: Option<&PairInPose>,
     ) -> (Vec3, PairInPose) {
         let straight = |path: &EyePath| {
-            let (origin, dir) = camera_segment(after.1, self.pixel, self.jitter);
+            let (origin, dir) = camera_segment(&after.1.camera, self.pixel, self.jitter);
             let watch = Watch {
                 groups: 0,
                 boxes: reach.moved,
             };
-            !path.bounced && !watch.crossed(origin, dir, path.first_t)
+            !path.chained && !watch.crossed(origin, dir, path.first_t)
         };
         let b = match known {
             // Its crossing was just tested against this move's boxes, not the last move's.
@@ -230,7 +233,7 @@ impl Pair {
             },
             _ => self.trace(after, reach.moved),
         };
-        let same_path = !b.crossed && !b.bounced;
+        let same_path = !b.crossed && !b.chained;
         // The box of the visible point and of its rays' origin, offset along the normal.
         let same_light = |hp: &HitPoint| {
             let x = Vec3::from(hp.position);
@@ -238,7 +241,12 @@ impl Pair {
             !reach.direct_may_change(&Aabb::new(x.min(offset), x.max(offset)))
         };
         let known_light = known.and_then(|a| a.light);
-        if same_path && b.visible.as_ref().is_none_or(same_light) {
+        if same_path
+            && b.visible
+                .map(|v| v.hit_point(self.pixel))
+                .as_ref()
+                .is_none_or(same_light)
+        {
             let unchanged = PairInPose {
                 path: b,
                 light: known_light,

@@ -5,14 +5,9 @@
 //! full-image eye passes on the backend (each of which visits every slot), and every backend
 //! then resets the same slots.
 
-use backend_cpu::chain_light::{ChainTracker, GlossyVertex};
 use backend_cpu::trace::SceneData;
-use glam::Vec3;
-use ppm_core::bsdf;
-use ppm_core::compile::{CompiledScene, camera_ray};
-use ppm_core::geometry::segment_meets_box;
-use ppm_core::layout::{ChainLight, HitPoint, hit_flags};
-use ppm_core::reach::Aabb;
+use ppm_core::compile::CompiledScene;
+use ppm_core::eye_path::{EyePath, EyePathSettings, Watch, trace_eye_path};
 use ppm_core::rng::{PassKind, StratifiedStream, StreamKey};
 use rayon::prelude::*;
 use std::cell::OnceCell;
@@ -123,157 +118,31 @@ fn meets(
         path: pixel,
     };
     let watch = Watch { groups, boxes: &[] };
-    eye_path(scene, pose, pixel, (jx, jy), &key, &watch, settings).met
+    eye_path(scene, pose, pixel, (jx, jy), &key, &watch, settings).watched
 }
 
-/// What an eye path traced on the host watches for: surfaces of some object groups (bits of
-/// [`ppm_core::compile::object_group`]), where it stops, and boxes its segments may cross.
-pub(super) struct Watch<'a> {
-    pub groups: u32,
-    pub boxes: &'a [Aabb],
-}
-
-impl Watch<'_> {
-    /// Whether the segment from `origin` along the unit `dir` for `t_max` meets a box.
-    pub fn crossed(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        self.boxes
-            .iter()
-            .any(|b| segment_meets_box(origin, dir, t_max, b.lo, b.hi))
-    }
-}
-
-/// One eye path traced on the host, as the eye pass traces it.
-#[derive(Clone, Copy)]
-pub(super) struct EyePath {
-    /// Whether it met one of the groups asked about, up to and including its visible point.
-    pub met: bool,
-    /// Whether one of its segments, up to where it stopped (escaping: without end), crossed
-    /// one of the boxes asked about.
-    pub crossed: bool,
-    /// Whether it bounced off a mirror, glass or glossy surface on its way.
-    pub bounced: bool,
-    /// How far its first segment, from the eye ([`camera_segment`]), went before a surface
-    /// (infinite when it left the scene).
-    pub first_t: f32,
-    /// Its visible point (position, facing normal, material, throughput and `VALID` and
-    /// `FRONT` flags, as the eye pass writes them), if it reached one before meeting a group.
-    pub visible: Option<HitPoint>,
-    /// What its glossy bounces found, as the eye pass finds it, when the settings sample
-    /// lights ([`ChainLight::NONE`] otherwise).
-    pub chain: ChainLight,
-}
-
-/// Dimensions `DIM_GLOSSY + 2 depth` and the next of a probe's key draw a glossy bounce
-/// (dimension `depth` picks at glass).
-const DIM_GLOSSY: u32 = 1 << 16;
-
-/// Traces the eye path through point `(jx, jy)` of `pixel` in `pose` (`scene`) to its first
-/// diffuse surface, glass choices and glossy bounces drawn from `key`; it stops at the first
-/// surface of one of `watch`'s groups.
+/// The eye path through point `jitter` of `pixel` in `pose` (`scene`), keyed by `key`,
+/// watching `watch` ([`trace_eye_path`]).
 pub(super) fn eye_path(
     scene: &SceneData,
     pose: &CompiledScene,
     pixel: u32,
-    (jx, jy): (f32, f32),
+    jitter: (f32, f32),
     key: &StreamKey,
     watch: &Watch,
     settings: &ProbeSettings,
 ) -> EyePath {
-    let (mut origin, mut dir) = camera_segment(pose, pixel, (jx, jy));
-    let mut throughput = Vec3::ONE;
-    let lights = settings
-        .sample_lights
-        .then_some((*key, settings.ray_epsilon));
-    let mut chain = ChainTracker::new(lights);
-    let mut crossed = false;
-    let mut first_t = f32::INFINITY;
-    let nothing = |chain: &ChainTracker, crossed, depth, first_t| EyePath {
-        met: false,
-        crossed,
-        bounced: depth > 0,
-        first_t,
-        visible: None,
-        chain: chain.finish(scene, None),
+    let path_settings = EyePathSettings {
+        max_depth: settings.max_depth,
+        ray_epsilon: settings.ray_epsilon,
+        sample_lights: settings.sample_lights,
     };
-    for depth in 0..=settings.max_depth {
-        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
-            crossed |= watch.crossed(origin, dir, f32::INFINITY);
-            return nothing(&chain, crossed, depth, first_t);
-        };
-        if depth == 0 {
-            first_t = hit.t;
-        }
-        crossed |= watch.crossed(origin, dir, hit.t);
-        let tri = &scene.triangles[hit.triangle as usize];
-        if tri.group & watch.groups != 0 {
-            return EyePath {
-                met: true,
-                crossed,
-                bounced: depth > 0,
-                first_t,
-                visible: None,
-                chain: ChainLight::NONE,
-            };
-        }
-        let position = origin + dir * hit.t;
-        let (material, texture) = scene.surface(&hit, position);
-        let material = &material;
-        let normal = Vec3::from(tri.normal);
-        let front = dir.dot(normal) < 0.0;
-        let facing = if front { normal } else { -normal };
-        let u = (
-            key.uniform(depth),
-            (
-                key.uniform(DIM_GLOSSY + 2 * depth),
-                key.uniform(DIM_GLOSSY + 2 * depth + 1),
-            ),
-        );
-        if let Some(weight) = bsdf::visible_point_weight(material, facing, -dir, u.0) {
-            let front = if front { hit_flags::FRONT } else { 0 };
-            return EyePath {
-                met: false,
-                crossed,
-                bounced: depth > 0,
-                first_t,
-                visible: Some(HitPoint {
-                    position: position.into(),
-                    normal: facing.into(),
-                    material: tri.material,
-                    throughput: (throughput * texture * weight).into(),
-                    flags: hit_flags::VALID | front,
-                    ..HitPoint::empty(pixel)
-                }),
-                chain: chain.finish(scene, Some((&hit, dir))),
-            };
-        }
-        let at = GlossyVertex {
-            position,
-            frame: scene.frame(&hit, material, facing),
-            front,
-            wo: -dir,
-            depth,
-        };
-        let bounce = chain.bounce(scene, material, &at, throughput, u);
-        if bounce.weight == Vec3::ZERO {
-            return nothing(&chain, crossed, depth + 1, first_t);
-        }
-        throughput *= bounce.weight;
-        dir = bounce.dir;
-        let side = if bounce.transmitted { -facing } else { facing };
-        origin = position + side * settings.ray_epsilon;
-    }
-    nothing(&chain, crossed, settings.max_depth + 1, first_t)
-}
-
-/// The first segment of an eye path through point `(jx, jy)` of `pixel`: the eye, and the
-/// unit direction to that point.
-pub(super) fn camera_segment(
-    pose: &CompiledScene,
-    pixel: u32,
-    (jx, jy): (f32, f32),
-) -> (Vec3, Vec3) {
-    let camera = &pose.camera;
-    let px = (pixel % camera.width) as f32 + jx;
-    let py = (pixel / camera.width) as f32 + jy;
-    (Vec3::from(camera.eye), camera_ray(camera, px, py))
+    trace_eye_path(
+        scene,
+        &pose.camera,
+        (pixel, jitter),
+        key,
+        &path_settings,
+        watch,
+    )
 }

@@ -20,6 +20,7 @@ use ppm_core::bsdf::{self, Transport, rough_glass};
 use ppm_core::compile::camera_ray;
 use ppm_core::layout::{GpuCamera, GpuLight, NO_MATERIAL, material_kind};
 use ppm_core::sampling::{sample_cdf, uniform_triangle};
+use ppm_core::trace::PoseQueries;
 
 /// Bounces after which a path stops. Russian roulette ends paths long before in any scene
 /// that absorbs: even the albedo-0.99 furnace loses only `0.99^1024 = 3e-5` of its light here.
