@@ -11,6 +11,7 @@ mod direct_light;
 mod eye_pass;
 mod gather_pass;
 mod hit_point_update;
+mod local_move;
 mod path_record;
 mod photon_grid;
 mod photon_pass;
@@ -18,6 +19,7 @@ mod photon_search;
 mod resolve;
 pub mod trace;
 
+use local_move::{KnownPairs, MoveInProgress, Stage};
 use path_record::PathRecord;
 use photon_grid::{MapContents, PhotonGrid, build_photon_grid};
 use photon_pass::{Deposits, photon_pass_main};
@@ -31,11 +33,14 @@ use ppm_core::layout::{
     PhotonPassParams, ResolveParams, SlotBounds,
 };
 use ppm_core::layout::{eye_flags, hit_flags, photon_flags};
+use ppm_core::local_move::LocalMove;
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
-use ppm_core::passes::{DynamicBackend, UpdateStats, check_gather_kind, crossed_mask_words};
+use ppm_core::passes::{
+    DynamicBackend, LocalMoveStats, UpdateStats, check_gather_kind, crossed_mask_words,
+};
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 use trace::SceneData;
@@ -91,6 +96,10 @@ pub struct CpuBackend {
     /// traced in is loaded, and the pass they are (their deposits are `photons` while
     /// `passes_stored` names it).
     paths: Option<(u64, PathRecord)>,
+    /// The local move in progress, between its first pass and its last.
+    moving: Option<MoveInProgress>,
+    /// The pairs the last local move traced in its pose B, for the next move's pose A.
+    known_pairs: Option<KnownPairs>,
 }
 
 /// Whether the current photons are indexed yet.
@@ -173,6 +182,8 @@ impl SceneUpload for CpuBackend {
         self.map_kind = None;
         self.unconsumed = None;
         self.paths = None;
+        self.moving = None;
+        self.known_pairs = None;
         Ok(())
     }
 }
@@ -373,6 +384,12 @@ impl DynamicBackend for CpuBackend {
         // The photons stay for a pass that adds to them; until one does, nothing gathers them.
         self.grid = PhotonIndex::NoPass;
         self.map_kind = None;
+        // A local move begun in pose A goes on in this pose, its pose B.
+        if let Some(moving) = &mut self.moving
+            && matches!(moving.stage, Stage::Begun)
+        {
+            moving.stage = Stage::PoseB;
+        }
         Ok(())
     }
 
@@ -436,6 +453,65 @@ impl DynamicBackend for CpuBackend {
         paths.sort_unstable();
         paths.dedup();
         Ok(paths)
+    }
+
+    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
+        let (scene, _) = loaded(&self.scene, "local move")?;
+        if self.hit_points.is_empty() {
+            return Err(BackendError::OutOfOrder {
+                pass: "local move",
+                needs: "an eye pass",
+            });
+        }
+        local_move::begin_main(&mut self.hit_points, &self.slot_bounds, request);
+        self.moving = Some(MoveInProgress {
+            request: request.clone(),
+            before: scene.clone(),
+            stage: Stage::Begun,
+        });
+        Ok(())
+    }
+
+    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "local resets")?;
+        let Some(moving) = self
+            .moving
+            .as_mut()
+            .filter(|m| matches!(m.stage, Stage::PoseB))
+        else {
+            return Err(BackendError::OutOfOrder {
+                pass: "local resets",
+                needs: "a local move begun in pose A, then the scene updated to pose B",
+            });
+        };
+        let stats = local_move::resets_main(
+            &mut self.hit_points,
+            &self.slot_bounds,
+            (scene, camera),
+            &moving.request,
+        );
+        moving.stage = Stage::Reset;
+        check_slots("local resets", &self.hit_points)?;
+        Ok(stats)
+    }
+
+    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "local direct change")?;
+        let Some(moving) = self.moving.take_if(|m| matches!(m.stage, Stage::Reset)) else {
+            return Err(BackendError::OutOfOrder {
+                pass: "local direct change",
+                needs: "the local resets",
+            });
+        };
+        let (stats, pairs) = local_move::direct_change_main(
+            &mut self.hit_points,
+            (&moving.before, scene, camera),
+            &moving.request,
+            self.known_pairs.as_ref(),
+        );
+        self.known_pairs = Some(pairs);
+        check_slots("local direct change", &self.hit_points)?;
+        Ok(stats)
     }
 }
 

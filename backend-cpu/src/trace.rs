@@ -33,6 +33,8 @@ pub struct SceneData {
     pub movers: Vec<GpuBounds>,
     /// Texture coordinates and images (their texels shared, not copied).
     pub textures: SurfaceTextures,
+    /// The pose's number ([`CompiledScene::pose`]): names its geometry, materials and lights.
+    pub pose: u64,
 }
 
 impl SceneData {
@@ -46,6 +48,7 @@ impl SceneData {
             emitters: Arc::clone(&scene.emitters),
             movers: scene.movers.clone(),
             textures: scene.textures.clone(),
+            pose: scene.pose,
         }
     }
 

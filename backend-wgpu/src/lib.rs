@@ -12,6 +12,7 @@
 
 mod buffers;
 mod context;
+mod host_move;
 mod kernel;
 pub mod layout;
 mod passes;
@@ -27,6 +28,7 @@ pub mod shaders {
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
+use host_move::{HostMove, Stage};
 use layout::UpdateParams;
 use passes::{
     CheckKernel, DirectLightKernel, EyeOutputs, EyePassKernel, GatherInputs, GatherKernel,
@@ -44,10 +46,11 @@ use ppm_core::layout::{
     PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags, gather_kind,
     photon_flags,
 };
+use ppm_core::local_move::LocalMove;
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, DynamicBackend, EyePass, EyeStats, GatherPass,
-    GatherStats, PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
-    UpdateStats, check_gather_kind, crossed_mask_words,
+    GatherStats, LocalMoveStats, PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve,
+    SceneUpload, UpdateStats, check_gather_kind, crossed_mask_words,
 };
 use ppm_core::update::gather::{GatherCase, SlotState};
 use scan::Scan;
@@ -152,6 +155,12 @@ pub struct WgpuBackend {
     features: Option<SceneFeatures>,
     /// Every pipeline built with everything compiled in ([`WgpuBackend::set_general`]).
     general: bool,
+    /// The pose held, for a local move's passes on the host.
+    pose: Option<CompiledScene>,
+    /// The local move in progress, between its first pass and its last.
+    moving: Option<HostMove>,
+    /// The pairs the last local move traced in its pose B, for the next move's pose A.
+    known_pairs: Option<host_move::KnownPairs>,
 }
 
 impl WgpuBackend {
@@ -208,6 +217,9 @@ impl WgpuBackend {
             timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
             features: None,
             general: false,
+            pose: None,
+            moving: None,
+            known_pairs: None,
         })
     }
 
@@ -384,6 +396,9 @@ impl SceneUpload for WgpuBackend {
             .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene, None))??;
         self.scene = Some(buffers);
         self.features = Some(scene.features);
+        self.pose = Some(scene.clone());
+        self.moving = None;
+        self.known_pairs = None;
         self.hit_points = None;
         self.slot_bounds = None;
         self.chain_light = None;
@@ -734,18 +749,22 @@ impl PhotonPass for WgpuBackend {
 
 impl DynamicBackend for WgpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
+        self.pose = Some(scene.clone());
+        // A local move begun in pose A goes on in this pose, its pose B.
+        if let Some(moving) = self.moving.as_mut().filter(|m| m.stage == Stage::Begun) {
+            moving.stage = Stage::PoseB;
+        }
+        self.map = None;
         // A refit of the pose held, or the same pose with new movers' boxes: written in place.
         if let Some(held) = self.scene.as_mut()
             && held.update(&self.ctx, scene)
         {
-            self.map = None;
             return Ok(());
         }
         let buffers = self.ctx.scoped("scene update", || {
             SceneBuffers::new(&self.ctx, scene, self.scene.as_ref())
         })??;
         self.scene = Some(buffers);
-        self.map = None;
         Ok(())
     }
 
@@ -872,6 +891,70 @@ impl DynamicBackend for WgpuBackend {
         })?;
         let flags = read_back::<u32>(&self.ctx, &landed, paths as usize)?;
         Ok((0..paths).filter(|&p| flags[p as usize] != 0).collect())
+    }
+
+    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
+        let before = self.pose.clone().ok_or(BackendError::OutOfOrder {
+            pass: "local move",
+            needs: "load_scene",
+        })?;
+        let mut slots = self.read_hit_points()?;
+        if slots.is_empty() {
+            return Err(BackendError::OutOfOrder {
+                pass: "local move",
+                needs: "an eye pass",
+            });
+        }
+        host_move::begin(&mut slots, &self.read_slot_bounds()?, request);
+        self.write_hit_points(&slots)?;
+        self.moving = Some(HostMove {
+            request: request.clone(),
+            before,
+            stage: Stage::Begun,
+        });
+        Ok(())
+    }
+
+    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
+        let (Some(moving), Some(after)) = (
+            self.moving.as_ref().filter(|m| m.stage == Stage::PoseB),
+            self.pose.as_ref(),
+        ) else {
+            return Err(BackendError::OutOfOrder {
+                pass: "local resets",
+                needs: "a local move begun in pose A, then the scene updated to pose B",
+            });
+        };
+        let (request, after) = (moving.request.clone(), after.clone());
+        let mut slots = self.read_hit_points()?;
+        let stats = host_move::resets(&mut slots, &self.read_slot_bounds()?, &after, &request);
+        self.write_hit_points(&slots)?;
+        if let Some(moving) = self.moving.as_mut() {
+            moving.stage = Stage::Reset;
+        }
+        Ok(stats)
+    }
+
+    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
+        let (Some(moving), Some(after)) = (
+            self.moving.take_if(|m| m.stage == Stage::Reset),
+            self.pose.clone(),
+        ) else {
+            return Err(BackendError::OutOfOrder {
+                pass: "local direct change",
+                needs: "the local resets",
+            });
+        };
+        let mut slots = self.read_hit_points()?;
+        let (stats, pairs) = host_move::direct_change(
+            &mut slots,
+            (&moving.before, &after),
+            &moving.request,
+            self.known_pairs.as_ref(),
+        );
+        self.write_hit_points(&slots)?;
+        self.known_pairs = Some(pairs);
+        Ok(stats)
     }
 }
 

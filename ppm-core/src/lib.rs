@@ -6,9 +6,10 @@
 //! - [`update`]: the progressive update formulas in their stable forms.
 //! - [`rng`], [`sampling`], [`geometry`], [`bsdf`]: math that exists once here and once in
 //!   WGSL; [`bsdf`] is what every material does with light.
-//! - [`trace`], [`eye_path`], [`direct_light`]: the per-item functions of the passes (ray
-//!   queries over the flattened tree, an eye path, a slot's direct light), one home in Rust,
-//!   each the twin of a WGSL function; backends run them over their slots.
+//! - [`trace`], [`eye_path`], [`direct_light`], [`local_move`]: the per-item functions of the
+//!   passes (ray queries over the flattened tree, an eye path, a slot's direct light, a local
+//!   move's decisions and corrections), one home in Rust, each the twin of a WGSL function;
+//!   backends run them over their slots.
 //! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
 //!   ([`scene::path`]), and the flattening into buffers; [`textures`]: the colour a
 //!   texture gives a surface point. Files are the `scenes` crate's.
@@ -32,6 +33,7 @@ pub mod grid;
 pub mod image;
 pub mod layout;
 pub mod limits;
+pub mod local_move;
 pub mod metrics;
 pub mod params;
 pub mod passes;

@@ -14,6 +14,7 @@ use crate::layout::{
     DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
     ResolveParams, SlotBounds, gather_kind,
 };
+use crate::local_move::LocalMove;
 use thiserror::Error;
 
 /// Why a pass failed.
@@ -147,6 +148,23 @@ pub struct UpdateStats {
     /// Hit points that kept their statistics.
     pub kept: u64,
     /// Eye rays traced.
+    pub rays: u64,
+}
+
+/// Counters of a local move's passes ([`DynamicBackend::local_resets`],
+/// [`DynamicBackend::local_direct_change`]): what the driver reads back of a move, never the
+/// slots.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LocalMoveStats {
+    /// Slots started over.
+    pub reset: u64,
+    /// Slots that kept their statistics.
+    pub kept: u64,
+    /// Kept slots whose direct light the move may change: their direct sums are corrected.
+    pub direct_corrected: u64,
+    /// Pixels whose paths past a mirror or glass were probed in pose B.
+    pub probed: u64,
+    /// Rays traced (probes and paired samples).
     pub rays: u64,
 }
 
@@ -328,6 +346,30 @@ pub trait DynamicBackend: Backend {
     /// path indices, ascending, of the current map's photons that lie within the radius of
     /// an updated hit point.
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError>;
+
+    /// Starts a local move of `request`'s objects (docs/algorithm.md 3b), in the pose held:
+    /// pose A, with the movers' boxes. Each slot gets the disc it gathers the correction
+    /// within and, where its direct light may change, `DIRECT_MAY_CHANGE`
+    /// ([`prepare_slot`](crate::local_move::prepare_slot)). What the direct-light change needs
+    /// of pose A is the backend's to keep: pose A itself, or its half of the pairs traced now.
+    /// Then come the correction's pose-A photons, [`DynamicBackend::update_scene`] to pose B,
+    /// [`DynamicBackend::local_resets`] and [`DynamicBackend::local_direct_change`].
+    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError>;
+
+    /// In pose B, after [`DynamicBackend::begin_local_move`] and the scene update: starts over
+    /// each slot whose view the move may change ([`view_test`](crate::local_move::view_test),
+    /// with pose B's outline over the moved objects' triangles and the
+    /// [`probe`](crate::local_move::probe_meets) of the pixels whose paths bounced near them)
+    /// and flags it `UPDATED` ([`reset_slot`](crate::local_move::reset_slot)), so the
+    /// correction leaves it out; a kept slot keeps everything. Refused out of that order.
+    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError>;
+
+    /// In pose B, after [`DynamicBackend::local_resets`]: corrects each kept slot flagged
+    /// `DIRECT_MAY_CHANGE` by the change of its direct light, estimated by paired samples
+    /// in both poses ([`Pair`](crate::local_move::Pair)) and weighed against its history
+    /// ([`apply_direct_change`](crate::local_move::apply_direct_change)). Ends the move's own
+    /// passes; refused out of that order.
+    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError>;
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::*;
+use ppm_core::local_move::LocalMove;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::*;
 use std::process::ExitCode;
@@ -202,6 +203,15 @@ impl DynamicBackend for Broken {
     }
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
         self.0.landing_paths()
+    }
+    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
+        self.0.begin_local_move(request)
+    }
+    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
+        self.0.local_resets()
+    }
+    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
+        self.0.local_direct_change()
     }
 }
 

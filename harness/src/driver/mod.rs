@@ -12,11 +12,9 @@
 //! and direct light once per pose, and an iteration is a photon pass and its gather.
 
 pub mod checkpoint;
-mod direct_change;
 mod local;
 pub mod moves;
 pub mod pass_params;
-mod probe;
 pub mod schedule;
 
 pub use moves::{MoveReport, PhotonCounts};
@@ -26,8 +24,6 @@ pub use schedule::{
 };
 
 use crate::report::{RenderReport, left_out};
-use backend_cpu::trace::SceneData;
-use direct_change::PairsInPose;
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
@@ -82,10 +78,6 @@ pub struct Renderer<'a> {
     /// the next pose's by rewriting what the two refits changed
     /// ([`recompile_moved`](ppm_core::refit::recompile_moved)).
     spare: Option<CompiledScene>,
-    /// The current pose for the host's traces ([`probe::HostPose`], sharing its buffers):
-    /// the last local move's pose B, kept with the direct-light pairs that move traced in
-    /// it, which the next move's pose A reuses.
-    host_copy: Option<(SceneData, PairsInPose)>,
     counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,
@@ -131,7 +123,6 @@ impl<'a> Renderer<'a> {
             extent: compiled.extent,
             compiled,
             spare: None,
-            host_copy: None,
             counters: Counters {
                 fresh: true,
                 ..Counters::default()
@@ -184,7 +175,6 @@ impl<'a> Renderer<'a> {
         let refitted_from = compiled.refit_from.as_ref().map(|w| w.pose);
         let before = std::mem::replace(&mut self.compiled, compiled);
         self.spare = Some(before).filter(|b| refitted_from == Some(b.pose));
-        self.host_copy = None;
     }
 
     /// One iteration: for `sppm` an eye pass and direct light, then for both estimators one
