@@ -39,7 +39,7 @@ use ppm_core::passes::{
     PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
 };
 use ppm_core::passes::{
-    DynamicBackend, LocalMoveStats, UpdateStats, check_gather_kind, crossed_mask_words,
+    DynamicBackend, LocalMoveStats, LocalMoves, UpdateStats, check_gather_kind, crossed_mask_words,
 };
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
@@ -368,7 +368,7 @@ fn indexed<'a>(
     }
 }
 
-impl DynamicBackend for CpuBackend {
+impl LocalMoves for CpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         // The same pose with other movers' boxes (a local move's pose A) keeps its data and
         // the paths traced in it.
@@ -391,68 +391,6 @@ impl DynamicBackend for CpuBackend {
             moving.stage = Stage::PoseB;
         }
         Ok(())
-    }
-
-    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        Ok(self.slot_bounds.clone())
-    }
-
-    fn update_hit_points(
-        &mut self,
-        params: &EyePassParams,
-        epsilon: f32,
-    ) -> Result<UpdateStats, BackendError> {
-        let (scene, camera) = loaded(&self.scene, "hit-point update")?;
-        if self.hit_points.is_empty() {
-            return Err(BackendError::OutOfOrder {
-                pass: "hit-point update",
-                needs: "an eye pass",
-            });
-        }
-        let stats = hit_point_update::update_hit_points_main(
-            params,
-            camera,
-            scene,
-            epsilon,
-            &mut self.hit_points,
-            &mut self.pending,
-            (!self.chain_light.is_empty()).then_some(&mut self.chain_light[..]),
-        );
-        self.r2_initial = params.r2_initial;
-        check_slots("hit-point update", &self.hit_points)?;
-        Ok(stats)
-    }
-
-    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
-        let grid = indexed(
-            &mut self.grid,
-            MapContents {
-                photons: &self.photons,
-                partners: self.partners.as_deref(),
-                left_out: &self.cancelled,
-            },
-            &self.hit_points,
-            self.r2_floor,
-            "landing paths",
-        )?;
-        let map = PhotonMap {
-            grid,
-            weights: None,
-            r2_floor: self.r2_floor,
-        };
-        let mut paths: Vec<u32> = self
-            .hit_points
-            .par_iter()
-            .filter(|h| h.is_valid() && h.flags & hit_flags::UPDATED != 0)
-            .flat_map_iter(|hp| {
-                let mut found = Vec::new();
-                for_photons_in_disc(hp, &map, |i, _, _| found.push(self.photons[i].path));
-                found
-            })
-            .collect();
-        paths.sort_unstable();
-        paths.dedup();
-        Ok(paths)
     }
 
     fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
@@ -512,6 +450,75 @@ impl DynamicBackend for CpuBackend {
         self.known_pairs = Some(pairs);
         check_slots("local direct change", &self.hit_points)?;
         Ok(stats)
+    }
+}
+
+impl DynamicBackend for CpuBackend {
+    fn update_hit_points(
+        &mut self,
+        params: &EyePassParams,
+        epsilon: f32,
+    ) -> Result<UpdateStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "hit-point update")?;
+        if self.hit_points.is_empty() {
+            return Err(BackendError::OutOfOrder {
+                pass: "hit-point update",
+                needs: "an eye pass",
+            });
+        }
+        let stats = hit_point_update::update_hit_points_main(
+            params,
+            camera,
+            scene,
+            epsilon,
+            &mut self.hit_points,
+            &mut self.pending,
+            (!self.chain_light.is_empty()).then_some(&mut self.chain_light[..]),
+        );
+        self.r2_initial = params.r2_initial;
+        check_slots("hit-point update", &self.hit_points)?;
+        Ok(stats)
+    }
+
+    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
+        let grid = indexed(
+            &mut self.grid,
+            MapContents {
+                photons: &self.photons,
+                partners: self.partners.as_deref(),
+                left_out: &self.cancelled,
+            },
+            &self.hit_points,
+            self.r2_floor,
+            "landing paths",
+        )?;
+        let map = PhotonMap {
+            grid,
+            weights: None,
+            r2_floor: self.r2_floor,
+        };
+        let mut paths: Vec<u32> = self
+            .hit_points
+            .par_iter()
+            .filter(|h| h.is_valid() && h.flags & hit_flags::UPDATED != 0)
+            .flat_map_iter(|hp| {
+                let mut found = Vec::new();
+                for_photons_in_disc(hp, &map, |i, _, _| found.push(self.photons[i].path));
+                found
+            })
+            .collect();
+        paths.sort_unstable();
+        paths.dedup();
+        Ok(paths)
+    }
+}
+
+impl CpuBackend {
+    /// The box of each slot's eye-path vertices, slot by slot (eye passes with
+    /// `eye_flags::RECORD_BOUNDS` keep them): where a local move looks for what the slot may
+    /// have seen; empty before an eye pass.
+    pub fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        Ok(self.slot_bounds.clone())
     }
 }
 
@@ -596,6 +603,10 @@ impl RandomSource for CpuBackend {
 impl Backend for CpuBackend {
     fn name(&self) -> &str {
         "cpu"
+    }
+
+    fn local_moves(&mut self) -> Option<&mut dyn LocalMoves> {
+        Some(self)
     }
 
     fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {

@@ -121,6 +121,9 @@ pub struct SceneBuffers {
     pub camera_value: ppm_core::layout::GpuCamera,
     /// Emitting triangles.
     pub light_count: usize,
+    /// The scene's triangles (none for a scene without: the table then holds one degenerate
+    /// triangle, which nothing reads as the scene's).
+    pub triangle_count: u32,
     /// The pose the table holds ([`CompiledScene::pose`]).
     pose: u64,
     /// Where each kind starts in the table, as `index` holds it.
@@ -210,9 +213,15 @@ impl SceneBuffers {
             texel_data: scene.textures.texels.clone(),
             camera_value: scene.camera,
             light_count: scene.lights.len(),
+            triangle_count: scene.triangles.len() as u32,
             pose: scene.pose,
             layout: index,
         })
+    }
+
+    /// The pose the table holds ([`CompiledScene::pose`]).
+    pub fn pose(&self) -> u64 {
+        self.pose
     }
 
     /// Writes `scene` over these buffers in place, if they hold the pose it was refitted
@@ -226,6 +235,7 @@ impl SceneBuffers {
         let unchanged = scene.camera == self.camera_value
             && scene.lights.len() == self.light_count
             && scene.movers.len() as u32 == layout.mover_count
+            && scene.triangles.len() as u32 == self.triangle_count
             && !scene.nodes.is_empty();
         if !unchanged || scene.pose != self.pose && writes.is_none() {
             return false;

@@ -12,9 +12,9 @@
 
 mod buffers;
 mod context;
-mod host_move;
 mod kernel;
 pub mod layout;
+mod local_move;
 mod passes;
 mod photon_grid;
 mod scan;
@@ -28,7 +28,6 @@ pub mod shaders {
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::GpuContext;
-use host_move::{HostMove, Stage};
 use layout::UpdateParams;
 use passes::{
     CheckKernel, DirectLightKernel, EyeOutputs, EyePassKernel, GatherInputs, GatherKernel,
@@ -49,8 +48,8 @@ use ppm_core::layout::{
 use ppm_core::local_move::LocalMove;
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, DynamicBackend, EyePass, EyeStats, GatherPass,
-    GatherStats, LocalMoveStats, PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve,
-    SceneUpload, UpdateStats, check_gather_kind, crossed_mask_words,
+    GatherStats, LocalMoveStats, LocalMoves, PhotonPass, PhotonStats, RandomSource, ReadBack,
+    Resolve, SceneUpload, UpdateStats, check_gather_kind, crossed_mask_words,
 };
 use ppm_core::update::gather::{GatherCase, SlotState};
 use scan::Scan;
@@ -95,6 +94,8 @@ struct Kernels {
     update: Option<HitPointUpdateKernel>,
     /// Compiled when a move first needs it.
     landing: Option<LandingPathsKernel>,
+    /// Parsed at the first local move, each pipeline compiled when a move first runs it.
+    local: Option<local_move::LocalMoveKernels>,
     scan: Scan,
 }
 
@@ -155,12 +156,13 @@ pub struct WgpuBackend {
     features: Option<SceneFeatures>,
     /// Every pipeline built with everything compiled in ([`WgpuBackend::set_general`]).
     general: bool,
-    /// The pose held, for a local move's passes on the host.
-    pose: Option<CompiledScene>,
     /// The local move in progress, between its first pass and its last.
-    moving: Option<HostMove>,
-    /// The pairs the last local move traced in its pose B, for the next move's pose A.
-    known_pairs: Option<host_move::KnownPairs>,
+    moving: Option<local_move::MoveInProgress>,
+    /// The buffers local moves reuse, allocated at the first.
+    move_buffers: Option<local_move::MoveBuffers>,
+    /// Whether a local move takes its pose-A pairs' light from the last move's pose B where
+    /// that is its pose A ([`WgpuBackend::set_keep_pairs`]).
+    keep_pairs: bool,
 }
 
 impl WgpuBackend {
@@ -183,6 +185,7 @@ impl WgpuBackend {
             rng: RngVectorsKernel::new(&ctx),
             update: None,
             landing: None,
+            local: None,
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
@@ -217,9 +220,9 @@ impl WgpuBackend {
             timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
             features: None,
             general: false,
-            pose: None,
             moving: None,
-            known_pairs: None,
+            move_buffers: None,
+            keep_pairs: true,
         })
     }
 
@@ -396,9 +399,8 @@ impl SceneUpload for WgpuBackend {
             .scoped("scene upload", || SceneBuffers::new(&self.ctx, scene, None))??;
         self.scene = Some(buffers);
         self.features = Some(scene.features);
-        self.pose = Some(scene.clone());
         self.moving = None;
-        self.known_pairs = None;
+        self.move_buffers = None;
         self.hit_points = None;
         self.slot_bounds = None;
         self.chain_light = None;
@@ -747,12 +749,10 @@ impl PhotonPass for WgpuBackend {
     }
 }
 
-impl DynamicBackend for WgpuBackend {
+impl LocalMoves for WgpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
-        self.pose = Some(scene.clone());
-        // A local move begun in pose A goes on in this pose, its pose B.
-        if let Some(moving) = self.moving.as_mut().filter(|m| m.stage == Stage::Begun) {
-            moving.stage = Stage::PoseB;
+        if let Some(moving) = self.moving.as_mut() {
+            moving.scene_updated();
         }
         self.map = None;
         // A refit of the pose held, or the same pose with new movers' boxes: written in place.
@@ -768,13 +768,20 @@ impl DynamicBackend for WgpuBackend {
         Ok(())
     }
 
-    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        match (&self.slot_bounds, &self.hit_points) {
-            (Some(buffer), Some((_, slots))) => read_back(&self.ctx, buffer, *slots as usize),
-            _ => Ok(Vec::new()),
-        }
+    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
+        self.begin_move(request)
     }
 
+    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
+        self.move_resets()
+    }
+
+    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
+        self.move_direct_change()
+    }
+}
+
+impl DynamicBackend for WgpuBackend {
     fn update_hit_points(
         &mut self,
         params: &EyePassParams,
@@ -892,69 +899,17 @@ impl DynamicBackend for WgpuBackend {
         let flags = read_back::<u32>(&self.ctx, &landed, paths as usize)?;
         Ok((0..paths).filter(|&p| flags[p as usize] != 0).collect())
     }
+}
 
-    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
-        let before = self.pose.clone().ok_or(BackendError::OutOfOrder {
-            pass: "local move",
-            needs: "load_scene",
-        })?;
-        let mut slots = self.read_hit_points()?;
-        if slots.is_empty() {
-            return Err(BackendError::OutOfOrder {
-                pass: "local move",
-                needs: "an eye pass",
-            });
+impl WgpuBackend {
+    /// The box of each slot's eye-path vertices, slot by slot (eye passes with
+    /// `eye_flags::RECORD_BOUNDS` keep them): where a local move looks for what the slot may
+    /// have seen; empty before an eye pass.
+    pub fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
+        match (&self.slot_bounds, &self.hit_points) {
+            (Some(buffer), Some((_, slots))) => read_back(&self.ctx, buffer, *slots as usize),
+            _ => Ok(Vec::new()),
         }
-        host_move::begin(&mut slots, &self.read_slot_bounds()?, request);
-        self.write_hit_points(&slots)?;
-        self.moving = Some(HostMove {
-            request: request.clone(),
-            before,
-            stage: Stage::Begun,
-        });
-        Ok(())
-    }
-
-    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
-        let (Some(moving), Some(after)) = (
-            self.moving.as_ref().filter(|m| m.stage == Stage::PoseB),
-            self.pose.as_ref(),
-        ) else {
-            return Err(BackendError::OutOfOrder {
-                pass: "local resets",
-                needs: "a local move begun in pose A, then the scene updated to pose B",
-            });
-        };
-        let (request, after) = (moving.request.clone(), after.clone());
-        let mut slots = self.read_hit_points()?;
-        let stats = host_move::resets(&mut slots, &self.read_slot_bounds()?, &after, &request);
-        self.write_hit_points(&slots)?;
-        if let Some(moving) = self.moving.as_mut() {
-            moving.stage = Stage::Reset;
-        }
-        Ok(stats)
-    }
-
-    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
-        let (Some(moving), Some(after)) = (
-            self.moving.take_if(|m| m.stage == Stage::Reset),
-            self.pose.clone(),
-        ) else {
-            return Err(BackendError::OutOfOrder {
-                pass: "local direct change",
-                needs: "the local resets",
-            });
-        };
-        let mut slots = self.read_hit_points()?;
-        let (stats, pairs) = host_move::direct_change(
-            &mut slots,
-            (&moving.before, &after),
-            &moving.request,
-            self.known_pairs.as_ref(),
-        );
-        self.write_hit_points(&slots)?;
-        self.known_pairs = Some(pairs);
-        Ok(stats)
     }
 }
 
@@ -1151,6 +1106,10 @@ impl Backend for WgpuBackend {
         "wgpu"
     }
 
+    fn local_moves(&mut self) -> Option<&mut dyn LocalMoves> {
+        Some(self)
+    }
+
     fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
         Some(self)
     }
@@ -1209,6 +1168,7 @@ impl Backend for WgpuBackend {
                 "landing-path pipeline: not compiled ({thesis_modes})"
             ));
         }
+        out.extend(self.local_moves_not_created());
         if let Some(d) = self.deposits.as_ref().filter(|d| d.weights.is_none()) {
             out.push(format!(
                 "photon path weights: {} bytes not allocated (no region pass)",

@@ -6,11 +6,15 @@ use ppm_core::bsdf::{BsdfCase, BsdfOutcome, Transport};
 use ppm_core::layout::*;
 use ppm_core::update::gather::{Found, GatherCase, SlotState};
 use ppm_core::update::pairing::PAIRED_DEPOSITS;
+use ppm_core::{direct_light, local_move};
 use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
 const BSDF_WGSL: &str = include_str!("../shaders/shared/bsdf.wgsl");
 const RNG_WGSL: &str = include_str!("../shaders/shared/rng.wgsl");
+const LOCAL_MOVE_WGSL: &str = include_str!("../shaders/shared/local_move.wgsl");
+const DIRECT_LIGHT_WGSL: &str = include_str!("../shaders/shared/direct_light.wgsl");
+const SCREEN_COVER_WGSL: &str = include_str!("../shaders/shared/screen_cover.wgsl");
 
 /// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
 /// layout.wgsl or in the assembled pass shaders.
@@ -269,6 +273,20 @@ fn pass_parameters_match_their_wgsl_twins() {
         spp,
         _pad0
     });
+    same_layout!(LocalMoveParams {
+        seed,
+        groups,
+        max_depth,
+        ray_epsilon,
+        r2_initial,
+        r2_floor,
+        widest,
+        direct_samples,
+        objects,
+        lights,
+        _pad0,
+        _pad1
+    });
 }
 
 #[test]
@@ -339,6 +357,69 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
     });
 }
 
+#[test]
+fn local_move_structs_match_their_wgsl_twins() {
+    use backend_wgpu::layout::{
+        CoverCase, CoverOutcome, CoverParams, ListParams, MoveDecisionCase, MoveDecisionOutcome,
+    };
+    same_layout!(CoverParams {
+        to_camera,
+        eye,
+        triangles,
+        width,
+        height,
+        objects,
+        _pad0
+    });
+    same_layout!(MoveDecisionCase {
+        boxes,
+        position,
+        covered,
+        eye,
+        eye_met,
+        flags,
+        groups,
+        r2_floor,
+        widest,
+        objects,
+        lights,
+        _pad0,
+        _pad1
+    });
+    same_layout!(MoveDecisionOutcome {
+        meets,
+        flags,
+        view,
+        correction_r2
+    });
+    same_layout!(CoverCase {
+        cover,
+        v0,
+        _pad0,
+        v1,
+        _pad1,
+        v2,
+        _pad2
+    });
+    same_layout!(CoverOutcome { words });
+    same_layout!(ListParams {
+        count,
+        known,
+        _pad0,
+        _pad1
+    });
+}
+
+/// The value of the WGSL constant `name` of type `ty`, declared in one of `sources`.
+fn wgsl_constant<'a>(sources: &[&'a str], name: &str, ty: &str) -> &'a str {
+    let line = sources
+        .iter()
+        .flat_map(|s| s.lines())
+        .find(|l| l.starts_with(&format!("const {name}: {ty} = ")))
+        .unwrap_or_else(|| panic!("no shared WGSL module declares {name}: {ty}"));
+    line.rsplit("= ").next().unwrap().trim_end_matches(';')
+}
+
 /// The WGSL constants that mirror Rust constants carry the same values.
 #[test]
 fn shared_constants_agree() {
@@ -388,23 +469,40 @@ fn shared_constants_agree() {
         ("GATHER_RAW_COUNT", gather_kind::RAW_COUNT),
         ("GATHER_DEFERRED", gather_kind::DEFERRED),
         ("GATHER_ADD_FLUX", gather_kind::ADD_FLUX),
+        ("HIT_DIRECT_MAY_CHANGE", hit_flags::DIRECT_MAY_CHANGE),
+        ("PROBE_PATHS", local_move::PROBE_PATHS),
+        ("PROBE_SEED", local_move::PROBE_SEED),
+        ("CHANGE_SEED", local_move::CHANGE_SEED),
+        ("MOST_SAMPLES", local_move::MOST_SAMPLES),
+        ("PAIR_LIGHT_POINT", direct_light::PAIR_LIGHT_POINT),
+        ("PAIR_DIRECTION", direct_light::PAIR_DIRECTION),
+        ("PAIR_LIGHT_CHOICE", direct_light::PAIR_LIGHT_CHOICE),
+        ("RAYS_PER_SAMPLE", direct_light::RAYS_PER_SAMPLE),
     ] {
-        let line = LAYOUT_WGSL
-            .lines()
-            .chain(BSDF_WGSL.lines())
-            .chain(RNG_WGSL.lines())
-            .find(|l| l.starts_with(&format!("const {name}: u32 = ")))
-            .unwrap_or_else(|| panic!("layout.wgsl, bsdf.wgsl and rng.wgsl lack {name}"));
-        let literal = line
-            .rsplit("= ")
-            .next()
-            .unwrap()
-            .trim_end_matches(';')
-            .trim_end_matches('u');
+        let sources = [
+            LAYOUT_WGSL,
+            BSDF_WGSL,
+            RNG_WGSL,
+            LOCAL_MOVE_WGSL,
+            DIRECT_LIGHT_WGSL,
+        ];
+        let literal = wgsl_constant(&sources, name, "u32").trim_end_matches('u');
         let parsed = match literal.strip_prefix("0x") {
             Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
             None => literal.parse().unwrap(),
         };
         assert_eq!(parsed, value, "{name}");
+    }
+    for (name, value) in [
+        ("CORRECTION_SPREAD", local_move::CORRECTION_SPREAD),
+        ("PAIR_FLOOR", ppm_core::update::pairing::PAIR_FLOOR),
+        ("SMOOTH_ALPHA", ppm_core::bsdf::SMOOTH_ALPHA),
+        ("F32_MAX", f32::MAX),
+        ("F32_MIN_POSITIVE", f32::MIN_POSITIVE),
+        ("COVER_EPSILON", f32::EPSILON),
+    ] {
+        let sources = [LAYOUT_WGSL, BSDF_WGSL, LOCAL_MOVE_WGSL, SCREEN_COVER_WGSL];
+        let literal = wgsl_constant(&sources, name, "f32");
+        assert_eq!(literal.parse::<f32>().unwrap(), value, "{name}");
     }
 }

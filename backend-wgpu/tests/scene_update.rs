@@ -6,7 +6,7 @@ use backend_wgpu::{GpuContext, WgpuBackend};
 use ppm_core::compile::{CompiledScene, compile_scene, mover_boxes};
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{EyePassParams, PhotonPassParams};
-use ppm_core::passes::{DynamicBackend, EyePass, PhotonPass, ReadBack, SceneUpload};
+use ppm_core::passes::{EyePass, LocalMoves, PhotonPass, ReadBack, SceneUpload};
 use ppm_core::refit::recompile_moved;
 use std::process::ExitCode;
 use test_support::{Need, Suite};

@@ -749,6 +749,39 @@ pub struct PathDeposits {
     pub normal_oct: [u32; PAIRED_DEPOSITS],
 }
 
+/// A local move's parameters as a GPU backend uploads them
+/// ([`LocalMove::params`](crate::local_move::LocalMove::params)), beside a buffer of its
+/// boxes ([`LocalMove::boxes`](crate::local_move::LocalMove::boxes): the moved objects' in
+/// pose A, then in pose B, then the lights') and one of the moved objects' indices. 48 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LocalMoveParams {
+    /// The render's seed, which keys the probes' and the pairs' random numbers.
+    pub seed: u32,
+    /// The bits of the moved objects' groups.
+    pub groups: u32,
+    /// Bounces of the probes' and the pairs' eye paths.
+    pub max_depth: u32,
+    /// Offset along the normal of their rays' origins.
+    pub ray_epsilon: f32,
+    /// The squared radius a slot that starts over gets.
+    pub r2_initial: f32,
+    /// The correction's squared floor radius.
+    pub r2_floor: f32,
+    /// The widest a kept slot's correction disc grows, in floor radii.
+    pub widest: f32,
+    /// Paired direct-light samples per slot whose direct light may change.
+    pub direct_samples: u32,
+    /// Moved objects: boxes `0..objects` are theirs in pose A, `objects..2 objects` in pose B.
+    pub objects: u32,
+    /// Light boxes, from box `2 objects` on.
+    pub lights: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+}
+
 /// Parameters of the resolve pass. 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -791,6 +824,7 @@ mod tests {
             ("GridParams", size_of::<GridParams>(), 16),
             ("GridPhoton", size_of::<GridPhoton>(), 32),
             ("ResolveParams", size_of::<ResolveParams>(), 16),
+            ("LocalMoveParams", size_of::<LocalMoveParams>(), 48),
         ];
         for (name, size, expected) in sizes {
             assert_eq!(size, expected, "{name}");

@@ -21,7 +21,8 @@
 use crate::direct_light::slot_direct;
 use crate::eye_path::{EyePath, EyePathSettings, Watch, camera_segment, trace_eye_path};
 use crate::layout::{
-    DirectLightParams, GpuCamera, GpuTriangle, HitPoint, direct_accumulate, hit_flags,
+    DirectLightParams, GpuBounds, GpuCamera, GpuTriangle, HitPoint, LocalMoveParams,
+    direct_accumulate, hit_flags,
 };
 use crate::reach::{Aabb, segments_may_meet};
 use crate::rng::{PassKind, StratifiedStream, StreamKey};
@@ -72,6 +73,35 @@ impl LocalMove {
             .iter()
             .map(|b| b.distance_from(eye))
             .fold(f32::INFINITY, f32::min)
+    }
+
+    /// The move as a GPU backend uploads it, beside [`LocalMove::boxes`] and
+    /// [`LocalMove::objects`].
+    pub fn params(&self) -> LocalMoveParams {
+        LocalMoveParams {
+            seed: self.seed,
+            groups: self.groups,
+            max_depth: self.paths.max_depth,
+            ray_epsilon: self.paths.ray_epsilon,
+            r2_initial: self.r2_initial,
+            r2_floor: self.r2_floor,
+            widest: self.widest,
+            direct_samples: self.direct_samples,
+            objects: self.objects.len() as u32,
+            lights: self.lights.len() as u32,
+            ..LocalMoveParams::default()
+        }
+    }
+
+    /// Its boxes in the order [`LocalMoveParams`] counts them: the moved objects' in pose A,
+    /// then in pose B, then the lights'.
+    pub fn boxes(&self) -> Vec<GpuBounds> {
+        self.before
+            .iter()
+            .chain(&self.after)
+            .chain(&self.lights)
+            .map(|b| GpuBounds::new(b.lo, b.hi))
+            .collect()
     }
 
     /// The probes' path settings: no light samples.

@@ -4,15 +4,16 @@
 //! name exactly the pass it drives. Each pass takes its `#[repr(C)]` parameter struct from
 //! [`crate::layout`], the same bytes a GPU backend uploads as a uniform, and returns counters.
 //! A move's photons are the one photon pass with another [`PhotonSource`] and gather kind;
-//! the other dynamic passes of docs/algorithm.md section 2 are the methods of
-//! [`DynamicBackend`], which a backend that renders still frames only leaves out.
+//! a local move's other passes are the methods of [`LocalMoves`], and those of the thesis's
+//! modes (docs/algorithm.md section 2) the methods of [`DynamicBackend`]: a backend that
+//! renders still frames only leaves both out.
 
 use crate::compile::CompiledScene;
 use crate::emission::PhotonSource;
 use crate::image::Image;
 use crate::layout::{
     DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
-    ResolveParams, SlotBounds, gather_kind,
+    ResolveParams, gather_kind,
 };
 use crate::local_move::LocalMove;
 use thiserror::Error;
@@ -151,8 +152,8 @@ pub struct UpdateStats {
     pub rays: u64,
 }
 
-/// Counters of a local move's passes ([`DynamicBackend::local_resets`],
-/// [`DynamicBackend::local_direct_change`]): what the driver reads back of a move, never the
+/// Counters of a local move's passes ([`LocalMoves::local_resets`],
+/// [`LocalMoves::local_direct_change`]): what the driver reads back of a move, never the
 /// slots.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct LocalMoveStats {
@@ -299,10 +300,17 @@ pub trait Backend:
         None
     }
 
-    /// The backend's dynamic passes, for the moves that keep light (docs/algorithm.md 2, 3b):
-    /// a backend that has them returns `Some(self)`, one that renders still frames only (the
-    /// conformance suite's `static` tier) keeps the default `None`, and every move then
-    /// restarts on it.
+    /// The backend's local-move passes (docs/algorithm.md 3b, 3c), for local mode, the move
+    /// that keeps what it did not change: a backend that has them returns `Some(self)` (the
+    /// conformance suite's `local` tier); one that renders still frames only keeps the
+    /// default `None`, and every move then restarts on it.
+    fn local_moves(&mut self) -> Option<&mut dyn LocalMoves> {
+        None
+    }
+
+    /// The passes of the thesis's modes besides (docs/algorithm.md 2: region, testing and
+    /// guided photons, the hit-point update, the landing paths): a backend that has them
+    /// returns `Some(self)` (the `dynamic` tier); without them those modes restart.
     fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
         None
     }
@@ -315,21 +323,51 @@ pub trait Backend:
     }
 }
 
-/// The passes of compensation photons and local moves (docs/algorithm.md 2, 3b), besides the
-/// photon pass's other sources: a backend that has them returns `Some(self)` from
-/// [`Backend::dynamic`].
-pub trait DynamicBackend: Backend {
+/// A local move's passes (docs/algorithm.md 3b, 3c), in this order: the scene update to
+/// pose A with the movers' boxes, [`LocalMoves::begin_local_move`], the correction's pose-A
+/// photons, the scene update to pose B, [`LocalMoves::local_resets`],
+/// [`LocalMoves::local_direct_change`], pose B's photons and the correction's apply. The
+/// photon passes are the photon pass's, with local mode's flags ([`crate::layout::photon_flags`]:
+/// `CHANGED_ONLY`, `RECORD_CROSSED` / `CULL_UNCROSSED`, `RECORD_DEPOSITS` / `PAIR_DEPOSITS`,
+/// `ADD_TO_MAP`, `KEEP_PATHS`) and gather kinds (`REGION_POSITIVE | DEFERRED | ADD_FLUX`, then
+/// `REGION_APPLY | ADD_FLUX`). A backend that has them returns `Some(self)` from
+/// [`Backend::local_moves`].
+pub trait LocalMoves: Backend {
     /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3):
     /// replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
     /// statistics. No gather may follow before a photon pass, but the last pass's photons stay
     /// for one that adds to them ([`crate::layout::photon_flags::ADD_TO_MAP`]).
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
 
-    /// The box of each slot's eye-path vertices, slot by slot, that eye passes with
-    /// [`crate::layout::eye_flags::RECORD_BOUNDS`] keep: where a local move looks for what
-    /// the slot may have seen ([`crate::layout::SlotBounds`]).
-    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError>;
+    /// Starts a local move of `request`'s objects (docs/algorithm.md 3b), in the pose held:
+    /// pose A, with the movers' boxes. Each slot gets the disc it gathers the correction
+    /// within and, where its direct light may change, `DIRECT_MAY_CHANGE`
+    /// ([`prepare_slot`](crate::local_move::prepare_slot)). What the direct-light change needs
+    /// of pose A is the backend's to keep: pose A itself, or its half of the pairs traced now.
+    /// Then come the correction's pose-A photons, [`LocalMoves::update_scene`] to pose B,
+    /// [`LocalMoves::local_resets`] and [`LocalMoves::local_direct_change`].
+    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError>;
 
+    /// In pose B, after [`LocalMoves::begin_local_move`] and the scene update: starts over
+    /// each slot whose view the move may change ([`view_test`](crate::local_move::view_test),
+    /// with pose B's outline over the moved objects' triangles and the
+    /// [`probe`](crate::local_move::probe_meets) of the pixels whose paths bounced near them)
+    /// and flags it `UPDATED` ([`reset_slot`](crate::local_move::reset_slot)), so the
+    /// correction leaves it out; a kept slot keeps everything. Refused out of that order.
+    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError>;
+
+    /// In pose B, after [`LocalMoves::local_resets`]: corrects each kept slot flagged
+    /// `DIRECT_MAY_CHANGE` by the change of its direct light, estimated by paired samples
+    /// in both poses ([`Pair`](crate::local_move::Pair)) and weighed against its history
+    /// ([`apply_direct_change`](crate::local_move::apply_direct_change)). Ends the move's own
+    /// passes; refused out of that order.
+    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError>;
+}
+
+/// The passes of the thesis's modes (docs/algorithm.md 2), besides the photon pass's other
+/// sources ([`PhotonSource::Region`], [`PhotonSource::Guided`]) and gather kinds: a backend
+/// that has them returns `Some(self)` from [`Backend::dynamic`].
+pub trait DynamicBackend: LocalMoves {
     /// Hit-point update after a move (docs/algorithm.md 2.4): re-runs the eye pass on the
     /// current geometry (with `params` keyed as the last iteration's, so each slot traces the
     /// same sample); a slot whose visible point changed object, validity, or moved more than
@@ -346,30 +384,6 @@ pub trait DynamicBackend: Backend {
     /// path indices, ascending, of the current map's photons that lie within the radius of
     /// an updated hit point.
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError>;
-
-    /// Starts a local move of `request`'s objects (docs/algorithm.md 3b), in the pose held:
-    /// pose A, with the movers' boxes. Each slot gets the disc it gathers the correction
-    /// within and, where its direct light may change, `DIRECT_MAY_CHANGE`
-    /// ([`prepare_slot`](crate::local_move::prepare_slot)). What the direct-light change needs
-    /// of pose A is the backend's to keep: pose A itself, or its half of the pairs traced now.
-    /// Then come the correction's pose-A photons, [`DynamicBackend::update_scene`] to pose B,
-    /// [`DynamicBackend::local_resets`] and [`DynamicBackend::local_direct_change`].
-    fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError>;
-
-    /// In pose B, after [`DynamicBackend::begin_local_move`] and the scene update: starts over
-    /// each slot whose view the move may change ([`view_test`](crate::local_move::view_test),
-    /// with pose B's outline over the moved objects' triangles and the
-    /// [`probe`](crate::local_move::probe_meets) of the pixels whose paths bounced near them)
-    /// and flags it `UPDATED` ([`reset_slot`](crate::local_move::reset_slot)), so the
-    /// correction leaves it out; a kept slot keeps everything. Refused out of that order.
-    fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError>;
-
-    /// In pose B, after [`DynamicBackend::local_resets`]: corrects each kept slot flagged
-    /// `DIRECT_MAY_CHANGE` by the change of its direct light, estimated by paired samples
-    /// in both poses ([`Pair`](crate::local_move::Pair)) and weighed against its history
-    /// ([`apply_direct_change`](crate::local_move::apply_direct_change)). Ends the move's own
-    /// passes; refused out of that order.
-    fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError>;
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@ use ppm_core::passes::*;
 use std::process::ExitCode;
 use tests::{BackendTrials, Suite, figure};
 
-/// Every in-tree backend passes both tiers.
+/// Every in-tree backend passes every tier.
 fn every_backend_passes_conformance(name: &str, _: Box<dyn Backend + Send>) {
     let registry = harness::registry::Registry::in_tree();
     let verdict = run_conformance(
@@ -180,6 +180,12 @@ impl Backend for Broken {
     fn name(&self) -> &str {
         "broken"
     }
+    fn local_moves(&mut self) -> Option<&mut dyn LocalMoves> {
+        match self.1 {
+            Fault::StillFramesOnly => None,
+            _ => Some(self),
+        }
+    }
     fn dynamic(&mut self) -> Option<&mut dyn DynamicBackend> {
         match self.1 {
             Fault::StillFramesOnly => None,
@@ -187,22 +193,9 @@ impl Backend for Broken {
         }
     }
 }
-impl DynamicBackend for Broken {
+impl LocalMoves for Broken {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.0.update_scene(scene)
-    }
-    fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        self.0.read_slot_bounds()
-    }
-    fn update_hit_points(
-        &mut self,
-        p: &EyePassParams,
-        epsilon: f32,
-    ) -> Result<UpdateStats, BackendError> {
-        self.0.update_hit_points(p, epsilon)
-    }
-    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
-        self.0.landing_paths()
     }
     fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
         self.0.begin_local_move(request)
@@ -212,6 +205,18 @@ impl DynamicBackend for Broken {
     }
     fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
         self.0.local_direct_change()
+    }
+}
+impl DynamicBackend for Broken {
+    fn update_hit_points(
+        &mut self,
+        p: &EyePassParams,
+        epsilon: f32,
+    ) -> Result<UpdateStats, BackendError> {
+        self.0.update_hit_points(p, epsilon)
+    }
+    fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
+        self.0.landing_paths()
     }
 }
 
@@ -356,8 +361,13 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
         Tier::Dynamic,
     );
     figure!("{verdict}");
-    assert!(!verdict.check("moves/same-seed").unwrap().passed);
-    assert!(!verdict.check("moves/independent").unwrap().passed);
+    for moves in [
+        "moves/same-seed",
+        "moves/local/same-seed",
+        "moves/independent",
+    ] {
+        assert!(!verdict.check(moves).unwrap().passed, "{moves}: {verdict}");
+    }
     let kinds = verdict.check("gather-kinds").unwrap();
     assert!(
         !kinds.passed && kinds.detail.contains("(thesis compensation)"),
@@ -374,20 +384,17 @@ fn conformance_fails_a_backend_that_mis_signs_compensation_photons_on_moves() {
 }
 
 /// The dynamic tier on a backend with `fault`, which renders still frames as the CPU does:
-/// it fails the moves check that compares slots, and the gather check at the step named
-/// `step`, and passes the still checks.
-fn fails_on_moves_only(fault: Fault, step: &str) {
+/// it fails the moves check `moves` that compares slots, and the gather check `kinds` at the
+/// step named `step`, and passes the still checks.
+fn fails_on_moves_only(fault: Fault, (moves, kinds, step): (&str, &str, &str)) {
     let verdict = run_conformance(
         &mut || Ok(Box::new(Broken(CpuBackend::new(), fault))),
         &ConformanceOptions::quick(),
         Tier::Dynamic,
     );
     figure!("{verdict}");
-    assert!(
-        !verdict.check("moves/same-seed").unwrap().passed,
-        "{verdict}"
-    );
-    let kinds = verdict.check("gather-kinds").unwrap();
+    assert!(!verdict.check(moves).unwrap().passed, "{verdict}");
+    let kinds = verdict.check(kinds).unwrap();
     assert!(
         !kinds.passed && kinds.detail.contains(&format!("({step})")),
         "{verdict}"
@@ -400,24 +407,27 @@ fn fails_on_moves_only(fault: Fault, step: &str) {
 /// A backend that skips the reset of an emptied slot's normaliser (no still pass empties a
 /// slot) fails at the first kind that empties slots.
 fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves() {
-    fails_on_moves_only(Fault::SkipsEmptiedReset, "thesis compensation");
+    let checks = ("moves/same-seed", "gather-kinds", "thesis compensation");
+    fails_on_moves_only(Fault::SkipsEmptiedReset, checks);
 }
 
 /// A backend that ignores [`photon_flags::ADD_TO_MAP`] fails where local mode's deferred
 /// correction is applied.
 fn conformance_fails_a_backend_that_ignores_add_to_map() {
-    fails_on_moves_only(Fault::IgnoresAddToMap, "local apply");
+    let checks = ("moves/local/same-seed", "correction-kinds", "local apply");
+    fails_on_moves_only(Fault::IgnoresAddToMap, checks);
 }
 
 /// A backend that ignores [`photon_flags::PAIR_DEPOSITS`] fails where local mode's correction
 /// is applied: its variance, and so the history a kept slot keeps, is not the contract's.
 fn conformance_fails_a_backend_that_ignores_pairing() {
-    fails_on_moves_only(Fault::IgnoresPairing, "local apply");
+    let checks = ("moves/local/same-seed", "correction-kinds", "local apply");
+    fails_on_moves_only(Fault::IgnoresPairing, checks);
 }
 
-/// A backend without dynamic passes passes the static tier, fails the dynamic tier on
-/// `dynamic-passes` alone among the checks both tiers share, and renders a moving scene: each
-/// of its moves restarts, saying why.
+/// A backend without local-move or dynamic passes passes the static tier, fails the others on
+/// `local-passes` and `dynamic-passes`, and renders a moving scene: each of its moves
+/// restarts, saying why.
 fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
     let make = &mut || -> Result<Box<dyn Backend>, BackendError> {
         Ok(Box::new(Broken(CpuBackend::new(), Fault::StillFramesOnly)))
@@ -431,8 +441,9 @@ fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
         "static runs no moves check"
     );
     let moving = run_conformance(make, &options, Tier::Dynamic);
-    let dynamic = moving.check("dynamic-passes").unwrap();
-    assert!(!dynamic.passed && dynamic.detail.contains("still frames only"));
+    let local = moving.check("local-passes").unwrap();
+    assert!(!local.passed && local.detail.contains("still frames only"));
+    assert!(!moving.check("dynamic-passes").unwrap().passed);
     let kinds = moving.check("gather-kinds").unwrap();
     assert!(
         !kinds.passed && kinds.detail.contains("ordinary photons only"),
@@ -469,8 +480,8 @@ fn a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves() {
 }
 
 /// A gather that goes wrong for one kind alone fails the gather checks naming that kind: every
-/// kind, in turn (the ordinary one fails the static `gather-formulas`, the others the dynamic
-/// `gather-kinds`).
+/// kind, in turn (the ordinary one fails the static `gather-formulas`, local mode's the local
+/// `correction-kinds`, the others the dynamic `gather-kinds`).
 fn the_gather_checks_name_the_one_kind_a_backend_gets_wrong() {
     use gather_kind::*;
     let check = |name: &str| {
@@ -495,10 +506,10 @@ fn the_gather_checks_name_the_one_kind_a_backend_gets_wrong() {
         let make = &mut || -> Result<Box<dyn Backend>, BackendError> {
             Ok(Box::new(Broken(CpuBackend::new(), Fault::SkewsKind(kind))))
         };
-        let name = if kind == ORDINARY {
-            "gather-formulas"
-        } else {
-            "gather-kinds"
+        let name = match kind {
+            ORDINARY => "gather-formulas",
+            k if k & ADD_FLUX != 0 => "correction-kinds",
+            _ => "gather-kinds",
         };
         let failed = check(name)(make, &ConformanceOptions::quick()).unwrap_err();
         figure!("{kind:#x}: {failed}");

@@ -1,6 +1,8 @@
-//! Same seed, same backend: the same buffers whatever the thread count (docs/algorithm.md 5).
+//! Same seed, same backend: the same buffers whatever the thread count (docs/algorithm.md 5),
+//! the device's limits, or the work a wgpu local move saves.
 
-use ppm_core::params::RenderParams;
+use harness::driver::{Budget, Renderer, Schedule, run};
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::ReadBack;
 use std::process::ExitCode;
 use tests::Suite;
@@ -47,7 +49,8 @@ fn a_different_seed_gives_different_photons() {
 
 /// The wgpu backend on a device held to WebGPU's baseline limits renders, bit for bit, what
 /// it renders with the adapter's own: no pass binds or needs more than any WebGPU device
-/// offers (four storage textures and eight storage buffers per stage, among others).
+/// offers (four storage textures and eight storage buffers per stage, among others), still or
+/// through a local move.
 fn wgpu_renders_the_same_buffers_within_baseline_limits() {
     let mut adapter_limits = backend_wgpu::WgpuBackend::new().unwrap();
     let mut baseline = backend_wgpu::GpuContext::baseline()
@@ -73,6 +76,77 @@ fn wgpu_renders_the_same_buffers_within_baseline_limits() {
     let (a, b) = (buffers(&mut adapter_limits), buffers(&mut baseline));
     assert!(!a.1.is_empty(), "the render deposited photons");
     assert!(a == b, "baseline limits changed the buffers");
+
+    // And through a local move, whose passes run on the device too.
+    let moved = Schedule::after_move(
+        Budget::iterations(2),
+        MoveMode::Local,
+        Budget::iterations(1),
+    );
+    let after_move = |backend: &mut backend_wgpu::WgpuBackend| {
+        let outcome = run(
+            backend,
+            &scene,
+            &params,
+            &MoveParams::default(),
+            &moved,
+            &mut (),
+        )
+        .unwrap();
+        assert!(outcome.error.is_none(), "{:?}", outcome.error);
+        let hit_points = backend.read_hit_points().unwrap();
+        (
+            bytemuck::cast_slice::<_, u8>(&hit_points).to_vec(),
+            outcome.image.pixels,
+        )
+    };
+    let (a, b) = (after_move(&mut adapter_limits), after_move(&mut baseline));
+    assert!(a == b, "baseline limits changed a local move's buffers");
+}
+
+/// Along a drag, a wgpu local move takes its pose-A pairs' light from the last move's pose
+/// B, which is its pose A, rather than evaluating it again: the same slots bit for bit, on a
+/// scene whose direct light the drag blocks (cornell-box) and one whose paths bounce off
+/// mirrors (wedding-band).
+fn a_wgpu_drag_keeps_its_pairs_and_changes_nothing() {
+    for name in ["cornell-box", "wedding-band"] {
+        let scene = scenes::builtin(name).unwrap().load().unwrap();
+        let declared = scene.moves[0];
+        let step = ppm_core::scene::Move {
+            translation: declared.translation / 8.0,
+            rotation: glam::Quat::IDENTITY.slerp(declared.rotation, 1.0 / 8.0),
+            ..declared
+        };
+        let mut params = RenderParams::for_scene(&scene);
+        (params.width, params.height, params.photons_per_pass) = (40, 32, 10_000);
+        let drag = |keep_pairs: bool| {
+            let mut backend = backend_wgpu::WgpuBackend::new().unwrap();
+            backend.set_keep_pairs(keep_pairs);
+            let moves = MoveParams::default();
+            let mut render = Renderer::start(&mut backend, scene.clone(), &params, &moves).unwrap();
+            for _ in 0..4 {
+                render.iteration().unwrap();
+            }
+            let mut corrected = 0;
+            for _ in 0..4 {
+                let moved = render.move_objects(&[step], MoveMode::Local).unwrap();
+                corrected += moved.direct_corrected;
+                render.iteration().unwrap();
+            }
+            let hit_points = render.backend().read_hit_points().unwrap();
+            (
+                bytemuck::cast_slice::<_, u8>(&hit_points).to_vec(),
+                corrected,
+            )
+        };
+        let (kept, corrected) = drag(true);
+        let (evaluated, _) = drag(false);
+        assert!(
+            corrected > 0,
+            "{name}: the drag corrected no slot's direct light"
+        );
+        assert!(kept == evaluated, "{name}: kept pairs changed the slots");
+    }
 }
 
 fn main() -> ExitCode {
@@ -89,6 +163,11 @@ fn main() -> ExitCode {
             &[tests::wgpu()],
             "wgpu_renders_the_same_buffers_within_baseline_limits",
             wgpu_renders_the_same_buffers_within_baseline_limits,
+        )
+        .test_needing(
+            &[tests::wgpu()],
+            "a_wgpu_drag_keeps_its_pairs_and_changes_nothing",
+            a_wgpu_drag_keeps_its_pairs_and_changes_nothing,
         )
         .run()
 }

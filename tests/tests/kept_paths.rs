@@ -10,7 +10,7 @@ use ppm_core::compile::{CompiledScene, compile_scene, mover_boxes};
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{Photon, PhotonPassParams, gather_kind, photon_flags};
 use ppm_core::params::{MoveMode, RenderParams};
-use ppm_core::passes::{DynamicBackend, PhotonPass, PhotonStats, ReadBack, SceneUpload};
+use ppm_core::passes::{LocalMoves, PhotonPass, PhotonStats, ReadBack, SceneUpload};
 
 const PHOTONS: u32 = 20_000;
 /// The ordinary pass whose paths the corrections draw.

@@ -39,6 +39,14 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
         "{:?}",
         report.left_out
     );
+    assert!(
+        listed(
+            &report.left_out,
+            "local-move pipelines: not compiled (no local move)"
+        ),
+        "{:?}",
+        report.left_out
+    );
 
     // Area mode's move re-traces the slots and defers its region passes.
     let moved = Schedule::after_move(Budget::iterations(2), MoveMode::Area, Budget::iterations(2));
@@ -50,6 +58,34 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
             && !listed(&report.left_out, "landing-path pipeline")
             && !listed(&report.left_out, "pending sums")
             && !listed(&report.left_out, "photon path weights"),
+        "{:?}",
+        report.left_out
+    );
+    assert!(
+        listed(&report.left_out, "local-move pipelines"),
+        "{:?}",
+        report.left_out
+    );
+
+    // Local mode's move compiles its pipelines: all but the probe's, for a move of the tall
+    // block, whose direct light some slots' may change; no path bounced off a mirror to
+    // probe in cornell-box.
+    let moved = Schedule::after_move(
+        Budget::iterations(2),
+        MoveMode::Local,
+        Budget::iterations(1),
+    );
+    let report = run(&mut backend, &scene, &p, &moves, &moved, &mut ())
+        .unwrap()
+        .report;
+    let local: Vec<&String> = report
+        .left_out
+        .iter()
+        .filter(|l| l.starts_with("local-move"))
+        .collect();
+    assert_eq!(
+        local,
+        ["local-move probe pipeline: not compiled (no move needed it)"],
         "{:?}",
         report.left_out
     );

@@ -1,6 +1,7 @@
-// #import layout rng qmc sampling geometry bsdf bvh lights tables scene materials textures
-// Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs. Writes each slot's
-// visible point; the slot starts fresh or keeps its statistics as `params.flags` says.
+// #import layout rng qmc sampling geometry bsdf bvh lights tables scene materials textures eye_path
+// Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs and
+// ppm_core::eye_path::slot_eye_path. Writes each slot's visible point, its eye path traced by
+// eye_path.wgsl; the slot starts fresh or keeps its statistics as `params.flags` says.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
@@ -16,52 +17,6 @@
 // False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
 // bounces through them are compiled out (backend_wgpu::Specialisation).
 override SPECULAR: bool = true;
-
-// The light sample at a glossy bounce at `depth` (backend-cpu's chain_light.rs): f cos Le /
-// p_light weighed against the bounce's density in xyz, before the path's throughput; w one
-// when a shadow ray was traced.
-fn glossy_vertex_light(material: GpuMaterial, position: vec3<f32>, frame: Frame, front: bool, wo: vec3<f32>, key: StreamKey, depth: u32) -> vec4<f32> {
-    if scene.light_count == 0u {
-        return vec4<f32>(0.0);
-    }
-    let first = EYE_LIGHT_DIM + 3u * depth;
-    let light = scene_light(sample_light(stream_uniform(key, first)));
-    let b = uniform_triangle(stream_uniform(key, first + 1u), stream_uniform(key, first + 2u));
-    let y = light.v0 + light.e1 * b.x + light.e2 * b.y;
-    // The shadow ray leaves from the light's side (the far one through rough glass).
-    let facing = frame.normal;
-    let side = select(-facing, facing, dot(facing, y - position) >= 0.0);
-    let origin = position + side * params.ray_epsilon;
-    let to_light = y - origin;
-    let dist2 = dot(to_light, to_light);
-    if dist2 <= 0.0 {
-        return vec4<f32>(0.0);
-    }
-    let dist = sqrt(dist2);
-    let wi = to_light / dist;
-    let cos_l = -dot(light.normal, wi);
-    let lobe = bsdf_glossy_lobe(material, frame, front, wo, wi);
-    if cos_l <= 0.0 || all(lobe.xyz == vec3<f32>(0.0)) {
-        return vec4<f32>(0.0);
-    }
-    if occluded(origin, wi, dist - 2.0 * params.ray_epsilon) {
-        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    }
-    let le = scene_material(light.material).emission;
-    let pl = light_pdf(light.pdf, light.area, dist2, cos_l);
-    return vec4<f32>(lobe.xyz * le * (power_heuristic(pl, lobe.w) / pl), 1.0);
-}
-
-// The weight of the emission met at `hit` travelling `dir` after a glossy bounce of density
-// `bounce_pdf` (negative: none), against the light sample taken there.
-fn emission_weight(hit: Hit, tri: GpuTriangle, dir: vec3<f32>, bounce_pdf: f32) -> f32 {
-    let cos_l = -dot(tri.normal, dir);
-    if bounce_pdf < 0.0 || tri.light == NO_MATERIAL || cos_l <= 0.0 {
-        return 1.0;
-    }
-    let light = scene_light(tri.light);
-    return power_heuristic(bounce_pdf, light_pdf(light.pdf, light.area, hit.t * hit.t, cos_l));
-}
 
 // The slot before this iteration's eye path: fresh, or its statistics without a visible point.
 fn cleared_slot(slot: u32, pixel: u32) -> HitPoint {
@@ -110,84 +65,27 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         let sample = start * params.spp + slot % params.spp;
         jitter = stratified_pair(params.seed, PASS_EYE, pixel, 0u, sample);
     }
-    let px = f32(pixel % camera.width) + jitter.x;
-    let py = f32(pixel / camera.width) + jitter.y;
-    var dir = camera_ray(camera, px, py);
-    var origin = camera.eye;
-    var throughput = vec3<f32>(1.0);
-    var out = cleared_slot(slot, pixel);
-    var rays = params.max_depth + 1u;
-    var shadow_rays = 0u;
-    // The box of the path's vertices after the camera (backend-cpu's eye_pass.rs).
-    var lo = vec3<f32>(F32_MAX);
-    var hi = vec3<f32>(-F32_MAX);
-    // What the glossy bounces found (backend-cpu's chain_light.rs): the light samples'
-    // radiance, and the last bounce's density within its glossy lobe (negative: none).
+    // What the glossy bounces found (ppm_core::layout::ChainLight) rides beside the slot in
+    // a scene with glossy surfaces.
     let chained = arrayLength(&chain_light) == arrayLength(&hit_points);
     let sample_lights = chained && (params.flags & EYE_SAMPLE_LIGHTS) != 0u;
-    var chain = ChainLight(vec3<f32>(0.0), 1.0);
-    var bounce_pdf = -1.0;
-    for (var depth = 0u; depth <= params.max_depth; depth++) {
-        let hit = closest_hit(origin, dir, T_MISS);
-        if hit.triangle == 0xffffffffu {
-            rays = depth + 1u;
-            break;
-        }
-        let tri = scene_triangle(hit.triangle);
-        out.eye_met |= tri.group;
-        let position = origin + dir * hit.t;
-        let base = scene_material(tri.material);
-        let texture = texture_factor(base, hit.triangle, tri, position);
-        var material = base;
-        material.albedo *= texture;
-        lo = min(lo, position);
-        hi = max(hi, position);
-        let front = dot(dir, tri.normal) < 0.0;
-        let facing = select(-tri.normal, tri.normal, front);
-        let u = stream_uniform(key, EYE_GLASS_DIM + depth);
-        // Negative where the path continues; always one on a diffuse surface, the only kind
-        // without SPECULAR.
-        let stop = bsdf_visible_point_weight(material, facing, -dir, u);
-        if stop >= 0.0 {
-            out.position = position;
-            out.normal = facing;
-            out.material = tri.material;
-            // The texture's factor rides in the throughput (ppm_core::textures), and so does
-            // a coat's transmittance towards the eye (ppm_core::bsdf).
-            out.throughput = throughput * visible_point_scale(base, material, texture) * stop;
-            out.flags |= HIT_VALID | select(0u, HIT_FRONT, front) | (tri.object << HIT_OBJECT_SHIFT);
-            chain.emission_weight = emission_weight(hit, tri, dir, bounce_pdf);
-            rays = depth + 1u;
-            break;
-        }
+    let settings = EyePathSettings(params.max_depth, params.ray_epsilon, sample_lights);
+    let path = trace_eye_path(pixel, jitter, key, settings, 0u);
+    var out = cleared_slot(slot, pixel);
+    out.eye_met |= path.met;
+    if path.chained {
         out.flags |= HIT_EYE_CHAINED;
-        let glossy_lobe = sample_lights && bsdf_chain_samples_lights(material);
-        let frame = surface_frame(material, hit.triangle, tri, facing);
-        if glossy_lobe {
-            let light = glossy_vertex_light(material, position, frame, front, -dir, key, depth);
-            chain.radiance += throughput * light.xyz;
-            shadow_rays += u32(light.w);
-        }
-        let glossy = EYE_GLOSSY_DIM + 2u * depth;
-        let u_dir = vec2<f32>(stream_uniform(key, glossy), stream_uniform(key, glossy + 1u));
-        let bounce = bsdf_sample(material, dir, frame, front, u, u_dir, TRANSPORT_RADIANCE);
-        if all(bounce.weight == vec3<f32>(0.0)) {
-            // A glossy direction below the surface: no visible point.
-            rays = depth + 1u;
-            break;
-        }
-        bounce_pdf = -1.0;
-        if glossy_lobe {
-            bounce_pdf = bsdf_glossy_lobe(material, frame, front, -dir, bounce.dir).w;
-        }
-        throughput *= bounce.weight;
-        dir = bounce.dir;
-        let side = select(facing, -facing, bounce.transmitted);
-        origin = position + side * params.ray_epsilon;
+    }
+    if path.visible {
+        out.position = path.position;
+        out.normal = path.normal;
+        out.material = path.material;
+        out.throughput = path.throughput;
+        out.flags |= eye_path_flags(path);
     }
     hit_points[slot] = out;
     if chained {
-        chain_light[slot] = chain;
+        chain_light[slot] = path.chain;
     }
     if (params.flags & EYE_RECORD_BOUNDS) != 0u {
         // Started over where the slot's statistics start (no direct sample yet).
@@ -195,9 +93,9 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
         if out.iterations != 0u {
             bounds = slot_bounds[slot];
         }
-        slot_bounds[slot] = GpuBounds(min(bounds.min, lo), 0u, max(bounds.max, hi), 0u);
+        slot_bounds[slot] = GpuBounds(min(bounds.min, path.lo), 0u, max(bounds.max, path.hi), 0u);
     }
-    atomicAdd(&counters[COUNTER_RAYS], rays + shadow_rays);
+    atomicAdd(&counters[COUNTER_RAYS], path.rays);
     if (out.flags & HIT_VALID) != 0u {
         atomicAdd(&counters[COUNTER_ITEMS], 1u);
     }

@@ -154,3 +154,31 @@ fn camera_ray(camera: GpuCamera, px: f32, py: f32) -> vec3<f32> {
     let sy = 1.0 - 2.0 * py / f32(camera.height);
     return normalize(camera.forward + camera.right * sx + camera.up * sy);
 }
+
+// Whether the segment origin + t dir, 0 <= t <= t_max, meets the closed box [lo, hi]
+// (ppm_core::geometry::segment_meets_box); an empty box (lo > hi) is never met.
+fn segment_meets_box(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, lo: vec3<f32>, hi: vec3<f32>) -> bool {
+    if any(lo > hi) {
+        return false;
+    }
+    var t0 = 0.0;
+    var t1 = t_max;
+    for (var axis = 0u; axis < 3u; axis++) {
+        let o = origin[axis];
+        let d = dir[axis];
+        if d == 0.0 {
+            if o < lo[axis] || o > hi[axis] {
+                return false;
+            }
+            continue;
+        }
+        let a = (lo[axis] - o) / d;
+        let b = (hi[axis] - o) / d;
+        t0 = max(t0, min(a, b));
+        t1 = min(t1, max(a, b));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    return true;
+}

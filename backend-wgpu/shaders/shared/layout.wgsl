@@ -10,6 +10,7 @@ const MATERIAL_COATED: u32 = 4u;
 const HIT_VALID: u32 = 1u;
 const HIT_FRONT: u32 = 2u;
 const HIT_UPDATED: u32 = 4u;
+const HIT_DIRECT_MAY_CHANGE: u32 = 16u;
 const HIT_RESTING: u32 = 32u;
 const HIT_EYE_CHAINED: u32 = 128u;
 const HIT_KEPT: u32 = HIT_UPDATED | HIT_EYE_CHAINED;
@@ -261,6 +262,22 @@ const GATHER_KIND_MASK: u32 = 0xffu;
 const GATHER_RAW_COUNT: u32 = 0x100u;
 const GATHER_DEFERRED: u32 = 0x200u;
 const GATHER_ADD_FLUX: u32 = 0x400u;
+
+// A local move's parameters (ppm_core::layout::LocalMoveParams), beside its boxes.
+struct LocalMoveParams {
+    seed: u32,
+    groups: u32,
+    max_depth: u32,
+    ray_epsilon: f32,
+    r2_initial: f32,
+    r2_floor: f32,
+    widest: f32,
+    direct_samples: u32,
+    objects: u32,
+    lights: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
 
 struct ResolveParams {
     width: u32,

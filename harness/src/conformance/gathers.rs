@@ -1,7 +1,8 @@
 //! The gather checks: a backend's own photon and gather passes, for each gather kind, against
 //! ppm-core's gather rule applied on the host by brute force to the backend's own photons and
 //! slots (docs/algorithm.md 1.4 and 3, "Who gathers what"). The static tier checks ordinary
-//! photons; the dynamic tier runs every kind a move uses, in the order the driver runs them.
+//! photons; the local tier local mode's correction; the dynamic tier every kind the thesis's
+//! modes use, in the order the driver runs them.
 
 use super::{BackendFactory, ConformanceOptions, cornell, err, eye_params, params_for};
 use crate::driver::pass_params;
@@ -71,16 +72,14 @@ const fn step(name: &'static str, kind: u32, source: Source, power_scale: f32) -
 
 const ORDINARY: Step = step("ordinary", gather_kind::ORDINARY, Source::Lights, 1.0);
 
-/// Every kind a move gathers, as its mode runs them: the thesis's raw region passes, area
-/// mode's deferred ones, difference mode's deferred ordinary photons, local mode's flux-only
-/// correction within a floor disc (pose B's photons, the same paths after the scene's move,
-/// paired with pose A's and added to them, gathered once), and the guided photons.
-const MOVE_STEPS: [Step; 12] = {
+/// Every kind the thesis's modes gather, as they run them: the thesis's raw region passes,
+/// area mode's deferred ones, difference mode's deferred ordinary photons, and the guided
+/// photons.
+const THESIS_STEPS: [Step; 9] = {
     use gather_kind::*;
     let (neg, pos) = (REGION_NEGATIVE, REGION_POSITIVE);
     let point = Source::Region(region_mode::POINT);
     let area = Source::Region(region_mode::AREA);
-    let correction = DEFERRED | ADD_FLUX;
     [
         step("guided", GUIDED, Source::Guided, 1.0),
         step("thesis compensation", neg | RAW_COUNT, point, -1.0),
@@ -91,22 +90,27 @@ const MOVE_STEPS: [Step; 12] = {
         step("difference, pose A", neg | DEFERRED, Source::Lights, -1.0),
         step("difference, pose B", pos | DEFERRED, Source::Lights, 1.0),
         step("difference apply", REGION_APPLY, Source::Lights, 0.0),
+    ]
+};
+
+/// Local mode's flux-only correction within a floor disc: pose A's photons held, pose B's (the
+/// same paths after the scene's move) paired with pose A's and added to them, gathered once,
+/// and applied.
+const LOCAL_STEPS: [Step; 3] = {
+    use gather_kind::*;
+    let correction = REGION_POSITIVE | DEFERRED | ADD_FLUX;
+    [
         Step {
             floor_radii: 3.0,
             flow: Flow::Held,
-            ..step(
-                "local correction, pose A",
-                pos | correction,
-                Source::Lights,
-                -1.0,
-            )
+            ..step("local correction, pose A", correction, Source::Lights, -1.0)
         },
         Step {
             floor_radii: 3.0,
             flow: Flow::Added,
             ..step(
                 "local correction, both poses",
-                pos | correction,
+                correction,
                 Source::Lights,
                 1.0,
             )
@@ -139,12 +143,31 @@ pub(super) fn check_ordinary(
     }
 }
 
-/// `gather-kinds` (dynamic tier): every kind a move gathers, on slots of which every third is
-/// flagged updated, so that each kind's choice of who gathers and who is served shows, and
-/// every second has a wide correction disc, which only local mode's correction reads.
+/// `correction-kinds` (local tier): local mode's correction as [`check_every_kind`] checks
+/// the thesis's kinds.
+pub(super) fn check_local_kinds(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+) -> Result<String, String> {
+    check_steps(make, o, &LOCAL_STEPS)
+}
+
+/// `gather-kinds` (dynamic tier): every kind the thesis's modes gather, on slots of which
+/// every third is flagged updated, so that each kind's choice of who gathers and who is served
+/// shows, and every second has a wide correction disc, which only local mode's correction
+/// reads.
 pub(super) fn check_every_kind(
     make: BackendFactory,
     o: &ConformanceOptions,
+) -> Result<String, String> {
+    check_steps(make, o, &THESIS_STEPS)
+}
+
+/// An ordinary pass, then `steps` on slots prepared for a move, each against the gather rule.
+fn check_steps(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+    steps: &[Step],
 ) -> Result<String, String> {
     let mut bench = Bench::new(make, o)?;
     if let Some(outcome) = bench.run(&ORDINARY)? {
@@ -152,7 +175,7 @@ pub(super) fn check_every_kind(
     }
     bench.prepare_move()?;
     let mut outcomes = Vec::new();
-    for step in &MOVE_STEPS {
+    for step in steps {
         outcomes.extend(bench.run(step)?);
     }
     let failed: Vec<String> = outcomes.iter().filter_map(|o| o.verdict().err()).collect();
@@ -164,7 +187,7 @@ pub(super) fn check_every_kind(
         .min_by_key(|o| o.checked - o.off)
         .expect("steps ran");
     Ok(format!(
-        "{} gathers of every kind as the gather rule by brute force; the least close: {worst}",
+        "{} gathers of each kind as the gather rule by brute force; the least close: {worst}",
         outcomes.len()
     ))
 }
@@ -369,8 +392,8 @@ impl Bench {
         let r2_floor = (step.floor_radii * self.params.initial_radius).powi(2);
         let (flags, pass) = match (step.flow, &self.held) {
             (Flow::Added, Some((_, _, pass))) => {
-                let dynamic = self.backend.dynamic().ok_or("no dynamic passes")?;
-                dynamic.update_scene(&self.moved).map_err(err)?;
+                let local = self.backend.local_moves().ok_or("no local-move passes")?;
+                local.update_scene(&self.moved).map_err(err)?;
                 let flags = photon_flags::ADD_TO_MAP | photon_flags::PAIR_DEPOSITS;
                 (flags, *pass)
             }

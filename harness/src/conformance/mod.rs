@@ -59,8 +59,12 @@ pub enum Tier {
     /// Still frames: any [`Backend`] plugs into the driver, the CLI and the suite (a move
     /// restarts on it).
     Static,
-    /// Moves that keep light too: [`Backend::dynamic`] gives the dynamic passes, and every
-    /// move mode agrees with the CPU backend.
+    /// Local moves, which keep what a move did not change: [`Backend::local_moves`] gives
+    /// their passes, and local mode agrees with the CPU backend (the moves users use; the
+    /// thesis's modes restart).
+    Local,
+    /// Every move mode: [`Backend::dynamic`] gives the thesis's passes too, and every mode
+    /// agrees with the CPU backend.
     Dynamic,
 }
 
@@ -68,6 +72,7 @@ impl fmt::Display for Tier {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             Tier::Static => "static",
+            Tier::Local => "local",
             Tier::Dynamic => "dynamic",
         })
     }
@@ -148,10 +153,17 @@ pub const CHECKS: &[(&str, Tier, Check)] = &[
     ("agreement/same-seed", Tier::Static, check_same_seed),
     ("agreement/independent", Tier::Static, check_independent),
     ("stress-family", Tier::Static, check_still_stress),
+    ("local-passes", Tier::Local, check_local_passes),
+    ("correction-kinds", Tier::Local, gathers::check_local_kinds),
+    (
+        "moves/local/same-seed",
+        Tier::Local,
+        check_local_moves_same_seed,
+    ),
+    ("moves/independent", Tier::Local, check_moves_independent),
     ("dynamic-passes", Tier::Dynamic, check_dynamic_passes),
     ("gather-kinds", Tier::Dynamic, gathers::check_every_kind),
     ("moves/same-seed", Tier::Dynamic, check_moves_same_seed),
-    ("moves/independent", Tier::Dynamic, check_moves_independent),
     ("moves/stress-family", Tier::Dynamic, check_moving_stress),
 ];
 
@@ -419,8 +431,8 @@ fn agreement_line(
 }
 
 /// The moves the `moves/` checks follow: each built-in scene's declared move in each of
-/// `modes`, `passes` iterations before and after it, and a random path of three unplanned
-/// moves of cornell-box in local mode.
+/// `modes`, `passes` iterations before and after it, and where `modes` holds local mode, a
+/// random path of three unplanned moves of cornell-box in it.
 fn move_cases(
     o: &ConformanceOptions,
     modes: &[MoveMode],
@@ -441,32 +453,48 @@ fn move_cases(
             ));
         }
     }
-    let scene = cornell()?;
-    let first = After::Iterations(o.passes);
-    let path = MovePath::random(&scene, 3, 11, first, After::Iterations(2));
-    cases.push((
-        "cornell-box, a random path".to_owned(),
-        scene,
-        Schedule::path(&path, MoveMode::Local, budget),
-    ));
+    if modes.contains(&MoveMode::Local) {
+        let scene = cornell()?;
+        let first = After::Iterations(o.passes);
+        let path = MovePath::random(&scene, 3, 11, first, After::Iterations(2));
+        cases.push((
+            "cornell-box, a random path".to_owned(),
+            scene,
+            Schedule::path(&path, MoveMode::Local, budget),
+        ));
+    }
     Ok(cases)
 }
 
-/// Moves, same seed: through the declared move of every built-in scene that has one, in
-/// every mode, and along a random path of three unplanned moves in local mode, the slots agree
-/// with the CPU reference after every iteration and every move. Every dynamic pass runs
-/// here: region, guided, landing and difference photons, the hit-point update, local mode's
-/// resets, probe and corrections.
+/// Local moves, same seed: through the declared move of every built-in scene that has one
+/// and along a random path of three unplanned moves, in local mode, the slots agree with the
+/// CPU reference after every iteration and every move. Every local-move pass runs here: the
+/// resets, the probe, the direct-light change and the correction.
+fn check_local_moves_same_seed(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+) -> Result<String, String> {
+    moves_same_seed(make, o, &[MoveMode::Local])
+}
+
+/// Moves, same seed: through the declared move of every built-in scene that has one, in the
+/// thesis's modes and difference mode, the slots agree with the CPU reference after every
+/// iteration and every move. Region, guided, landing and difference photons and the
+/// hit-point update run here.
 fn check_moves_same_seed(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
-    let modes = [
-        MoveMode::Local,
-        MoveMode::Difference,
-        MoveMode::Area,
-        MoveMode::Thesis,
-    ];
+    let modes = [MoveMode::Difference, MoveMode::Area, MoveMode::Thesis];
+    moves_same_seed(make, o, &modes)
+}
+
+/// The same-seed comparison of [`move_cases`] in `modes`.
+fn moves_same_seed(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+    modes: &[MoveMode],
+) -> Result<String, String> {
     let moves = MoveParams::default();
     let mut details = Vec::new();
-    for (name, scene, schedule) in move_cases(o, &modes)? {
+    for (name, scene, schedule) in move_cases(o, modes)? {
         let p = params_for(&scene, o);
         let render = |backend: &mut dyn Backend| {
             record_schedule(backend, &scene, &p, &moves, &schedule).map_err(err)
@@ -561,15 +589,29 @@ fn stress_family(make: BackendFactory, moving: bool) -> Result<String, String> {
     }
 }
 
-/// The backend gives its dynamic passes ([`Backend::dynamic`]); without them every move
-/// restarts, and the moves checks cannot pass.
+/// The backend gives its local-move passes ([`Backend::local_moves`]); without them every
+/// move restarts, and the moves checks cannot pass.
+fn check_local_passes(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
+    let mut backend = make().map_err(err)?;
+    match backend.local_moves() {
+        Some(_) => Ok("scene update, local resets and direct-light change".into()),
+        None => Err(format!(
+            "backend '{}' gives no local-move passes (Backend::local_moves is None): it renders \
+             still frames only, the static tier",
+            backend.name()
+        )),
+    }
+}
+
+/// The backend gives the passes of the thesis's modes ([`Backend::dynamic`]); without them
+/// a move in those modes restarts, and their checks cannot pass.
 fn check_dynamic_passes(make: BackendFactory, _: &ConformanceOptions) -> Result<String, String> {
     let mut backend = make().map_err(err)?;
     match backend.dynamic() {
-        Some(_) => Ok("scene update, hit-point update, region, guided and landing passes".into()),
+        Some(_) => Ok("hit-point update, region, guided and landing passes".into()),
         None => Err(format!(
-            "backend '{}' gives no dynamic passes (Backend::dynamic is None): it renders still \
-             frames only, the static tier",
+            "backend '{}' gives no dynamic passes (Backend::dynamic is None): the thesis's \
+             modes restart on it",
             backend.name()
         )),
     }

@@ -38,11 +38,11 @@
 //! object late in its life is still reset by the next move of it. A moved light restarts.
 //!
 //! The decisions and the direct-light change are the backend's passes, run where its slots
-//! live ([`DynamicBackend::begin_local_move`], `local_resets`, `local_direct_change`, over
+//! live ([`LocalMoves::begin_local_move`], `local_resets`, `local_direct_change`, over
 //! [`ppm_core::local_move`]'s per-slot functions); this module sizes the move and orders the
 //! passes, and reads back their counters, never the slots.
 //!
-//! [`DynamicBackend::begin_local_move`]: ppm_core::passes::DynamicBackend::begin_local_move
+//! [`LocalMoves::begin_local_move`]: ppm_core::passes::LocalMoves::begin_local_move
 //!
 //! Then every second iteration ([`FOCUS_PERIOD`](super::FOCUS_PERIOD)) traces eye paths and
 //! direct light only for the slots with the fewest iterations: a slot whose direct sum holds
@@ -52,7 +52,7 @@
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
 use super::moves::{Compensation, MoveReport};
-use super::{Renderer, dynamic, pass_params};
+use super::{Renderer, local, pass_params};
 use glam::Vec3;
 use ppm_core::compile::{mover_boxes, object_group};
 use ppm_core::eye_path::EyePathSettings;
@@ -168,15 +168,15 @@ impl Renderer<'_> {
             self.report.photons_deposited as f64 / self.report.photons_emitted.max(1) as f64;
         let stored_before = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
-        dynamic(self.backend)?.update_scene(&self.compiled)?;
-        dynamic(self.backend)?.begin_local_move(&request)?;
+        local(self.backend)?.update_scene(&self.compiled)?;
+        local(self.backend)?.begin_local_move(&request)?;
         self.compensate(&size.photons, gather_kind::REGION_NEGATIVE)?;
-        dynamic(self.backend)?.update_scene(&compiled)?;
+        local(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
         self.counters.frame += 1;
-        let resets = dynamic(self.backend)?.local_resets()?;
-        dynamic(self.backend)?.local_direct_change()?;
+        let resets = local(self.backend)?.local_resets()?;
+        local(self.backend)?.local_direct_change()?;
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;

@@ -32,7 +32,7 @@ use ppm_core::layout::{
     PhotonPassParams, RecordedPath, ResolveParams, eye_flags, gather_kind, photon_flags,
 };
 use ppm_core::params::{Estimator, MoveParams, RenderParams};
-use ppm_core::passes::{Backend, BackendError, DynamicBackend, PhotonStats};
+use ppm_core::passes::{Backend, BackendError, DynamicBackend, LocalMoves, PhotonStats};
 use ppm_core::scene::Scene;
 use std::time::Instant;
 
@@ -92,8 +92,17 @@ pub struct Renderer<'a> {
     report: RenderReport,
 }
 
-/// The backend's dynamic passes; an error on a backend without them, whose moves restart
+/// The backend's local-move passes; an error on a backend without them, whose moves restart
 /// before any of these is called ([`Renderer::move_to`]).
+fn local(backend: &mut dyn Backend) -> Result<&mut dyn LocalMoves, BackendError> {
+    let name = backend.name().to_owned();
+    backend.local_moves().ok_or_else(|| {
+        BackendError::Unsupported(format!("backend '{name}' has no local-move passes"))
+    })
+}
+
+/// The backend's passes of the thesis's modes; an error on a backend without them, whose
+/// moves in those modes restart before any of these is called ([`Renderer::move_to`]).
 fn dynamic(backend: &mut dyn Backend) -> Result<&mut dyn DynamicBackend, BackendError> {
     let name = backend.name().to_owned();
     backend

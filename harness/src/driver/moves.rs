@@ -8,7 +8,7 @@
 //! compensation, testing photons record the emissions that reach the reset slots, and guided
 //! passes alternate with ordinary ones. Restart starts over on the new pose.
 
-use super::{Renderer, dynamic};
+use super::{Renderer, dynamic, local};
 use glam::Vec3;
 use ppm_core::emission::{PhotonSource, ordinary_emission};
 use ppm_core::layout::{
@@ -155,15 +155,28 @@ impl Renderer<'_> {
         };
         if changed.is_empty() {
             // Nothing moved: every slot keeps everything, in every mode.
-            report.kept = self.backend.read_hit_points()?.len() as u64;
+            report.kept = if self.has_image() {
+                u64::from(self.params.width * self.params.height * self.params.spp)
+            } else {
+                0
+            };
             report.seconds = start.elapsed().as_secs_f64();
             return Ok(report);
         }
+        let passes = match mode {
+            MoveMode::Local => self.backend.local_moves().is_some(),
+            _ => self.backend.dynamic().is_some(),
+        };
         let plan = if !self.has_image() {
             Err("no iteration has run: nothing to keep".to_owned())
-        } else if self.backend.dynamic().is_none() {
+        } else if !passes && self.backend.local_moves().is_none() {
             Err(format!(
-                "backend '{}' renders still frames only (no dynamic passes)",
+                "backend '{}' renders still frames only (no local-move passes)",
+                self.backend.name()
+            ))
+        } else if !passes {
+            Err(format!(
+                "backend '{}' has local moves but not the passes of the thesis's modes",
                 self.backend.name()
             ))
         } else {
@@ -192,7 +205,7 @@ impl Renderer<'_> {
         // where nothing changed their paths coincide and the two cancel almost exactly.
         self.compensate(&plan, gather_kind::REGION_NEGATIVE)?;
         let compiled = recompile_moved(&self.compiled, &next, &changed, self.spare.take());
-        dynamic(self.backend)?.update_scene(&compiled)?;
+        local(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
         self.counters.frame += 1;
