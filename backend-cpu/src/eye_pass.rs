@@ -2,11 +2,8 @@
 //! non-specular surface ([`ppm_core::eye_path::slot_eye_path`]), over the slots in parallel.
 
 use crate::trace::SceneData;
-use glam::Vec3;
-use ppm_core::eye_path::slot_eye_path;
-use ppm_core::layout::{
-    ChainLight, EyePassParams, GpuCamera, HitPoint, SlotBounds, eye_flags, hit_flags,
-};
+use ppm_core::eye_path::{extended_bounds, slot_eye_path};
+use ppm_core::layout::{ChainLight, EyePassParams, GpuCamera, HitPoint, SlotBounds, eye_flags};
 use ppm_core::passes::EyeStats;
 use rayon::iter::Either;
 use rayon::prelude::*;
@@ -35,7 +32,7 @@ pub fn eye_pass_main(
         .map(|(slot, ((hp, b), c))| {
             let path = slot_eye_path(params, camera, scene, slot as u32, hp);
             if let Some(b) = b {
-                *b = extended(*b, hp, path.vertices);
+                *b = extended_bounds(*b, hp, path.vertices);
             }
             if let (Some(c), Some(found)) = (c, path.chain) {
                 *c = found;
@@ -58,22 +55,4 @@ fn each_or_none<T: Send>(
         Some(slice) => Either::Left(slice.par_iter_mut().map(Some)),
         None => Either::Right((0..len).into_par_iter().map(|_| None)),
     }
-}
-
-/// A slot's bounds after an eye pass: started over where its statistics start (no direct
-/// sample yet: a fresh or reset slot), left alone where it rested, else grown by the box of
-/// its path's vertices.
-fn extended(bounds: SlotBounds, hp: &HitPoint, path: SlotBounds) -> SlotBounds {
-    if hp.flags & hit_flags::RESTING != 0 {
-        return bounds;
-    }
-    let start = if hp.iterations == 0 {
-        SlotBounds::NOTHING
-    } else {
-        bounds
-    };
-    SlotBounds::new(
-        Vec3::from(start.min).min(path.min.into()),
-        Vec3::from(start.max).max(path.max.into()),
-    )
 }

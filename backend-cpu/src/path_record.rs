@@ -12,6 +12,7 @@ use glam::Vec3;
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{Photon, PhotonPassParams, photon_flags};
 use ppm_core::passes::PhotonStats;
+use ppm_core::photon_path::PathRecorder;
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 
@@ -60,6 +61,16 @@ impl BatchRecord {
     pub fn end_path(&mut self) {
         self.segment_ends.push(self.segments.len() as u32);
         self.deposit_ends.push(self.deposit_segments.len() as u32);
+    }
+}
+
+impl PathRecorder for BatchRecord {
+    fn segment(&mut self, origin: Vec3, dir: Vec3, t: f32) {
+        self.segments.push(Segment { origin, dir, t });
+    }
+
+    fn deposit(&mut self, bounce: u32) {
+        self.deposit_segments.push(bounce);
     }
 }
 

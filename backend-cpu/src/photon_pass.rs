@@ -1,23 +1,16 @@
 //! Photon pass (docs/algorithm.md 1.3): photons leave the lights with the light's whole power,
 //! bounce with Russian roulette, and deposit at non-specular surfaces.
 
-use crate::path_record::{BatchRecord, PathRecord, Segment};
+use crate::path_record::{BatchRecord, PathRecord};
 use crate::trace::SceneData;
-use glam::Vec3;
-use ppm_core::bsdf;
-use ppm_core::emission::{EMISSION_DIMS, Emission, PhotonSource};
-use ppm_core::geometry::oct_encode;
-use ppm_core::layout::{Photon, PhotonPassParams, first_hit, photon_flags};
+use ppm_core::emission::PhotonSource;
+use ppm_core::layout::{Photon, PhotonPassParams, photon_flags};
 use ppm_core::passes::PhotonStats;
+use ppm_core::photon_path::{PathRecorder, trace_photon_path};
 use ppm_core::rng::StreamKey;
-use ppm_core::trace::PoseQueries;
 use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
-
-/// Random dimensions: the emission's (see `ppm_core::emission`), then three per bounce.
-const DIM_BOUNCE: u32 = EMISSION_DIMS;
-const DIMS_PER_BOUNCE: u32 = 3;
 
 /// Photons traced per parallel task: large enough to amortise scheduling, small enough to balance.
 const CHUNK: u32 = 2048;
@@ -93,16 +86,22 @@ pub fn photon_pass_main(
                 let emission = source.emit(&scene.lights, &scene.materials, &key);
                 let before = deposits.len();
                 let path_crossed = if emission.weight > 0.0 {
-                    let (path_rays, path_crossed) =
-                        trace_photon(params, scene, &key, &emission, &mut deposits, &mut record);
+                    let (path_rays, path_crossed) = trace_photon_path(
+                        scene,
+                        params,
+                        &scene.movers,
+                        (&key, &emission),
+                        &mut deposits,
+                        record.as_mut().map(|r| r as &mut dyn PathRecorder),
+                    );
                     rays += path_rays;
                     path_crossed
                 } else {
-                    if let Some(r) = &mut record {
-                        r.end_path();
-                    }
                     false
                 };
+                if let Some(r) = &mut record {
+                    r.end_path();
+                }
                 if record_crossed {
                     set_mask_bit(crossed, params.mask_offset + path, path_crossed);
                 }
@@ -207,86 +206,4 @@ pub fn set_mask_bit(mask: &[AtomicU32], bit: u32, value: bool) {
     } else {
         word.fetch_and(!m, Ordering::Relaxed);
     }
-}
-
-/// Traces one photon path from `emission`, appending its deposits (and to `record`, where
-/// the pass keeps its paths, its segments and which of them each deposit ends); returns the
-/// ray segments traced and whether the path crossed a mover's box (always true when no flag
-/// asks).
-fn trace_photon(
-    params: &PhotonPassParams,
-    scene: &SceneData,
-    key: &StreamKey,
-    emission: &Emission,
-    out: &mut Vec<Photon>,
-    record: &mut Option<BatchRecord>,
-) -> (u64, bool) {
-    let path = key.path;
-    let mut dir = emission.direction;
-    let mut origin = emission.origin + emission.normal * params.ray_epsilon;
-    let mut power = emission.power * params.power_scale;
-    let mut rays = 0;
-    // Whether the path has crossed a mover's box so far; the boxes are tested only when a
-    // flag needs the answer (ordinary passes start it true and skip the test).
-    let tests_movers =
-        params.flags & (photon_flags::CHANGED_ONLY | photon_flags::RECORD_CROSSED) != 0;
-    let mut crossed = !tests_movers;
-    let stores_all = params.flags & photon_flags::CHANGED_ONLY == 0;
-    for bounce in 0..params.max_depth {
-        rays += 1;
-        let hit = scene.closest_hit(origin, dir, f32::INFINITY);
-        let t = hit.map_or(f32::INFINITY, |h| h.t);
-        crossed = crossed || scene.near_mover(origin, dir, t);
-        if let Some(r) = record {
-            r.segments.push(Segment { origin, dir, t });
-        }
-        let Some(hit) = hit else {
-            break;
-        };
-        let tri = &scene.triangles[hit.triangle as usize];
-        let position = origin + dir * hit.t;
-        let (material, _) = scene.surface(&hit, position);
-        let material = &material;
-        let normal = Vec3::from(tri.normal);
-        let facing = if dir.dot(normal) < 0.0 {
-            normal
-        } else {
-            -normal
-        };
-        let d = DIM_BOUNCE + bounce * DIMS_PER_BOUNCE;
-        let front = facing == normal;
-        if bsdf::holds_visible_points(material)
-            && (stores_all || crossed)
-            && (bounce > 0 || params.first_hit == first_hit::DEPOSIT)
-        {
-            // What reaches the base of a coated surface (ppm_core::bsdf::arrival).
-            let arrived = bsdf::arrival(material, -dir.dot(facing));
-            out.push(Photon {
-                position: position.into(),
-                path,
-                power: (power * arrived).into(),
-                normal_oct: oct_encode(facing),
-            });
-            if let Some(r) = record {
-                r.deposit_segments.push(bounce);
-            }
-        }
-        let u = (key.uniform(d), (key.uniform(d + 1), key.uniform(d + 2)));
-        let frame = scene.frame(&hit, material, facing);
-        let Some(scattered) = bsdf::photon_bounce(material, dir, &frame, front, u) else {
-            break;
-        };
-        power *= scattered.weight;
-        dir = scattered.dir;
-        let side = if scattered.transmitted {
-            -facing
-        } else {
-            facing
-        };
-        origin = position + side * params.ray_epsilon;
-    }
-    if let Some(r) = record {
-        r.end_path();
-    }
-    (rays, crossed)
 }

@@ -324,6 +324,25 @@ pub fn slot_eye_path<P: PoseQueries>(
     }
 }
 
+/// A slot's bounds after an eye pass that records them ([`eye_flags::RECORD_BOUNDS`]): started
+/// over where its statistics start (no direct sample yet: a fresh or reset slot), left alone
+/// where it rested, else grown by `path`, the box of its path's vertices
+/// ([`SlotEyePath::vertices`]). A local move looks there for what the slot may have seen.
+pub fn extended_bounds(bounds: SlotBounds, hp: &HitPoint, path: SlotBounds) -> SlotBounds {
+    if hp.flags & hit_flags::RESTING != 0 {
+        return bounds;
+    }
+    let start = if hp.iterations == 0 {
+        SlotBounds::NOTHING
+    } else {
+        bounds
+    };
+    SlotBounds::new(
+        Vec3::from(start.min).min(path.min.into()),
+        Vec3::from(start.max).max(path.max.into()),
+    )
+}
+
 /// A glossy bounce of an eye path: where, the surface's frame on the path's side and whether
 /// that is the outside, towards where the path came from, and its depth (which keys the light
 /// sample's numbers).

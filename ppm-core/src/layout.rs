@@ -526,7 +526,10 @@ pub struct PhotonPassParams {
     pub gather_r2_floor: f32,
 }
 
-/// Bits of [`PhotonPassParams::flags`].
+/// Bits of [`PhotonPassParams::flags`]. The driver sets only [`KEEP_PATHS`](photon_flags::KEEP_PATHS), a hint; the others
+/// are how the CPU and wgpu backends' photon passes trace a local move's correction
+/// ([`CorrectionPhotons::flagged_pass`](crate::local_move::CorrectionPhotons::flagged_pass)),
+/// which a backend of its own need not honour.
 pub mod photon_flags {
     /// Store only the deposits whose path crossed a moved object's box before reaching them
     /// (local mode's difference passes): a path that has not met a box is the same in both

@@ -6,9 +6,9 @@
 //! - [`update`]: the progressive update formulas in their stable forms.
 //! - [`rng`], [`sampling`], [`geometry`], [`bsdf`]: math that exists once here and once in
 //!   WGSL; [`bsdf`] is what every material does with light.
-//! - [`trace`], [`eye_path`], [`direct_light`], [`local_move`]: the per-item functions of the
-//!   passes (ray queries over the flattened tree, an eye path, a slot's direct light, a local
-//!   move's decisions and corrections), one home in Rust, each the twin of a WGSL function;
+//! - [`trace`], [`eye_path`], [`direct_light`], [`photon_path`], [`local_move`]: the per-item
+//!   functions of the passes (ray queries over the flattened tree, an eye path, a slot's
+//!   direct light, a photon's path, a local move's decisions and corrections), one home in Rust, each the twin of a WGSL function;
 //!   backends run them over their slots.
 //! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
 //!   ([`scene::path`]), and the flattening into buffers; [`textures`]: the colour a
@@ -37,6 +37,7 @@ pub mod local_move;
 pub mod metrics;
 pub mod params;
 pub mod passes;
+pub mod photon_path;
 pub mod qmc;
 pub mod reach;
 pub mod refit;

@@ -21,8 +21,8 @@
 use crate::direct_light::slot_direct;
 use crate::eye_path::{EyePath, EyePathSettings, Watch, camera_segment, trace_eye_path};
 use crate::layout::{
-    DirectLightParams, GpuBounds, GpuCamera, GpuTriangle, HitPoint, LocalMoveParams,
-    direct_accumulate, hit_flags,
+    DirectLightParams, GatherParams, GpuBounds, GpuCamera, GpuTriangle, HitPoint, LocalMoveParams,
+    PhotonPassParams, direct_accumulate, gather_kind, hit_flags, photon_flags,
 };
 use crate::reach::{Aabb, segments_may_meet};
 use crate::rng::{PassKind, StratifiedStream, StreamKey};
@@ -110,6 +110,111 @@ impl LocalMove {
             sample_lights: false,
             ..self.paths
         }
+    }
+}
+
+/// Which pose of a local move a pass of its correction runs in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pose {
+    /// Before the move: its photons carry negative power and wait for pose B's.
+    A,
+    /// After the move: its photons carry positive power and join pose A's.
+    B,
+}
+
+/// One pose's photons of a local move's correction (docs/algorithm.md 3b): the ordinary
+/// photons of `pass`, traced with the same random numbers in both poses, stored only where
+/// their path has crossed a moved object's box (a path that has not is the same in both poses,
+/// and its deposits would cancel), with negative power in pose A and positive in pose B.
+/// Pose A's wait; pose B's join them, and [`CorrectionApply`] folds both into the kept slots at
+/// once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CorrectionPhotons {
+    /// The pose.
+    pub pose: Pose,
+    /// The ordinary pass whose random numbers the correction draws: its seed, pass index,
+    /// photon count, depth, first hit and ray offset count; its other fields are the
+    /// backend's to set. When it is the ordinary pass just traced in pose A, a backend that
+    /// kept that pass's paths may answer pose A from them (`photon_flags::KEEP_PATHS`).
+    pub pass: PhotonPassParams,
+    /// The squared radius each kept slot gathers the correction within at least, or its
+    /// `correction_r2` where wider ([`crate::update::gather::search_r2`]).
+    pub r2_floor: f32,
+    /// Pose B pairs each deposit with pose A's of the same path and order, so that the
+    /// correction's variance counts each path's net deposit ([`crate::update::pairing`]).
+    pub pair_deposits: bool,
+    /// Pose A notes which paths crossed a moved box, and pose B traces only those: exact, as
+    /// a path that crossed none stores nothing in either pose. A backend may leave it out.
+    pub cull_uncrossed: bool,
+}
+
+impl CorrectionPhotons {
+    /// The photon pass that traces them where the photon pass honours local mode's flags
+    /// (the CPU and wgpu backends'): [`photon_flags::CHANGED_ONLY`], pose A recording its
+    /// crossings and deposits, pose B culling, pairing and adding its photons to pose A's
+    /// ([`photon_flags::ADD_TO_MAP`]), for the correction's gather.
+    pub fn flagged_pass(&self) -> PhotonPassParams {
+        let (sign, flags) = match self.pose {
+            Pose::A => (
+                -1.0,
+                flag(self.pair_deposits, photon_flags::RECORD_DEPOSITS)
+                    | flag(self.cull_uncrossed, photon_flags::RECORD_CROSSED),
+            ),
+            Pose::B => (
+                1.0,
+                photon_flags::ADD_TO_MAP
+                    | flag(self.pair_deposits, photon_flags::PAIR_DEPOSITS)
+                    | flag(self.cull_uncrossed, photon_flags::CULL_UNCROSSED),
+            ),
+        };
+        PhotonPassParams {
+            power_scale: sign,
+            flags: photon_flags::CHANGED_ONLY | flags,
+            mask_offset: 0,
+            gather_kind: CORRECTION_GATHER,
+            gather_r2_floor: self.r2_floor,
+            ..self.pass
+        }
+    }
+}
+
+/// `bit` where `on`.
+fn flag(on: bool, bit: u32) -> u32 {
+    if on { bit } else { 0 }
+}
+
+/// The gather kind of a correction's photons: kept slots fold them into their pending sums,
+/// flux only.
+pub const CORRECTION_GATHER: u32 =
+    gather_kind::REGION_POSITIVE | gather_kind::DEFERRED | gather_kind::ADD_FLUX;
+
+/// What folds a local move's correction into the kept slots, once both poses' photons are
+/// traced ([`CorrectionPhotons`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CorrectionApply {
+    /// The render's `alpha`.
+    pub alpha: f32,
+    /// Photons of each pose's pass: each stands for the ordinary photons a slot counted over
+    /// that many.
+    pub photons: u32,
+}
+
+impl CorrectionApply {
+    /// The gathers that fold the correction in where the gather pass honours local mode's
+    /// kinds: the photons of both poses into the pending sums ([`CORRECTION_GATHER`]), then the
+    /// sums into the flux, the history weighed against their variance
+    /// ([`gather_kind::REGION_APPLY`] with [`gather_kind::ADD_FLUX`]).
+    pub fn gathers(&self) -> [GatherParams; 2] {
+        let gather = |kind| GatherParams {
+            alpha: self.alpha,
+            emitted_increment: 0.0,
+            kind,
+            region_photons: self.photons as f32,
+        };
+        [
+            gather(CORRECTION_GATHER),
+            gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX),
+        ]
     }
 }
 

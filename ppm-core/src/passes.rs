@@ -15,7 +15,7 @@ use crate::layout::{
     DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
     ResolveParams, gather_kind,
 };
-use crate::local_move::LocalMove;
+use crate::local_move::{CorrectionApply, CorrectionPhotons, LocalMove};
 use thiserror::Error;
 
 /// Why a pass failed.
@@ -325,12 +325,10 @@ pub trait Backend:
 
 /// A local move's passes (docs/algorithm.md 3b, 3c), in this order: the scene update to
 /// pose A with the movers' boxes, [`LocalMoves::begin_local_move`], the correction's pose-A
-/// photons, the scene update to pose B, [`LocalMoves::local_resets`],
-/// [`LocalMoves::local_direct_change`], pose B's photons and the correction's apply. The
-/// photon passes are the photon pass's, with local mode's flags ([`crate::layout::photon_flags`]:
-/// `CHANGED_ONLY`, `RECORD_CROSSED` / `CULL_UNCROSSED`, `RECORD_DEPOSITS` / `PAIR_DEPOSITS`,
-/// `ADD_TO_MAP`, `KEEP_PATHS`) and gather kinds (`REGION_POSITIVE | DEFERRED | ADD_FLUX`, then
-/// `REGION_APPLY | ADD_FLUX`). A backend that has them returns `Some(self)` from
+/// photons ([`LocalMoves::correction_photons`]), the scene update to pose B,
+/// [`LocalMoves::local_resets`], [`LocalMoves::local_direct_change`], pose B's photons and
+/// [`LocalMoves::apply_correction`]. Each says what it does in its request; a call out of
+/// that order is refused by name. A backend that has them returns `Some(self)` from
 /// [`Backend::local_moves`].
 pub trait LocalMoves: Backend {
     /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3):
@@ -362,6 +360,35 @@ pub trait LocalMoves: Backend {
     /// ([`apply_direct_change`](crate::local_move::apply_direct_change)). Ends the move's own
     /// passes; refused out of that order.
     fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError>;
+
+    /// One pose's photons of the move's correction ([`CorrectionPhotons`]): pose A's after
+    /// [`LocalMoves::begin_local_move`], held for pose B's, which come after the direct-light
+    /// change and join them. No gather reads the photon map between the two; a pose B without
+    /// pose A's photons held is refused.
+    ///
+    /// By default this is the backend's own photon pass with the request's flags
+    /// ([`CorrectionPhotons::flagged_pass`]); a backend that keeps the correction apart from its
+    /// photon map (as the example backend does) overrides it.
+    fn correction_photons(
+        &mut self,
+        request: &CorrectionPhotons,
+    ) -> Result<PhotonStats, BackendError> {
+        self.photon_pass(&request.flagged_pass(), &PhotonSource::Lights)
+    }
+
+    /// Folds both poses' correction photons into every kept slot at once, each within its
+    /// correction disc, into its flux alone (a correction brings no photons to shrink a
+    /// radius with), and weighs the slot's history against the correction's variance
+    /// ([`crate::update::history_kept`]). Ends the move.
+    ///
+    /// By default these are the backend's own gather passes of [`CorrectionApply::gathers`],
+    /// returning the fold's counts.
+    fn apply_correction(&mut self, request: &CorrectionApply) -> Result<GatherStats, BackendError> {
+        let [fold, apply] = request.gathers();
+        let folded = self.gather_pass(&fold)?;
+        self.gather_pass(&apply)?;
+        Ok(folded)
+    }
 }
 
 /// The passes of the thesis's modes (docs/algorithm.md 2), besides the photon pass's other

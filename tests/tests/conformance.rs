@@ -57,6 +57,11 @@ enum Fault {
     /// ([`photon_flags::PAIR_DEPOSITS`] ignored): kept slots give up history a move did not
     /// change.
     IgnoresPairing,
+    /// A local move's resets start no slot over: what a moved object newly covers keeps its
+    /// stale light.
+    ResetsNothing,
+    /// A local move's direct-light change leaves every direct sum as it was.
+    SkipsDirectChange,
 }
 
 struct Broken(CpuBackend, Fault);
@@ -80,7 +85,9 @@ impl Broken {
             Fault::DropsOneInTen { .. }
             | Fault::StillFramesOnly
             | Fault::SkipsEmptiedReset
-            | Fault::SkewsKind(_) => *p,
+            | Fault::SkewsKind(_)
+            | Fault::ResetsNothing
+            | Fault::SkipsDirectChange => *p,
         }
     }
 }
@@ -201,10 +208,25 @@ impl LocalMoves for Broken {
         self.0.begin_local_move(request)
     }
     fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
-        self.0.local_resets()
+        let before = self.0.read_hit_points()?;
+        let stats = self.0.local_resets()?;
+        if let Fault::ResetsNothing = self.1 {
+            self.0.write_hit_points(&before)?;
+            return Ok(LocalMoveStats {
+                reset: 0,
+                kept: before.len() as u64,
+                ..stats
+            });
+        }
+        Ok(stats)
     }
     fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
-        self.0.local_direct_change()
+        let before = self.0.read_hit_points()?;
+        let stats = self.0.local_direct_change()?;
+        if let Fault::SkipsDirectChange = self.1 {
+            self.0.write_hit_points(&before)?;
+        }
+        Ok(stats)
     }
 }
 impl DynamicBackend for Broken {
@@ -414,15 +436,51 @@ fn conformance_fails_a_backend_that_skips_the_reset_of_an_emptied_slot_on_moves(
 /// A backend that ignores [`photon_flags::ADD_TO_MAP`] fails where local mode's deferred
 /// correction is applied.
 fn conformance_fails_a_backend_that_ignores_add_to_map() {
-    let checks = ("moves/local/same-seed", "correction-kinds", "local apply");
+    let checks = (
+        "moves/local/same-seed",
+        "correction-kinds",
+        "local correction, both poses",
+    );
     fails_on_moves_only(Fault::IgnoresAddToMap, checks);
 }
 
 /// A backend that ignores [`photon_flags::PAIR_DEPOSITS`] fails where local mode's correction
 /// is applied: its variance, and so the history a kept slot keeps, is not the contract's.
 fn conformance_fails_a_backend_that_ignores_pairing() {
-    let checks = ("moves/local/same-seed", "correction-kinds", "local apply");
+    let checks = (
+        "moves/local/same-seed",
+        "correction-kinds",
+        "local correction, both poses",
+    );
     fails_on_moves_only(Fault::IgnoresPairing, checks);
+}
+
+/// A backend whose local move skips one of its passes over the slots fails the check that
+/// names that pass, and `moves/local/same-seed`; the other pass's check passes it.
+fn conformance_fails_a_backend_that_skips_a_local_move_pass() {
+    for (fault, fails, passes) in [
+        (Fault::ResetsNothing, "local-resets", None),
+        (
+            Fault::SkipsDirectChange,
+            "local-direct-change",
+            Some("local-resets"),
+        ),
+    ] {
+        let verdict = run_conformance(
+            &mut || Ok(Box::new(Broken(CpuBackend::new(), fault))),
+            &ConformanceOptions::quick(),
+            Tier::Local,
+        );
+        figure!("{verdict}");
+        assert!(!verdict.check(fails).unwrap().passed, "{fails}: {verdict}");
+        assert!(
+            !verdict.check("moves/local/same-seed").unwrap().passed,
+            "{verdict}"
+        );
+        if let Some(passes) = passes {
+            assert!(verdict.check(passes).unwrap().passed, "{passes}: {verdict}");
+        }
+    }
 }
 
 /// A backend without local-move or dynamic passes passes the static tier, fails the others on
@@ -557,6 +615,10 @@ fn main() -> ExitCode {
         .test(
             "conformance_fails_a_backend_that_ignores_pairing",
             conformance_fails_a_backend_that_ignores_pairing,
+        )
+        .test(
+            "conformance_fails_a_backend_that_skips_a_local_move_pass",
+            conformance_fails_a_backend_that_skips_a_local_move_pass,
         )
         .test(
             "a_still_frame_backend_passes_the_static_tier_and_restarts_at_moves",

@@ -9,7 +9,7 @@ use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
     ResolveParams,
 };
-use ppm_core::local_move::LocalMove;
+use ppm_core::local_move::{CorrectionApply, CorrectionPhotons, LocalMove};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::*;
 use ppm_core::scene::Move;
@@ -109,6 +109,15 @@ impl LocalMoves for Counted {
     }
     fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
         self.local().local_direct_change()
+    }
+    fn correction_photons(
+        &mut self,
+        request: &CorrectionPhotons,
+    ) -> Result<PhotonStats, BackendError> {
+        self.local().correction_photons(request)
+    }
+    fn apply_correction(&mut self, request: &CorrectionApply) -> Result<GatherStats, BackendError> {
+        self.local().apply_correction(request)
     }
 }
 

@@ -1,28 +1,32 @@
-//! A backend for still frames, written only against ppm-core's public API: one thread, plain
-//! loops, no acceleration beyond the scene's own BVH. It is the executable specification of
-//! the `static` tier of the contract (README, "Writing a backend"): copy it, then make each
-//! pass fast. Every pass follows docs/algorithm.md section 1, and draws its random numbers
-//! exactly as the passes key them ([`ppm_core::rng`]), so a same-seed render matches the CPU
-//! backend's slot by slot. The per-item work is ppm-core's, traced through the compiled
+//! A backend for still frames and local moves, written only against ppm-core's public API: one
+//! thread, plain loops, no acceleration beyond the scene's own BVH. It is the executable
+//! specification of the `local` tier of the contract (README, "Writing a backend"): copy it,
+//! then make each pass fast. Every pass follows docs/algorithm.md, and draws its random
+//! numbers exactly as the passes key them ([`ppm_core::rng`]), so a same-seed render matches
+//! the CPU backend's slot by slot. The per-item work is ppm-core's, traced through the compiled
 //! pose's flattened tree ([`FlatPose`]), as a GPU backend traces it.
 //!
 //! What each trait asks, and where this file answers it:
 //! - [`SceneUpload`]: keep the compiled scene (its buffers are already GPU-shaped).
-//! - [`EyePass`]: one eye path per slot to its visible point ([`slot_eye_path`]).
+//! - [`EyePass`]: one eye path per slot to its visible point ([`slot_eye_path`]), and the box
+//!   of its vertices ([`extended_bounds`]), which a local move reads.
 //! - [`DirectLight`]: emission seen plus light from the lights, and what the eye path's
 //!   glossy bounces found ([`slot_direct_light`]).
 //! - [`PhotonPass`]: photons from the lights, their deposits in path order
-//!   ([`paths::photon_path`]); a move's other photon sources are refused.
-//! - [`GatherPass`]: each slot's photons within its radius, folded in by
+//!   ([`trace_photon_path`]); the thesis's other photon sources are refused.
+//! - [`GatherPass`]: each slot's photons within its radius ([`found_in_disc`]), folded in by
 //!   [`gather_rule`], which decides every gather kind's policy, for the kind the photon pass
 //!   named ([`check_gather_kind`]).
 //! - [`Resolve`], [`ReadBack`], [`RandomSource`]: the image, the buffers, the generator.
+//! - [`LocalMoves`] (`local.rs`): a local move's passes, each slot by slot through
+//!   [`ppm_core::local_move`], and its correction's photons and apply.
 //!
-//! [`Backend::dynamic`] stays `None`: a move restarts on this backend, saying why.
+//! [`Backend::dynamic`] stays `None`: a move in the thesis's modes restarts on this backend,
+//! saying why.
 
 #![warn(missing_docs)]
 
-pub mod paths;
+mod local;
 
 use glam::Vec3;
 use ppm_core::bsdf;
@@ -30,20 +34,22 @@ use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::direct_light::slot_direct_light;
 use ppm_core::emission::PhotonSource;
-use ppm_core::eye_path::slot_eye_path;
-use ppm_core::geometry::oct_faces;
+use ppm_core::eye_path::{extended_bounds, slot_eye_path};
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, Photon, PhotonPassParams,
-    ResolveParams, eye_flags,
+    ChainLight, DirectLightParams, EyePassParams, GatherParams, GpuMaterial, HitPoint, Photon,
+    PhotonPassParams, ResolveParams, SlotBounds, eye_flags,
 };
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, EyePass, EyeStats, GatherPass, GatherStats,
-    PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload, check_gather_kind,
+    LocalMoves, PhotonPass, PhotonStats, RandomSource, ReadBack, Resolve, SceneUpload,
+    check_gather_kind,
 };
+use ppm_core::photon_path::trace_photon_path;
 use ppm_core::rng::{StreamKey, random_bits};
 use ppm_core::trace::FlatPose;
-use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, search_r2};
+use ppm_core::update::gather::{Found, SlotState, found_in_disc, gather_rule, gathers};
+use ppm_core::update::pairing::Partner;
 use ppm_core::update::radiance;
 
 /// The backend's state: the scene, one hit point per slot, and the current photon map.
@@ -51,6 +57,8 @@ use ppm_core::update::radiance;
 pub struct MinimalBackend {
     scene: Option<CompiledScene>,
     hit_points: Vec<HitPoint>,
+    /// The box of each slot's eye-path vertices, which a local move reads.
+    slot_bounds: Vec<SlotBounds>,
     /// What each slot's eye path found at glossy bounces, for the direct-light pass.
     chain_light: Vec<ChainLight>,
     /// Each slot's deferred sum; a still frame never defers, so it stays zero.
@@ -62,6 +70,10 @@ pub struct MinimalBackend {
     r2_floor: f32,
     /// The initial squared radius of the last fresh eye pass.
     r2_initial: f32,
+    /// The local move in progress, from its first pass to the direct-light change.
+    moving: Option<local::Moving>,
+    /// A local move's correction photons, from pose A's to the apply.
+    correction: Option<local::Correction>,
 }
 
 impl MinimalBackend {
@@ -88,6 +100,8 @@ impl SceneUpload for MinimalBackend {
         self.hit_points.clear();
         self.photons.clear();
         self.map_kind = None;
+        self.moving = None;
+        self.correction = None;
         Ok(())
     }
 }
@@ -106,19 +120,25 @@ impl EyePass for MinimalBackend {
         }
         if !keep {
             self.hit_points = vec![HitPoint::default(); slots];
+            self.slot_bounds = vec![SlotBounds::NOTHING; slots];
             self.chain_light = vec![ChainLight::NONE; slots];
             self.pending = vec![[0.0; 4]; slots];
             self.r2_initial = params.r2_initial;
         }
+        let record = params.flags & eye_flags::RECORD_BOUNDS != 0;
         let mut stats = EyeStats::default();
-        for (slot, (hp, chain)) in self
+        for (slot, ((hp, chain), bounds)) in self
             .hit_points
             .iter_mut()
             .zip(&mut self.chain_light)
+            .zip(&mut self.slot_bounds)
             .enumerate()
         {
             let path = slot_eye_path(params, camera, &FlatPose::new(scene), slot as u32, hp);
             *chain = path.chain.unwrap_or(ChainLight::NONE);
+            if record {
+                *bounds = extended_bounds(*bounds, hp, path.vertices);
+            }
             stats.rays += path.rays;
             stats.hit_points += u64::from(hp.is_valid());
         }
@@ -151,40 +171,7 @@ impl PhotonPass for MinimalBackend {
         source: &PhotonSource<'_>,
     ) -> Result<PhotonStats, BackendError> {
         source.lights_only("minimal")?;
-        let scene = loaded(&self.scene, "photon")?;
-        let mut stats = PhotonStats {
-            emitted: u64::from(params.photon_count),
-            ..Default::default()
-        };
-        let mut photons = Vec::new();
-        // No light, no photon: the pass emits its count and deposits nothing.
-        if !scene.lights.is_empty() {
-            for local in 0..params.photon_count {
-                let key = StreamKey {
-                    seed: params.seed,
-                    kind: source.pass_kind(),
-                    pass_index: params.pass_index,
-                    path: params.first_path + local,
-                };
-                let emission = source.emit(&scene.lights, &scene.materials, &key);
-                if emission.weight > 0.0 {
-                    stats.rays += paths::photon_path(params, scene, &key, &emission, &mut photons);
-                }
-            }
-        }
-        if let Some((index, p)) = photons
-            .iter()
-            .enumerate()
-            .find(|(_, p)| !p.power.iter().chain(&p.position).all(|v| v.is_finite()))
-        {
-            return Err(BackendError::NonFinitePhoton {
-                pass: "photon",
-                index,
-                path: p.path,
-                value: format!("power {:?} at {:?}", p.power, p.position),
-            });
-        }
-        stats.deposited = photons.len() as u64;
+        let (photons, stats) = trace_photons(loaded(&self.scene, "photon")?, params, source)?;
         self.photons = photons;
         self.map_kind = Some(params.gather_kind);
         self.r2_floor = params.gather_r2_floor;
@@ -192,43 +179,115 @@ impl PhotonPass for MinimalBackend {
     }
 }
 
+/// The photons of the pass `params` from `source` in `scene`, path by path
+/// ([`trace_photon_path`]), in path order; refused where one is not finite.
+fn trace_photons(
+    scene: &CompiledScene,
+    params: &PhotonPassParams,
+    source: &PhotonSource<'_>,
+) -> Result<(Vec<Photon>, PhotonStats), BackendError> {
+    let mut stats = PhotonStats {
+        emitted: u64::from(params.photon_count),
+        ..Default::default()
+    };
+    let mut photons = Vec::new();
+    // No light, no photon: the pass emits its count and deposits nothing.
+    if !scene.lights.is_empty() {
+        let pose = FlatPose::new(scene);
+        for local in 0..params.photon_count {
+            let key = StreamKey {
+                seed: params.seed,
+                kind: source.pass_kind(),
+                pass_index: params.pass_index,
+                path: params.first_path + local,
+            };
+            let emission = source.emit(&scene.lights, &scene.materials, &key);
+            if emission.weight > 0.0 {
+                let path = (&key, &emission);
+                let (rays, _) =
+                    trace_photon_path(&pose, params, &scene.movers, path, &mut photons, None);
+                stats.rays += rays;
+            }
+        }
+    }
+    if let Some((index, p)) = photons
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.power.iter().chain(&p.position).all(|v| v.is_finite()))
+    {
+        return Err(BackendError::NonFinitePhoton {
+            pass: "photon",
+            index,
+            path: p.path,
+            value: format!("power {:?} at {:?}", p.power, p.position),
+        });
+    }
+    stats.deposited = photons.len() as u64;
+    Ok((photons, stats))
+}
+
 impl GatherPass for MinimalBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
-        let materials = &loaded(&self.scene, "gather")?.materials;
+        let scene = loaded(&self.scene, "gather")?;
         check_gather_kind(self.map_kind, params)?;
-        let mut stats = GatherStats::default();
-        for (hp, pending) in self.hit_points.iter_mut().zip(&mut self.pending) {
-            let mut found = Found::default();
-            let mut reflectance = [0.0; 3];
-            if ppm_core::update::gather::gathers(hp.flags, params.kind) {
-                // Every photon, one by one, within the slot's disc (or a wider disc under the
-                // map's floor, whose photons then stand for their density over the slot's own).
-                let r2 = search_r2(hp, self.r2_floor);
-                for p in &self.photons {
-                    let d = [0, 1, 2].map(|c| p.position[c] - hp.position[c]);
-                    let inside = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r2;
-                    if inside && oct_faces(p.normal_oct, hp.normal.into()) {
-                        found.count += 1.0;
-                        found.weight += 1.0;
-                        found.flux = [0, 1, 2].map(|c| found.flux[c] + p.power[c]);
-                    }
-                }
-                let shrink = disc_shrink(hp.r2, r2);
-                found.flux = found.flux.map(|f| f * shrink);
-                found.weight *= shrink;
-                stats.hit_points_reached += u64::from(found.count > 0.0);
-                stats.photons_gathered += found.count as u64;
-                let f = bsdf::visible_point_f(&materials[hp.material as usize]);
-                reflectance = (Vec3::from(hp.throughput) * f).into();
-            }
-            let before = SlotState::of(hp, *pending);
-            let after = gather_rule(params, self.r2_initial, reflectance, before, &found);
-            after.store(hp);
-            *pending = after.pending;
-        }
+        let map = Map {
+            photons: &self.photons,
+            partners: &[],
+            r2_floor: self.r2_floor,
+        };
+        let stats = fold(
+            params,
+            (&mut self.hit_points, &mut self.pending),
+            (&scene.materials, self.r2_initial),
+            &map,
+        );
         check_hit_points("gather", &self.hit_points)?;
         Ok(stats)
     }
+}
+
+/// Photons a gather folds in: each with its pose-A partner where a correction paired them,
+/// and the floor of the disc a slot searches at least.
+struct Map<'a> {
+    photons: &'a [Photon],
+    /// Empty, or one per photon.
+    partners: &'a [Option<Partner>],
+    r2_floor: f32,
+}
+
+/// One gather of `params.kind` over every slot: what each finds in its disc, every photon
+/// tested ([`found_in_disc`]), folded in by [`gather_rule`], which decides every kind's
+/// policy.
+fn fold(
+    params: &GatherParams,
+    (hit_points, pending): (&mut [HitPoint], &mut [[f32; 4]]),
+    (materials, r2_initial): (&[GpuMaterial], f32),
+    map: &Map,
+) -> GatherStats {
+    let mut stats = GatherStats::default();
+    let weights = vec![1.0; map.photons.len()];
+    let none = vec![None; map.photons.len()];
+    let partners = if map.partners.is_empty() {
+        &none[..]
+    } else {
+        map.partners
+    };
+    for (hp, pending) in hit_points.iter_mut().zip(pending.iter_mut()) {
+        let mut found = Found::default();
+        let mut reflectance = [0.0; 3];
+        if gathers(hp.flags, params.kind) {
+            found = found_in_disc(hp, (map.photons, &weights, partners), map.r2_floor);
+            stats.hit_points_reached += u64::from(found.count > 0.0);
+            stats.photons_gathered += found.count as u64;
+            let f = bsdf::visible_point_f(&materials[hp.material as usize]);
+            reflectance = (Vec3::from(hp.throughput) * f).into();
+        }
+        let before = SlotState::of(hp, *pending);
+        let after = gather_rule(params, r2_initial, reflectance, before, &found);
+        after.store(hp);
+        *pending = after.pending;
+    }
+    stats
 }
 
 impl Resolve for MinimalBackend {
@@ -295,5 +354,9 @@ impl RandomSource for MinimalBackend {
 impl Backend for MinimalBackend {
     fn name(&self) -> &str {
         "minimal"
+    }
+
+    fn local_moves(&mut self) -> Option<&mut dyn LocalMoves> {
+        Some(self)
     }
 }

@@ -10,18 +10,17 @@ use glam::Vec3;
 use ppm_core::bsdf;
 use ppm_core::compile::{CompiledScene, compile_scene};
 use ppm_core::emission::{PhotonSource, ordinary_emission};
-use ppm_core::geometry::oct_faces;
 use ppm_core::layout::{
-    EmissionRegion, GatherParams, GuidedEmission, HitPoint, Photon, PhotonPassParams, RecordedPath,
-    gather_kind, hit_flags, photon_flags, region_mode,
+    EmissionRegion, GatherParams, GpuBounds, GuidedEmission, HitPoint, Photon, PhotonPassParams,
+    RecordedPath, gather_kind, hit_flags, region_mode,
 };
+use ppm_core::local_move::{CORRECTION_GATHER, CorrectionApply, CorrectionPhotons, Pose};
 use ppm_core::params::RenderParams;
 use ppm_core::passes::{Backend, BackendError};
 use ppm_core::region::emitting_region;
 use ppm_core::rng::{PassKind, StreamKey};
-use ppm_core::update::gather::{Found, SlotState, disc_shrink, gather_rule, gathers, search_r2};
-use ppm_core::update::luminance;
-use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner, variance_term};
+use ppm_core::update::gather::{Found, SlotState, found_in_disc, gather_rule, gathers};
+use ppm_core::update::pairing::{Partner, pose_a_partners};
 
 /// Where a step's photons start.
 #[derive(Clone, Copy)]
@@ -46,16 +45,17 @@ struct Step {
     flow: Flow,
 }
 
-/// Whether a step's photons are gathered alone, held for the next step, or added to the
-/// held ones ([`photon_flags::ADD_TO_MAP`]) and gathered with them.
+/// Whether a step's photons are gathered alone, or are a local move's correction in one of
+/// its poses ([`LocalMoves::correction_photons`](ppm_core::passes::LocalMoves::correction_photons)).
 #[derive(Clone, Copy, PartialEq)]
 enum Flow {
     Alone,
-    /// Pose A of local mode's correction: held, its deposits recorded for pose B to pair with
-    /// ([`photon_flags::RECORD_DEPOSITS`]).
+    /// Pose A of local mode's correction: held for pose B, its deposits recorded for pose B
+    /// to pair with.
     Held,
     /// Pose B: the scene's move made, the held pass's paths traced again, their deposits
-    /// paired with pose A's ([`photon_flags::PAIR_DEPOSITS`]) and added to them.
+    /// paired with pose A's and added to them; both gathered at once and applied
+    /// ([`LocalMoves::apply_correction`](ppm_core::passes::LocalMoves::apply_correction)).
     Added,
 }
 
@@ -94,11 +94,10 @@ const THESIS_STEPS: [Step; 9] = {
 };
 
 /// Local mode's flux-only correction within a floor disc: pose A's photons held, pose B's (the
-/// same paths after the scene's move) paired with pose A's and added to them, gathered once,
-/// and applied.
-const LOCAL_STEPS: [Step; 3] = {
-    use gather_kind::*;
-    let correction = REGION_POSITIVE | DEFERRED | ADD_FLUX;
+/// same paths after the scene's move) paired with pose A's and added to them, gathered once
+/// ([`CORRECTION_GATHER`]) and applied ([`APPLY_CORRECTION`]).
+const LOCAL_STEPS: [Step; 2] = {
+    let correction = CORRECTION_GATHER;
     [
         Step {
             floor_radii: 3.0,
@@ -115,9 +114,11 @@ const LOCAL_STEPS: [Step; 3] = {
                 1.0,
             )
         },
-        step("local apply", REGION_APPLY | ADD_FLUX, Source::Lights, 0.0),
     ]
 };
+
+/// The apply that follows the correction's gather.
+const APPLY_CORRECTION: u32 = gather_kind::REGION_APPLY | gather_kind::ADD_FLUX;
 
 /// `gather-formulas` (static tier): ordinary photons through the backend's own passes; then a
 /// gather of another kind than the photon pass named must be refused.
@@ -196,8 +197,21 @@ fn check_steps(
 struct Outcome {
     name: &'static str,
     kind: u32,
+    /// The kind applied after it, if one was (local mode's correction).
+    then: Option<u32>,
     checked: usize,
     off: usize,
+}
+
+impl Outcome {
+    /// `kind K (name)`, and the kind applied after it.
+    fn kinds(&self) -> String {
+        let first = format!("kind {:#x} ({})", self.kind, self.name);
+        match self.then {
+            Some(then) => format!("{first} then kind {then:#x} (apply)"),
+            None => first,
+        }
+    }
 }
 
 impl Outcome {
@@ -206,8 +220,10 @@ impl Outcome {
     fn verdict(&self) -> Result<(), String> {
         match self.off * 1000 > self.checked {
             true => Err(format!(
-                "kind {:#x} ({}): {} of {} slots differ from the gather rule applied by brute force",
-                self.kind, self.name, self.off, self.checked
+                "{}: {} of {} slots differ from the gather rule applied by brute force",
+                self.kinds(),
+                self.off,
+                self.checked
             )),
             false => Ok(()),
         }
@@ -218,9 +234,8 @@ impl std::fmt::Display for Outcome {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "kind {:#x} ({}), {} of {} slots match",
-            self.kind,
-            self.name,
+            "{}, {} of {} slots match",
+            self.kinds(),
             self.checked - self.off,
             self.checked
         )
@@ -251,8 +266,20 @@ impl Bench {
         let mut params = params_for(&scene, o);
         params.width = params.width.min(32);
         params.height = params.height.min(32);
-        let compiled = compile_scene(&scene, params.width, params.height);
-        let moved = compile_scene(&scene.at_frame(1), params.width, params.height);
+        let mut compiled = compile_scene(&scene, params.width, params.height);
+        let mut moved = compile_scene(&scene.at_frame(1), params.width, params.height);
+        // A mover's box around the whole scene: every path of local mode's correction crosses
+        // it as it leaves the light, so the correction stores every deposit for the check.
+        let (lo, hi) = compiled
+            .object_bounds
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), [a, b]| {
+                (lo.min(*a), hi.max(*b))
+            });
+        let margin = Vec3::splat(0.01 * compiled.extent);
+        let everything = vec![GpuBounds::new(lo - margin, hi + margin)];
+        compiled.movers.clone_from(&everything);
+        moved.movers = everything;
         let mut backend = make().map_err(err)?;
         backend.load_scene(&compiled).map_err(err)?;
         backend
@@ -326,8 +353,8 @@ impl Bench {
     fn run(&mut self, step: &Step) -> Result<Option<Outcome>, String> {
         let before = self.backend.read_hit_points().map_err(err)?;
         let n = self.params.photons_per_pass;
-        let apply = step.kind & gather_kind::KIND_MASK == gather_kind::REGION_APPLY;
-        let (mut photons, mut weights, r2_floor) = match apply {
+        let is_apply = step.kind & gather_kind::KIND_MASK == gather_kind::REGION_APPLY;
+        let (mut photons, mut weights, r2_floor) = match is_apply {
             true => (Vec::new(), Vec::new(), 0.0),
             false => self.photon_pass(step, n)?,
         };
@@ -356,29 +383,51 @@ impl Bench {
             kind: step.kind,
             region_photons: n as f32,
         };
-        self.backend.gather_pass(&gather).map_err(err)?;
+        let then = (step.flow == Flow::Added).then_some(APPLY_CORRECTION);
+        match then {
+            Some(_) => {
+                let local = self.backend.local_moves().ok_or("no local-move passes")?;
+                let apply = CorrectionApply {
+                    alpha: self.params.alpha,
+                    photons: n,
+                };
+                local.apply_correction(&apply).map_err(err)?;
+            }
+            None => {
+                self.backend.gather_pass(&gather).map_err(err)?;
+            }
+        }
         let after = self.backend.read_hit_points().map_err(err)?;
         let r2_initial = self.params.initial_radius * self.params.initial_radius;
+        let apply = GatherParams {
+            kind: APPLY_CORRECTION,
+            ..gather
+        };
         let expected: Vec<SlotState> = before
             .iter()
             .zip(&self.pending)
             .map(|(hp, pending)| {
-                let gathering = !apply && gathers(hp.flags, step.kind);
+                let gathering = !is_apply && gathers(hp.flags, step.kind);
                 let (reflectance, found) = match gathering {
                     true => (
                         self.reflectance(hp),
-                        found_by_brute_force(hp, (&photons, &weights, &partners), r2_floor),
+                        found_in_disc(hp, (&photons, &weights, &partners), r2_floor),
                     ),
                     false => (Vec3::ZERO, Found::default()),
                 };
                 let state = SlotState::of(hp, *pending);
-                gather_rule(&gather, r2_initial, reflectance.into(), state, &found)
+                let state = gather_rule(&gather, r2_initial, reflectance.into(), state, &found);
+                match then {
+                    Some(_) => gather_rule(&apply, r2_initial, [0.0; 3], state, &Found::default()),
+                    None => state,
+                }
             })
             .collect();
         self.pending = expected.iter().map(|s| s.pending).collect();
         Ok(Some(Outcome {
             name: step.name,
             kind: step.kind,
+            then,
             checked: after.len(),
             off: differing(&expected, &after),
         }))
@@ -390,19 +439,12 @@ impl Bench {
     /// own photons, would follow a mis-signed pass.
     fn photon_pass(&mut self, step: &Step, n: u32) -> Result<(Vec<Photon>, Vec<f32>, f32), String> {
         let r2_floor = (step.floor_radii * self.params.initial_radius).powi(2);
-        let (flags, pass) = match (step.flow, &self.held) {
-            (Flow::Added, Some((_, _, pass))) => {
-                let local = self.backend.local_moves().ok_or("no local-move passes")?;
-                local.update_scene(&self.moved).map_err(err)?;
-                let flags = photon_flags::ADD_TO_MAP | photon_flags::PAIR_DEPOSITS;
-                (flags, *pass)
-            }
-            (Flow::Held, _) => (photon_flags::RECORD_DEPOSITS, self.next_pass),
-            _ => (0, self.next_pass),
+        let pass = match (step.flow, &self.held) {
+            (Flow::Added, Some((_, _, pass))) => *pass,
+            _ => self.next_pass,
         };
         let params = PhotonPassParams {
             gather_r2_floor: r2_floor,
-            flags,
             ..pass_params::photon_pass(
                 &self.params,
                 self.compiled.extent,
@@ -414,7 +456,30 @@ impl Bench {
         };
         self.next_pass += 1;
         let source = photon_source(&self.regions, &self.paths, step.source);
-        self.backend.photon_pass(&params, &source).map_err(err)?;
+        let pose = match step.flow {
+            Flow::Alone => None,
+            Flow::Held => Some(Pose::A),
+            Flow::Added => Some(Pose::B),
+        };
+        match pose {
+            None => {
+                self.backend.photon_pass(&params, &source).map_err(err)?;
+            }
+            Some(pose) => {
+                let local = self.backend.local_moves().ok_or("no local-move passes")?;
+                if pose == Pose::B {
+                    local.update_scene(&self.moved).map_err(err)?;
+                }
+                let request = CorrectionPhotons {
+                    pose,
+                    pass: params,
+                    r2_floor,
+                    pair_deposits: true,
+                    cull_uncrossed: false,
+                };
+                local.correction_photons(&request).map_err(err)?;
+            }
+        }
         let photons = self.backend.read_photons().map_err(err)?;
         if let Some(ph) = photons
             .iter()
@@ -474,59 +539,6 @@ fn photon_source<'a>(
 
 fn sign(i: u32, bit: u32) -> f32 {
     if i & bit == 0 { -1.0 } else { 1.0 }
-}
-
-/// What `hp` finds among `photons` within its radius, or the wider disc a floor gives it
-/// ([`search_r2`]) scaled to its own ([`Found`]).
-fn found_by_brute_force(
-    hp: &HitPoint,
-    (photons, weights, partners): (&[Photon], &[f32], &[Option<Partner>]),
-    r2_floor: f32,
-) -> Found {
-    let r2 = search_r2(hp, r2_floor);
-    let (x, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
-    let (mut count, mut weight, mut flux, mut power_sq) = (0u32, 0.0, Vec3::ZERO, 0.0);
-    let inside = |p: Vec3| (p - x).length_squared() < r2;
-    for ((ph, w), partner) in photons.iter().zip(weights).zip(partners) {
-        if inside(Vec3::from(ph.position)) && oct_faces(ph.normal_oct, normal) {
-            count += 1;
-            weight += w;
-            flux += Vec3::from(ph.power);
-            let both = partner.filter(|a| inside(a.position)).map(|a| a.luminance);
-            let cancels = partner.is_some_and(|a| a.cancels(ph));
-            power_sq += variance_term(luminance(ph.power), both, cancels);
-        }
-    }
-    let shrink = disc_shrink(hp.r2, r2);
-    Found {
-        flux: (flux * shrink).into(),
-        count: count as f32,
-        weight: weight * shrink,
-        power_sq: power_sq * shrink * shrink,
-        _pad: [0.0; 2],
-    }
-}
-
-/// Each of pose B's deposits `pose_b` paired with the deposit its path stored in the same
-/// order in pose A, `pose_a` (both in path order, as read back), where they pair.
-fn pose_a_partners(pose_a: &[Photon], pose_b: &[Photon]) -> Vec<Option<Partner>> {
-    let mut nth = 0;
-    pose_b
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            nth = match i > 0 && pose_b[i - 1].path == b.path {
-                true => nth + 1,
-                false => 0,
-            };
-            let first = pose_a.partition_point(|a| a.path < b.path);
-            let candidate = pose_a
-                .get(first + nth)
-                .filter(|a| a.path == b.path && nth < PAIRED_DEPOSITS)
-                .map(Partner::of);
-            partner(b, candidate.as_ref())
-        })
-        .collect()
 }
 
 /// Slots whose statistics differ from `expected` beyond f32 summation order: relative 1e-4 of

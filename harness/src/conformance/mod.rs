@@ -7,20 +7,20 @@ use crate::diff::{
     OTHER_SEED_OFFSET, Recording, independent, record, record_schedule, runs_of, runs_of_schedule,
     same_seed,
 };
-use crate::driver::{Budget, Schedule, pass_params, run};
+use crate::driver::{Budget, Renderer, Schedule, local_move_request, pass_params, run};
 use backend_cpu::CpuBackend;
 use glam::Vec3;
-use ppm_core::compile::compile_scene;
+use ppm_core::compile::{compile_scene, mover_boxes};
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{
     EyePassParams, HitPoint, NO_MATERIAL, PhotonPassParams, first_hit, gather_kind, hit_flags,
 };
 use ppm_core::params::{Estimator, MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::{Backend, BackendError};
+use ppm_core::passes::{Backend, BackendError, LocalMoveStats};
 use ppm_core::qmc;
 use ppm_core::rng::TEST_VECTORS;
-use ppm_core::scene::Scene;
 use ppm_core::scene::path::{After, MovePath};
+use ppm_core::scene::{Move, Scene};
 use std::fmt;
 
 mod gathers;
@@ -154,6 +154,12 @@ pub const CHECKS: &[(&str, Tier, Check)] = &[
     ("agreement/independent", Tier::Static, check_independent),
     ("stress-family", Tier::Static, check_still_stress),
     ("local-passes", Tier::Local, check_local_passes),
+    ("local-resets", Tier::Local, check_local_resets),
+    (
+        "local-direct-change",
+        Tier::Local,
+        check_local_direct_change,
+    ),
     ("correction-kinds", Tier::Local, gathers::check_local_kinds),
     (
         "moves/local/same-seed",
@@ -587,6 +593,111 @@ fn stress_family(make: BackendFactory, moving: bool) -> Result<String, String> {
     } else {
         Err(failed.join("; "))
     }
+}
+
+/// A local move's resets alone, same seed: after a few iterations of every built-in scene that
+/// moves (paths straight to their visible points, off mirrors, through glass), the move's
+/// first passes (`begin_local_move` in pose A, `local_resets` in pose B) start over the slots
+/// the CPU backend's do, slot by slot (a probe ray that rounding sends elsewhere may part a
+/// few: at most one in a thousand), and count as many.
+fn check_local_resets(make: BackendFactory, o: &ConformanceOptions) -> Result<String, String> {
+    local_pass_agreement(make, o, false)
+}
+
+/// A local move's direct-light change, same seed: after the resets of
+/// [`check_local_resets`], `local_direct_change` leaves each kept slot's direct sum and count
+/// as the CPU backend's does (relative 1e-3; at most one slot in a thousand apart).
+fn check_local_direct_change(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+) -> Result<String, String> {
+    local_pass_agreement(make, o, true)
+}
+
+/// The slots after a local move's passes on the backend and on the CPU backend, on every
+/// built-in scene that moves: the resets (their `UPDATED` flags), and with `direct` the
+/// direct sums and counts after the direct-light change.
+fn local_pass_agreement(
+    make: BackendFactory,
+    o: &ConformanceOptions,
+    direct: bool,
+) -> Result<String, String> {
+    let mut details = Vec::new();
+    for builtin in scenes::BUILTIN {
+        let scene = builtin.load().map_err(err)?;
+        let Some(&step) = scene.moves.first() else {
+            continue;
+        };
+        let p = params_for(&scene, o);
+        let run = |backend: &mut dyn Backend| {
+            local_passes(backend, &scene, step, &p, direct).map_err(err)
+        };
+        let (reference, cpu) = run(&mut CpuBackend::new())?;
+        let (slots, stats) = run(make().map_err(err)?.as_mut())?;
+        let apart = reference
+            .iter()
+            .zip(&slots)
+            .filter(|(a, b)| match direct {
+                false => (a.flags ^ b.flags) & hit_flags::UPDATED != 0,
+                true => {
+                    let close = |x: f32, y: f32| (x - y).abs() <= 1e-3 * x.abs().max(y.abs());
+                    a.iterations != b.iterations || (0..3).any(|c| !close(a.direct[c], b.direct[c]))
+                }
+            })
+            .count();
+        let line = format!(
+            "{}: {} reset, {} corrected ({} and {} on the CPU), {apart} of {} slots apart",
+            builtin.name,
+            stats.reset,
+            stats.direct_corrected,
+            cpu.reset,
+            cpu.direct_corrected,
+            slots.len()
+        );
+        if apart * 1000 > slots.len() || slots.len() != reference.len() {
+            return Err(line);
+        }
+        details.push(line);
+    }
+    Ok(details.join(", "))
+}
+
+/// `backend`'s slots after `o.passes`-like iterations of `scene` and the passes of a local
+/// move of `step` (its resets, and with `direct` its direct-light change), and the resets'
+/// counters.
+fn local_passes(
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    step: Move,
+    p: &RenderParams,
+    direct: bool,
+) -> Result<(Vec<HitPoint>, LocalMoveStats), BackendError> {
+    let mut render = Renderer::start(backend, scene.clone(), p, &MoveParams::default())?;
+    for _ in 0..p.passes {
+        render.iteration()?;
+    }
+    let mut next = scene.clone();
+    next.apply(&step);
+    let (mut a, mut b) = (
+        compile_scene(scene, p.width, p.height),
+        compile_scene(&next, p.width, p.height),
+    );
+    let movers = mover_boxes(scene, &next, &[step.object], a.extent);
+    (a.movers, b.movers) = (movers.clone(), movers);
+    let pose = (a.extent, &a.lights[..]);
+    let request = local_move_request((scene, &next), &[step.object], p, pose, (1.0, 1.0, 8));
+    let backend = render.backend();
+    let local = backend.local_moves().ok_or_else(|| {
+        BackendError::Unsupported("no local-move passes (Backend::local_moves is None)".into())
+    })?;
+    local.update_scene(&a)?;
+    local.begin_local_move(&request)?;
+    local.update_scene(&b)?;
+    let stats = local.local_resets()?;
+    if direct {
+        local.local_direct_change()?;
+    }
+    Ok((backend.read_hit_points()?, stats))
 }
 
 /// The backend gives its local-move passes ([`Backend::local_moves`]); without them every

@@ -51,17 +51,21 @@
 //!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
-use super::moves::{Compensation, MoveReport};
+use super::moves::MoveReport;
 use super::{Renderer, local, pass_params};
 use glam::Vec3;
 use ppm_core::compile::{mover_boxes, object_group};
 use ppm_core::eye_path::EyePathSettings;
+use ppm_core::layout::GpuLight;
 use ppm_core::layout::gather_kind;
-use ppm_core::local_move::{LocalMove, direct_samples_for};
-use ppm_core::params::Estimator;
-use ppm_core::passes::BackendError;
+use ppm_core::local_move::{
+    CorrectionApply, CorrectionPhotons, LocalMove, Pose, direct_samples_for,
+};
+use ppm_core::params::{Estimator, RenderParams};
+use ppm_core::passes::{BackendError, PhotonStats};
 use ppm_core::reach::Aabb;
 use ppm_core::refit::recompile_moved;
+use ppm_core::rng::DIFFERENCE_PASS_BASE;
 use ppm_core::scene::{MaterialKind, Scene};
 use std::time::Instant;
 
@@ -79,20 +83,20 @@ const LIGHT_BOXES: usize = 16;
 struct CorrectionSize {
     /// Whole passes' worth of photons: the pass counter advances by as many.
     passes: u32,
-    /// The difference passes that correct the indirect light.
-    photons: Compensation,
+    /// The photons of the one pass per pose that corrects the indirect light.
+    photons: u32,
     /// Their squared floor radius.
     r2_floor: f32,
     /// The widest a kept slot's disc grows far from the move, in floor radii
-    /// ([`correction_r2`]).
+    /// ([`correction_r2`](ppm_core::local_move::correction_r2)).
     widest: f32,
-    /// Paired direct-light samples per corrected slot ([`direct_changes`]).
+    /// Paired direct-light samples per corrected slot.
     direct_samples: u32,
 }
 
 impl Renderer<'_> {
     /// Why local mode cannot keep anything for a move of `changed` objects, if it cannot.
-    pub(super) fn local_plan(&self, changed: &[usize]) -> Result<Compensation, String> {
+    pub(super) fn local_plan(&self, changed: &[usize]) -> Result<(), String> {
         if self.params.estimator != Estimator::Sppm {
             return Err("local mode keeps sppm slots; ppm restarts".to_owned());
         }
@@ -110,7 +114,7 @@ impl Renderer<'_> {
                 self.scene.objects[light].name
             ));
         }
-        Ok(self.local_correction().photons)
+        Ok(())
     }
 
     /// Local mode's correction of a move. Its size follows the history the move keeps
@@ -131,10 +135,7 @@ impl Renderer<'_> {
         CorrectionSize {
             // Pass indices advance by whole passes, so no two moves share random numbers.
             passes: share.ceil() as u32,
-            photons: Compensation::Difference {
-                correction_photons: Some(photons),
-                r2_floor,
-            },
+            photons,
             r2_floor,
             widest: CORRECTION_WIDEST.min(share),
             direct_samples: direct_samples_for(share),
@@ -170,7 +171,22 @@ impl Renderer<'_> {
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
         local(self.backend)?.update_scene(&self.compiled)?;
         local(self.backend)?.begin_local_move(&request)?;
-        self.compensate(&size.photons, gather_kind::REGION_NEGATIVE)?;
+        // One pass per pose; a drag step's draws the numbers of the ordinary pass just traced.
+        let pass_index = self
+            .reused_pass(size.photons, 1)
+            .unwrap_or(DIFFERENCE_PASS_BASE + self.counters.difference_pass);
+        let correction = |pose| CorrectionPhotons {
+            pose,
+            pass: self.photon_params(pass_index, size.photons, 1.0, gather_kind::ORDINARY),
+            r2_floor: size.r2_floor,
+            pair_deposits: self.moves.pair_deposits,
+            cull_uncrossed: self.moves.cull_uncrossed,
+        };
+        let (before, after) = (correction(Pose::A), correction(Pose::B));
+        if size.photons > 0 {
+            let stats = self.correction_photons(&before)?;
+            self.counts.compensation.add(&stats);
+        }
         local(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
@@ -180,14 +196,22 @@ impl Renderer<'_> {
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
-        let positive = self.compensate(&size.photons, gather_kind::REGION_POSITIVE)?;
-        if positive.emitted > 0 {
-            report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
+        if size.photons > 0 {
+            let positive = self.correction_photons(&after)?;
+            self.counts.region.add(&positive);
+            if positive.emitted > 0 {
+                report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
+            }
+            let t = Instant::now();
+            let apply = CorrectionApply {
+                alpha: self.params.alpha,
+                photons: size.photons,
+            };
+            let stats = local(self.backend)?.apply_correction(&apply)?;
+            self.report.times.gather += t.elapsed().as_secs_f64();
+            self.report.photons_gathered += stats.photons_gathered;
         }
         self.counters.difference_pass += size.passes;
-        if size.passes > 0 {
-            self.gather(gather_kind::REGION_APPLY | gather_kind::ADD_FLUX, 0.0, 0.0)?;
-        }
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;
         let emitted = self.counts.compensation.emitted + self.counts.region.emitted;
         if emitted > emitted_before && per_photon > 0.0 {
@@ -202,44 +226,71 @@ impl Renderer<'_> {
         Ok(report)
     }
 
+    /// One pose's photons of a local move's correction, counted as photon passes are.
+    fn correction_photons(
+        &mut self,
+        request: &CorrectionPhotons,
+    ) -> Result<PhotonStats, BackendError> {
+        let t = Instant::now();
+        let stats = local(self.backend)?.correction_photons(request)?;
+        self.count_photons(&stats, t);
+        Ok(stats)
+    }
+
     /// The move of the `changed` objects to their pose in `next` as the backend's passes see
     /// it, sized as `size` says.
     fn local_move(&self, next: &Scene, changed: &[usize], size: &CorrectionSize) -> LocalMove {
-        LocalMove {
-            objects: changed.iter().map(|&o| o as u32).collect(),
-            groups: changed.iter().fold(0, |g, &o| g | object_group(o)),
-            before: changed.iter().map(|&o| aabb(&self.scene, o)).collect(),
-            after: changed.iter().map(|&o| aabb(next, o)).collect(),
-            lights: self.light_boxes(),
-            seed: self.params.seed,
-            paths: EyePathSettings {
-                max_depth: self.params.max_eye_depth,
-                ray_epsilon: pass_params::ray_epsilon(&self.params, self.extent),
-                sample_lights: false,
-            },
-            r2_initial: self.params.initial_radius * self.params.initial_radius,
-            r2_floor: size.r2_floor,
-            widest: size.widest,
-            direct_samples: size.direct_samples,
-        }
+        let correction = (size.r2_floor, size.widest, size.direct_samples);
+        let pose = (self.extent, &self.lights[..]);
+        local_move_request((&self.scene, next), changed, &self.params, pose, correction)
     }
+}
 
-    /// The boxes the direct-light test reaches for: each light's (a box inside another
-    /// counted once: a quad's two triangles share theirs), or one around all of them.
-    fn light_boxes(&self) -> Vec<Aabb> {
-        let mut boxes: Vec<Aabb> = Vec::new();
-        for l in &self.lights {
-            let v0 = Vec3::from(l.v0);
-            let b = Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)]);
-            if !boxes.iter().any(|kept| kept.contains(&b)) {
-                boxes.push(b);
-            }
-        }
-        if boxes.len() <= LIGHT_BOXES {
-            return boxes;
-        }
-        vec![boxes.iter().skip(1).fold(boxes[0], |a, b| a.union(b))]
+/// The local move of the `changed` objects from `before` to `after`, rendered with `params`
+/// in a pose of extent `extent` lit by `lights`, its correction's floor, widest disc and
+/// direct-light pairs `correction`: what every pass of it needs
+/// ([`LocalMoves::begin_local_move`](ppm_core::passes::LocalMoves::begin_local_move)).
+pub fn local_move_request(
+    (before, after): (&Scene, &Scene),
+    changed: &[usize],
+    params: &RenderParams,
+    (extent, lights): (f32, &[GpuLight]),
+    (r2_floor, widest, direct_samples): (f32, f32, u32),
+) -> LocalMove {
+    LocalMove {
+        objects: changed.iter().map(|&o| o as u32).collect(),
+        groups: changed.iter().fold(0, |g, &o| g | object_group(o)),
+        before: changed.iter().map(|&o| aabb(before, o)).collect(),
+        after: changed.iter().map(|&o| aabb(after, o)).collect(),
+        lights: light_boxes(lights),
+        seed: params.seed,
+        paths: EyePathSettings {
+            max_depth: params.max_eye_depth,
+            ray_epsilon: pass_params::ray_epsilon(params, extent),
+            sample_lights: false,
+        },
+        r2_initial: params.initial_radius * params.initial_radius,
+        r2_floor,
+        widest,
+        direct_samples,
     }
+}
+
+/// The boxes the direct-light test reaches for: each light's (a box inside another counted
+/// once: a quad's two triangles share theirs), or one around all of them.
+fn light_boxes(lights: &[GpuLight]) -> Vec<Aabb> {
+    let mut boxes: Vec<Aabb> = Vec::new();
+    for l in lights {
+        let v0 = Vec3::from(l.v0);
+        let b = Aabb::of_triangle([v0, v0 + Vec3::from(l.e1), v0 + Vec3::from(l.e2)]);
+        if !boxes.iter().any(|kept| kept.contains(&b)) {
+            boxes.push(b);
+        }
+    }
+    if boxes.len() <= LIGHT_BOXES {
+        return boxes;
+    }
+    vec![boxes.iter().skip(1).fold(boxes[0], |a, b| a.union(b))]
 }
 
 /// Object `o`'s box as posed in `scene`.

@@ -17,6 +17,7 @@ pub mod moves;
 pub mod pass_params;
 pub mod schedule;
 
+pub use local::local_move_request;
 pub use moves::{MoveReport, PhotonCounts};
 pub use schedule::{
     Budget, Observer, ObserverResult, Outcome, Progress, Resume, RunError, Schedule, Step,

@@ -11,10 +11,7 @@
 use super::{Renderer, dynamic, local};
 use glam::Vec3;
 use ppm_core::emission::{PhotonSource, ordinary_emission};
-use ppm_core::layout::{
-    EmissionRegion, GuidedEmission, PhotonPassParams, RecordedPath, gather_kind, photon_flags,
-    region_mode,
-};
+use ppm_core::layout::{EmissionRegion, GuidedEmission, RecordedPath, gather_kind, region_mode};
 use ppm_core::params::{Estimator, MoveMode};
 use ppm_core::passes::{BackendError, PhotonStats};
 use ppm_core::refit::recompile_moved;
@@ -84,25 +81,17 @@ pub struct MoveReport {
     pub seconds: f64,
 }
 
-/// What compensates a move: region photons through the emitting rectangle (thesis and area
-/// modes) or difference photons over the whole emission (difference and local modes).
+/// What compensates a move in the thesis's modes: region photons through the emitting
+/// rectangle (thesis and area modes) or difference photons over the whole emission (difference
+/// mode). Local mode's correction is its own passes' ([`super::local`]).
 pub(super) enum Compensation {
     Region {
         region: EmissionRegion,
         /// Thesis mode's raw counts applied pass by pass; otherwise weighted and deferred.
         raw: bool,
     },
-    Difference {
-        /// Local mode: the photons of its one correction pass per pose, which stores only
-        /// deposits of paths that crossed a mover's box. `None`: difference mode's
-        /// `difference_passes` passes of ordinary photons, storing every deposit.
-        correction_photons: Option<u32>,
-        /// Squared radius the passes are gathered within at least (local mode:
-        /// [`MoveParams::correction_for`]; 0: each slot's own).
-        ///
-        /// [`MoveParams::correction_for`]: ppm_core::params::MoveParams::correction_for
-        r2_floor: f32,
-    },
+    /// Difference mode's `difference_passes` passes of ordinary photons in each pose.
+    Difference,
 }
 
 impl Renderer<'_> {
@@ -179,8 +168,10 @@ impl Renderer<'_> {
                 "backend '{}' has local moves but not the passes of the thesis's modes",
                 self.backend.name()
             ))
+        } else if mode == MoveMode::Local {
+            self.local_plan(&changed).map(|()| None)
         } else {
-            self.compensation_plan(mode, &next, &changed)
+            self.compensation_plan(mode, &next, &changed).map(Some)
         };
         let plan = match plan {
             Ok(plan) => plan,
@@ -195,9 +186,9 @@ impl Renderer<'_> {
             }
         };
         self.focus = mode == MoveMode::Local;
-        if self.focus {
+        let Some(plan) = plan else {
             return self.move_locally(next, &changed, report, start);
-        }
+        };
         if let Compensation::Region { region, .. } = &plan {
             report.region_area = region.area;
         }
@@ -241,7 +232,7 @@ impl Renderer<'_> {
                 self.counters.region_pass += self.moves.compensation_passes;
                 (self.moves.compensation_passes, !raw)
             }
-            Compensation::Difference { .. } => {
+            Compensation::Difference => {
                 self.counters.difference_pass += self.moves.difference_passes;
                 (self.moves.difference_passes, true)
             }
@@ -288,8 +279,7 @@ impl Renderer<'_> {
     ) -> Result<Compensation, String> {
         let poses = [&self.scene, next];
         let kind = match mode {
-            MoveMode::Restart => return Err("restart mode".to_owned()),
-            MoveMode::Local => return self.local_plan(changed),
+            MoveMode::Restart | MoveMode::Local => return Err("restart mode".to_owned()),
             MoveMode::Difference
                 if poses
                     .iter()
@@ -297,12 +287,7 @@ impl Renderer<'_> {
             {
                 return Err("nothing moves".to_owned());
             }
-            MoveMode::Difference => {
-                return Ok(Compensation::Difference {
-                    correction_photons: None,
-                    r2_floor: 0.0,
-                });
-            }
+            MoveMode::Difference => return Ok(Compensation::Difference),
             MoveMode::Thesis => region_mode::POINT,
             MoveMode::Area => region_mode::AREA,
         };
@@ -363,74 +348,21 @@ impl Renderer<'_> {
                     self.gather(kind | flag, 0.0, total)?;
                 }
             }
-            Compensation::Difference {
-                correction_photons,
-                r2_floor,
-            } => {
+            Compensation::Difference => {
                 // Ordinary photons, each standing for `emitted / total` ordinary photons (path
                 // weight 1); deferred, so only the paths the move changed leave a net change.
-                // Local mode's correction is one pass per pose: a gather per pass over every
-                // kept slot cost more than the photons (MoveParams::correction_passes).
-                let (n, passes) = match *correction_photons {
-                    Some(n) => (n, u32::from(n > 0)),
-                    None => (self.params.photons_per_pass, self.moves.difference_passes),
-                };
+                let (n, passes) = (self.params.photons_per_pass, self.moves.difference_passes);
                 let total = (n * passes) as f32;
-                // Storing only what follows a box crossing, pose A also records which paths
-                // crossed one, each pass in its own slot of the mask, and pose B traces only
-                // those: the others would store nothing. A correction's gather only adds, the
-                // sign riding on the photons' power, so pose B's pass adds its photons to pose
-                // A's and one gather folds both.
-                let mut flags = 0;
-                let mut gathered = kind | gather_kind::DEFERRED;
-                let correction = correction_photons.is_some();
-                if correction {
-                    gathered = gather_kind::REGION_POSITIVE
-                        | gather_kind::DEFERRED
-                        | gather_kind::ADD_FLUX;
-                    flags |= photon_flags::CHANGED_ONLY;
-                    if kind == gather_kind::REGION_POSITIVE {
-                        flags |= photon_flags::ADD_TO_MAP;
-                    }
-                    // The variance counts each path's net deposit (ppm_core's pairing).
-                    if self.moves.pair_deposits {
-                        flags |= if kind == gather_kind::REGION_NEGATIVE {
-                            photon_flags::RECORD_DEPOSITS
-                        } else {
-                            photon_flags::PAIR_DEPOSITS
-                        };
-                    }
-                    if self.moves.cull_uncrossed {
-                        flags |= if kind == gather_kind::REGION_NEGATIVE {
-                            photon_flags::RECORD_CROSSED
-                        } else {
-                            photon_flags::CULL_UNCROSSED
-                        };
-                    }
-                }
-                let reused = correction_photons.and_then(|n| self.reused_pass(n, passes));
+                let gathered = kind | gather_kind::DEFERRED;
                 for k in 0..passes {
-                    let index =
-                        reused.unwrap_or(DIFFERENCE_PASS_BASE + self.counters.difference_pass + k);
-                    let mask_offset = k.checked_mul(n).ok_or_else(|| {
-                        BackendError::Limit(format!(
-                            "crossed-path mask: {passes} difference passes of {n} photons exceed 2^32 bits"
-                        ))
-                    })?;
-                    let params = PhotonPassParams {
-                        flags,
-                        mask_offset,
-                        gather_r2_floor: *r2_floor,
-                        ..self.photon_params(index, n, sign, gathered)
-                    };
+                    let index = DIFFERENCE_PASS_BASE + self.counters.difference_pass + k;
+                    let params = self.photon_params(index, n, sign, gathered);
                     let t = Instant::now();
                     let stats = self.backend.photon_pass(&params, &PhotonSource::Lights)?;
                     self.count_photons(&stats, t);
                     total_stats.add(&stats);
                     self.count_compensation(kind, &stats);
-                    if !correction || kind == gather_kind::REGION_POSITIVE {
-                        self.gather(gathered, 0.0, total)?;
-                    }
+                    self.gather(gathered, 0.0, total)?;
                 }
             }
         }
@@ -440,11 +372,11 @@ impl Renderer<'_> {
     /// The ordinary pass whose paths a local move's correction of `n` photons in `passes`
     /// passes traces again, if any: a one-pass correction (a drag step's) right after an
     /// ordinary pass draws that pass's random numbers. In pose A its paths are the ones the
-    /// pass traced there, which a backend that kept them ([`photon_flags::KEEP_PATHS`])
+    /// pass traced there, which a backend that kept them ([`KEEP_PATHS`](ppm_core::layout::photon_flags::KEEP_PATHS))
     /// answers without tracing them again. Sharing numbers with a pass the history gathered
     /// leaves the correction unbiased: each of the two estimates is, and their sum's
     /// expectation is the sum of theirs.
-    fn reused_pass(&self, n: u32, passes: u32) -> Option<u32> {
+    pub(super) fn reused_pass(&self, n: u32, passes: u32) -> Option<u32> {
         let right_after = self.counters.steps_since_move > 0 && self.counters.photon_pass > 0;
         (passes == 1 && n == self.params.photons_per_pass && right_after)
             .then(|| self.counters.photon_pass - 1)

@@ -4,9 +4,13 @@
 //! test runs them through the WGSL). A backend's gather pass finds each slot's photons, calls
 //! [`gather_rule`], and writes the result back: the policy is not the backend's to choose.
 
+use super::luminance as lum;
+use super::pairing::{Partner, variance_term};
 use super::{Statistics, compensation_update, history_kept, luminance, ppm_update};
-use crate::layout::{GatherParams, HitPoint, gather_kind, hit_flags};
+use crate::geometry::oct_faces;
+use crate::layout::{GatherParams, HitPoint, Photon, gather_kind, hit_flags};
 use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
 
 /// The fields of a slot that a gather reads and writes, with its pending sum (the deferred
 /// region photons of area and local modes). 48 bytes, the layout of `SlotState` in
@@ -88,6 +92,40 @@ pub struct Found {
     pub power_sq: f32,
     /// Padding.
     pub _pad: [f32; 2],
+}
+
+/// What `hp` finds among `photons` within its radius, or the wider disc a floor gives it
+/// ([`search_r2`]) scaled to its own ([`Found`]): each photon tested in turn, its path weight
+/// from `weights` and, where a correction's pose B paired it, the variance term of its pair
+/// ([`variance_term`]). The plain form of every gather, which the conformance suite recomputes
+/// by and a plain backend gathers with.
+pub fn found_in_disc(
+    hp: &HitPoint,
+    (photons, weights, partners): (&[Photon], &[f32], &[Option<Partner>]),
+    r2_floor: f32,
+) -> Found {
+    let r2 = search_r2(hp, r2_floor);
+    let (x, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
+    let (mut count, mut weight, mut flux, mut power_sq) = (0u32, 0.0, Vec3::ZERO, 0.0);
+    let inside = |p: Vec3| (p - x).length_squared() < r2;
+    for ((ph, w), partner) in photons.iter().zip(weights).zip(partners) {
+        if inside(Vec3::from(ph.position)) && oct_faces(ph.normal_oct, normal) {
+            count += 1;
+            weight += w;
+            flux += Vec3::from(ph.power);
+            let both = partner.filter(|a| inside(a.position)).map(|a| a.luminance);
+            let cancels = partner.is_some_and(|a| a.cancels(ph));
+            power_sq += variance_term(lum(ph.power), both, cancels);
+        }
+    }
+    let shrink = disc_shrink(hp.r2, r2);
+    Found {
+        flux: (flux * shrink).into(),
+        count: count as f32,
+        weight: weight * shrink,
+        power_sq: power_sq * shrink * shrink,
+        _pad: [0.0; 2],
+    }
 }
 
 /// Whether a slot belongs to the set a pass of `kind` serves, visible point or not: such a

@@ -100,6 +100,28 @@ pub fn cross_term(a: f32, b: f32) -> f32 {
     (2.0 * a * b).max(-(1.0 - PAIR_FLOOR) * (a * a + b * b))
 }
 
+/// Each of pose B's deposits `pose_b` paired with the deposit its path stored in the same
+/// order in pose A, `pose_a` (both in path order, as read back), where they pair.
+pub fn pose_a_partners(pose_a: &[Photon], pose_b: &[Photon]) -> Vec<Option<Partner>> {
+    let mut nth = 0;
+    pose_b
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            nth = match i > 0 && pose_b[i - 1].path == b.path {
+                true => nth + 1,
+                false => 0,
+            };
+            let first = pose_a.partition_point(|a| a.path < b.path);
+            let candidate = pose_a
+                .get(first + nth)
+                .filter(|a| a.path == b.path && nth < PAIRED_DEPOSITS)
+                .map(Partner::of);
+            partner(b, candidate.as_ref())
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
