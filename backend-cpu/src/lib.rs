@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+mod camera_move;
 mod direct_light;
 mod eye_pass;
 mod gather_pass;
@@ -19,11 +20,13 @@ mod photon_search;
 mod resolve;
 pub mod trace;
 
+use camera_move::CameraInProgress;
 use local_move::{KnownPairs, MoveInProgress, Stage};
 use path_record::PathRecord;
 use photon_grid::{MapContents, PhotonGrid, build_photon_grid};
 use photon_pass::{Deposits, photon_pass_main};
 use photon_search::{PhotonMap, for_photons_in_disc};
+use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
@@ -100,6 +103,8 @@ pub struct CpuBackend {
     moving: Option<MoveInProgress>,
     /// The pairs the last local move traced in its pose B, for the next move's pose A.
     known_pairs: Option<KnownPairs>,
+    /// The camera move in progress, between its first pass and its last.
+    camera_moving: Option<CameraInProgress>,
 }
 
 /// Whether the current photons are indexed yet.
@@ -184,6 +189,7 @@ impl SceneUpload for CpuBackend {
         self.paths = None;
         self.moving = None;
         self.known_pairs = None;
+        self.camera_moving = None;
         Ok(())
     }
 }
@@ -285,6 +291,9 @@ impl EyePass for CpuBackend {
             self.pending = vec![[0.0; 4]; slots];
             self.r2_initial = params.r2_initial;
         }
+        if let Some(moving) = &mut self.camera_moving {
+            moving.traced = !keep;
+        }
         check_slots("eye", &self.hit_points)?;
         Ok(stats)
     }
@@ -373,8 +382,10 @@ impl LocalMoves for CpuBackend {
         // The same pose with other movers' boxes (a local move's pose A) keeps its data and
         // the paths traced in it.
         match &mut self.scene {
-            Some((data, camera)) if data.same_pose(scene) && *camera == scene.camera => {
+            // A camera move changes no photon path: the paths kept stay the pass's.
+            Some((data, camera)) if data.same_pose(scene) => {
                 data.movers.clone_from(&scene.movers);
+                *camera = scene.camera;
             }
             _ => {
                 self.scene = Some((SceneData::new(scene), scene.camera));
@@ -449,6 +460,55 @@ impl LocalMoves for CpuBackend {
         );
         self.known_pairs = Some(pairs);
         check_slots("local direct change", &self.hit_points)?;
+        Ok(stats)
+    }
+
+    fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError> {
+        loaded(&self.scene, "camera move")?;
+        if self.hit_points.is_empty() {
+            return Err(BackendError::OutOfOrder {
+                pass: "camera move",
+                needs: "an eye pass",
+            });
+        }
+        // Pairs were traced through the old view's pixels; a move in progress ends here.
+        self.known_pairs = None;
+        self.moving = None;
+        self.camera_moving = Some(CameraInProgress {
+            request: *request,
+            before: self.hit_points.clone(),
+            before_bounds: self.slot_bounds.clone(),
+            traced: false,
+        });
+        Ok(())
+    }
+
+    fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
+        let (scene, camera) = loaded(&self.scene, "inherit light")?;
+        let moving = match self.camera_moving.take() {
+            Some(m) if m.traced && *camera == m.request.after => m,
+            Some(m) if m.traced => {
+                self.camera_moving = Some(m);
+                return Err(BackendError::OutOfOrder {
+                    pass: "inherit light",
+                    needs: "the scene update to the new camera",
+                });
+            }
+            other => {
+                self.camera_moving = other;
+                return Err(BackendError::OutOfOrder {
+                    pass: "inherit light",
+                    needs: "begin_camera_move, then an eye pass that starts the slots fresh",
+                });
+            }
+        };
+        let stats = camera_move::inherit_main(
+            &mut self.hit_points,
+            &mut self.slot_bounds,
+            &scene.materials,
+            &moving,
+        );
+        check_slots("inherit light", &self.hit_points)?;
         Ok(stats)
     }
 }

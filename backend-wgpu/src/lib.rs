@@ -36,6 +36,7 @@ use passes::{
 };
 use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
 use ppm_core::bsdf::{BsdfCase, BsdfOutcome};
+use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::{CompiledScene, SceneFeatures};
 use ppm_core::emission::PhotonSource;
@@ -778,6 +779,19 @@ impl LocalMoves for WgpuBackend {
 
     fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
         self.move_direct_change()
+    }
+
+    fn begin_camera_move(&mut self, _: &CameraMove) -> Result<(), BackendError> {
+        Err(BackendError::Unsupported(
+            "the wgpu backend keeps no light across a camera move yet".to_owned(),
+        ))
+    }
+
+    fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
+        Err(BackendError::OutOfOrder {
+            pass: "inherit light",
+            needs: "begin_camera_move",
+        })
     }
 }
 

@@ -785,6 +785,25 @@ pub struct LocalMoveParams {
     pub _pad1: u32,
 }
 
+/// Parameters of a camera move's inheritance (docs/algorithm.md 3d): the cameras before and
+/// after, and how the slots are laid out. 144 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CameraMoveParams {
+    /// The camera the earlier slots were traced from.
+    pub before: GpuCamera,
+    /// The camera the slots are traced from now.
+    pub after: GpuCamera,
+    /// Eye samples per pixel: slot `pixel * spp + s`.
+    pub spp: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
+}
+
 /// Parameters of the resolve pass. 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -828,6 +847,7 @@ mod tests {
             ("GridPhoton", size_of::<GridPhoton>(), 32),
             ("ResolveParams", size_of::<ResolveParams>(), 16),
             ("LocalMoveParams", size_of::<LocalMoveParams>(), 48),
+            ("CameraMoveParams", size_of::<CameraMoveParams>(), 144),
         ];
         for (name, size, expected) in sizes {
             assert_eq!(size, expected, "{name}");

@@ -9,6 +9,7 @@
 //! - [`trace`], [`eye_path`], [`direct_light`], [`photon_path`], [`local_move`]: the per-item
 //!   functions of the passes (ray queries over the flattened tree, an eye path, a slot's
 //!   direct light, a photon's path, a local move's decisions and corrections), one home in Rust, each the twin of a WGSL function;
+//!   [`camera_move`]: what a slot of a new view takes over from the slots of the old one;
 //!   backends run them over their slots.
 //! - [`scene`], [`compile`]: the scene model, its poses and paths of moves nobody declared
 //!   ([`scene::path`]), and the flattening into buffers; [`textures`]: the colour a
@@ -23,6 +24,7 @@
 #![warn(missing_docs)]
 
 pub mod bsdf;
+pub mod camera_move;
 pub mod check;
 pub mod compile;
 pub mod direct_light;

@@ -8,6 +8,7 @@
 //! modes (docs/algorithm.md section 2) the methods of [`DynamicBackend`]: a backend that
 //! renders still frames only leaves both out.
 
+use crate::camera_move::{CameraMove, CameraMoveStats};
 use crate::compile::CompiledScene;
 use crate::emission::PhotonSource;
 use crate::image::Image;
@@ -328,8 +329,9 @@ pub trait Backend:
 /// photons ([`LocalMoves::correction_photons`]), the scene update to pose B,
 /// [`LocalMoves::local_resets`], [`LocalMoves::local_direct_change`], pose B's photons and
 /// [`LocalMoves::apply_correction`]. Each says what it does in its request; a call out of
-/// that order is refused by name. A backend that has them returns `Some(self)` from
-/// [`Backend::local_moves`].
+/// that order is refused by name. A camera move that keeps the light (docs/algorithm.md 3d)
+/// is two more: [`LocalMoves::begin_camera_move`] and [`LocalMoves::inherit_light`]. A
+/// backend that has them returns `Some(self)` from [`Backend::local_moves`].
 pub trait LocalMoves: Backend {
     /// Swaps the geometry under the hit points when an object moves (docs/algorithm.md 2.3):
     /// replaces triangles, BVH, lights and mover boxes with `scene`'s, keeping hit points and
@@ -389,6 +391,19 @@ pub trait LocalMoves: Backend {
         self.gather_pass(&apply)?;
         Ok(folded)
     }
+
+    /// Starts a camera move (docs/algorithm.md 3d) in the view held: keeps the slots as they
+    /// are (with their bounds, where the backend records them) for the new view to take
+    /// over, and forgets what local moves kept of this view (pairs traced through its
+    /// pixels). Then come the scene update to `request.after`, an eye pass that starts every
+    /// slot fresh, and [`LocalMoves::inherit_light`].
+    fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError>;
+
+    /// After [`LocalMoves::begin_camera_move`], the scene update to the new camera and an eye
+    /// pass that started every slot fresh: each slot takes over the light of the earlier
+    /// slots near its visible point ([`inherit_slot`](crate::camera_move::inherit_slot)),
+    /// and the kept slots are let go. Refused out of that order.
+    fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError>;
 }
 
 /// The passes of the thesis's modes (docs/algorithm.md 2), besides the photon pass's other

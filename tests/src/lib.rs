@@ -219,3 +219,17 @@ pub fn furnace_with_mover(lo: Vec3, hi: Vec3, shift: Vec3) -> Scene {
     });
     scene
 }
+
+/// The path tracer's truth of `scene` at `size` x `size`, `spp` samples a pixel (seed 5).
+pub fn truth(scene: &Scene, size: u32, spp: u32) -> ppm_core::image::Image {
+    let compiled = compile_scene(scene, size, size);
+    let budget = harness::reference::ReferenceBudget {
+        spp: Some(spp),
+        seconds: None,
+    };
+    let reference = harness::reference::render_reference(&compiled, 5, budget, &mut |_, _| {
+        std::ops::ControlFlow::Continue(())
+    });
+    assert!(reference.error.is_none(), "{:?}", reference.error);
+    reference.image
+}

@@ -8,6 +8,7 @@ use harness::diff::{OTHER_SEED_OFFSET, runs_of};
 use harness::diff::{independent, record, same_seed};
 use harness::driver::checkpoint::RenderState;
 use harness::driver::{Budget, Resume, Schedule};
+use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
@@ -227,6 +228,12 @@ impl LocalMoves for Broken {
             self.0.write_hit_points(&before)?;
         }
         Ok(stats)
+    }
+    fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError> {
+        self.0.begin_camera_move(request)
+    }
+    fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
+        self.0.inherit_light()
     }
 }
 impl DynamicBackend for Broken {

@@ -2,6 +2,7 @@
 //! reads back their counters. Every backend runs behind a proxy that counts what crosses the
 //! contract's read-back ([`ReadBack`]) while a drag of small moves renders.
 
+use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
@@ -118,6 +119,12 @@ impl LocalMoves for Counted {
     }
     fn apply_correction(&mut self, request: &CorrectionApply) -> Result<GatherStats, BackendError> {
         self.local().apply_correction(request)
+    }
+    fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError> {
+        self.local().begin_camera_move(request)
+    }
+    fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
+        self.local().inherit_light()
     }
 }
 

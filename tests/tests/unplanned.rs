@@ -7,8 +7,6 @@
 use backend_cpu::CpuBackend;
 use glam::{Quat, Vec3};
 use harness::driver::{Budget, Renderer, Schedule, run};
-use harness::reference::{ReferenceBudget, render_reference};
-use ppm_core::compile::compile_scene;
 use ppm_core::image::Image;
 use ppm_core::layout::hit_flags;
 use ppm_core::metrics::{block_relative_rmse, relative_rmse};
@@ -16,7 +14,6 @@ use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{Move, Scene};
-use std::ops::ControlFlow;
 use std::process::ExitCode;
 use tests::{BackendTrials, Suite, figure};
 use tests::{around, luminance, objects_seen};
@@ -36,17 +33,6 @@ fn rigid(scene: &Scene, name: &str, degrees: f32, by: [f32; 3]) -> Move {
         translation: Vec3::from(by),
         rotation: Quat::from_rotation_y(degrees.to_radians()),
     }
-}
-
-fn truth(scene: &Scene, size: u32, spp: u32) -> Image {
-    let compiled = compile_scene(scene, size, size);
-    let budget = ReferenceBudget {
-        spp: Some(spp),
-        seconds: None,
-    };
-    let reference = render_reference(&compiled, 5, budget, &mut |_, _| ControlFlow::Continue(()));
-    assert!(reference.error.is_none(), "{:?}", reference.error);
-    reference.image
 }
 
 /// The short block turned by 25 degrees and moved to the back left, where no `[[moves]]`
@@ -127,6 +113,7 @@ fn path(scene: &Scene) -> MovePath {
     let event = |after, moves| PathEvent {
         after: After::Iterations(after),
         moves,
+        camera: None,
     };
     MovePath {
         events: vec![
@@ -157,8 +144,8 @@ fn a_path_of_unplanned_moves_converges_to_the_truth_of_its_final_pose() {
     let (scene, p) = cornell(SIZE, 10_000);
     let path = path(&scene);
     let last = path.final_pose(&scene);
-    let truth = truth(&last, SIZE, 1024);
-    let start_off = block_relative_rmse(&self::truth(&scene, SIZE, 256), &truth, 8);
+    let truth = tests::truth(&last, SIZE, 1024);
+    let start_off = block_relative_rmse(&tests::truth(&scene, SIZE, 256), &truth, 8);
     let render = |after: u32| {
         let schedule = Schedule::path(&path, MoveMode::Local, Budget::iterations(after));
         let mut backend = CpuBackend::new();
@@ -280,7 +267,7 @@ fn no_move_blows_a_pixel_up(name: &str, mut backend: Box<dyn Backend + Send>) {
         let targets = [scene.at_frame(1), random.final_pose(&scene)];
         let truths: Vec<f32> = targets
             .iter()
-            .map(|t| brightest(&truth(t, SIZE, 128)))
+            .map(|t| brightest(&tests::truth(t, SIZE, 128)))
             .collect();
         let mut worst = 0.0f32;
         let mut check = |backend: &mut dyn Backend, warm: u32, seed: u32| {

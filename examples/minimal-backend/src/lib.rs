@@ -26,6 +26,7 @@
 
 #![warn(missing_docs)]
 
+mod camera;
 mod local;
 
 use glam::Vec3;
@@ -74,6 +75,8 @@ pub struct MinimalBackend {
     moving: Option<local::Moving>,
     /// A local move's correction photons, from pose A's to the apply.
     correction: Option<local::Correction>,
+    /// The camera move in progress, from its first pass to the inheritance.
+    camera_moving: Option<camera::CameraMoving>,
 }
 
 impl MinimalBackend {
@@ -124,6 +127,9 @@ impl EyePass for MinimalBackend {
             self.chain_light = vec![ChainLight::NONE; slots];
             self.pending = vec![[0.0; 4]; slots];
             self.r2_initial = params.r2_initial;
+        }
+        if let Some(moving) = &mut self.camera_moving {
+            moving.traced = !keep;
         }
         let record = params.flags & eye_flags::RECORD_BOUNDS != 0;
         let mut stats = EyeStats::default();

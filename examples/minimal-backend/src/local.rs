@@ -5,6 +5,7 @@
 
 use crate::{Map, MinimalBackend, fold, loaded, trace_photons};
 use glam::Vec3;
+use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::CompiledScene;
 use ppm_core::emission::PhotonSource;
@@ -212,5 +213,13 @@ impl LocalMoves for MinimalBackend {
         fold(&apply, slots, (materials, self.r2_initial), &nothing);
         check_hit_points("apply correction", &self.hit_points)?;
         Ok(stats)
+    }
+
+    fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError> {
+        self.begin_camera(request)
+    }
+
+    fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
+        self.inherit()
     }
 }

@@ -356,6 +356,10 @@ pub struct ReferenceArgs {
     /// Frame: 0 before the scene's move, 1 after it.
     #[arg(long, default_value_t = 0)]
     frame: u32,
+    /// A path file (objects and camera moved from frame 0): render the pose at its end, the
+    /// truth of `ppm report error-vs-time --path FILE`.
+    #[arg(long, conflicts_with = "frame")]
+    path: Option<PathBuf>,
     /// Image width (default: the scene's).
     #[arg(long)]
     width: Option<u32>,
@@ -409,7 +413,11 @@ pub fn reference(args: ReferenceArgs) -> Result<()> {
     };
     let paths = OutputPaths::new(&args.output)?;
     let pool = thread_pool(args.threads)?;
-    let compiled = ppm_core::compile::compile_scene(&scene.at_frame(args.frame), width, height);
+    let posed = match &args.path {
+        Some(file) => scenes::file::path::load_path_file(file, &scene)?.final_pose(&scene),
+        None => scene.at_frame(args.frame),
+    };
+    let compiled = ppm_core::compile::compile_scene(&posed, width, height);
     eprintln!(
         "rendering the reference of {} at {width}x{height}",
         scene.name

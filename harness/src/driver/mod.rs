@@ -11,6 +11,7 @@
 //! to the slot's sum, then traces and gathers one photon pass; `ppm` traces its hit points
 //! and direct light once per pose, and an iteration is a photon pass and its gather.
 
+mod camera;
 pub mod checkpoint;
 mod local;
 pub mod moves;

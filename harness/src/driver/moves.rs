@@ -81,6 +81,24 @@ pub struct MoveReport {
     pub seconds: f64,
 }
 
+impl MoveReport {
+    /// A move in `mode` that has done nothing yet.
+    pub fn new(mode: MoveMode) -> Self {
+        Self {
+            mode,
+            region_area: 0.0,
+            updated: 0,
+            kept: 0,
+            direct_corrected: 0,
+            changed_share: None,
+            culled_share: None,
+            recorded_paths: 0,
+            restarted: None,
+            seconds: 0.0,
+        }
+    }
+}
+
 /// What compensates a move in the thesis's modes: region photons through the emitting
 /// rectangle (thesis and area modes) or difference photons over the whole emission (difference
 /// mode). Local mode's correction is its own passes' ([`super::local`]).
@@ -126,18 +144,7 @@ impl Renderer<'_> {
         candidates: Option<&[usize]>,
     ) -> Result<MoveReport, BackendError> {
         let start = Instant::now();
-        let mut report = MoveReport {
-            mode,
-            region_area: 0.0,
-            updated: 0,
-            kept: 0,
-            direct_corrected: 0,
-            changed_share: None,
-            culled_share: None,
-            recorded_paths: 0,
-            restarted: None,
-            seconds: 0.0,
-        };
+        let mut report = MoveReport::new(mode);
         let changed = match candidates {
             Some(objects) => self.scene.changed_among(&next, objects),
             None => self.scene.changed_objects(&next),

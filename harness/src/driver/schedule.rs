@@ -10,7 +10,7 @@ use crate::report::RenderReport;
 use ppm_core::image::Image;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError};
-use ppm_core::scene::path::{After, MovePath};
+use ppm_core::scene::path::{After, CameraStep, MovePath};
 use ppm_core::scene::{Move, Scene};
 use std::time::Instant;
 use thiserror::Error;
@@ -66,6 +66,14 @@ pub enum Step {
     MoveObjects {
         /// The moves, applied in order.
         moves: Vec<Move>,
+        /// How the render follows.
+        mode: MoveMode,
+    },
+    /// Put the camera elsewhere (a path's event): local mode keeps the light of what is
+    /// still seen ([`Renderer::move_camera`]).
+    MoveCamera {
+        /// Where it goes.
+        camera: CameraStep,
         /// How the render follows.
         mode: MoveMode,
     },
@@ -133,10 +141,15 @@ impl Schedule {
                 After::Seconds(s) => Budget::seconds(s),
                 After::Iterations(n) => Budget::iterations(n),
             }));
-            steps.push(Step::MoveObjects {
-                moves: event.moves.clone(),
-                mode,
-            });
+            if !event.moves.is_empty() {
+                steps.push(Step::MoveObjects {
+                    moves: event.moves.clone(),
+                    mode,
+                });
+            }
+            if let Some(camera) = event.camera {
+                steps.push(Step::MoveCamera { camera, mode });
+            }
         }
         steps.push(Step::Render(after));
         Self { start: 0.0, steps }
@@ -338,10 +351,14 @@ pub fn run_from(
                 clock.pause();
                 observer.step_done(&at, &mut renderer)
             }
-            Step::Move { .. } | Step::MoveObjects { .. } => {
+            Step::Move { .. } | Step::MoveObjects { .. } | Step::MoveCamera { .. } => {
                 let moved = match step {
                     &Step::Move { time, mode } => renderer.move_to(scene.at_time(time), mode),
                     Step::MoveObjects { moves, mode } => renderer.move_objects(moves, *mode),
+                    Step::MoveCamera { camera, mode } => {
+                        let placed = camera.place(&renderer.scene().camera);
+                        renderer.move_camera(placed, *mode)
+                    }
                     Step::Render(_) => unreachable!("matched above"),
                 };
                 at.step_seconds = clock.seconds() - step_start;

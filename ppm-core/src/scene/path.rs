@@ -2,7 +2,7 @@
 //! objects rigidly after some rendering time or iterations. `scenes::file::path` reads them
 //! from files; [`MovePath::random`] makes them for tests.
 
-use super::model::{MaterialKind, Move, Scene};
+use super::model::{Camera, MaterialKind, Move, Scene};
 use crate::rng::{PassKind, StreamKey};
 use glam::{Quat, Vec3};
 
@@ -25,13 +25,36 @@ impl After {
     }
 }
 
-/// Moves made at one time: the rigid moves of one or more objects, after `after`.
+/// Where a step puts the camera: its up vector and field of view stay.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct CameraStep {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub look_at: Vec3,
+}
+
+impl CameraStep {
+    /// `camera` put here.
+    pub fn place(&self, camera: &Camera) -> Camera {
+        Camera {
+            eye: self.eye,
+            look_at: self.look_at,
+            ..camera.clone()
+        }
+    }
+}
+
+/// Moves made at one time: the rigid moves of one or more objects, then perhaps the camera,
+/// after `after`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PathEvent {
     /// Rendering before it, since the previous event (or the start).
     pub after: After,
     /// The moves, applied in order to the pose that stands then.
     pub moves: Vec<Move>,
+    /// Where the camera goes, after the moves.
+    pub camera: Option<CameraStep>,
 }
 
 /// Moves nobody declared in the scene, in time order.
@@ -105,6 +128,7 @@ impl MovePath {
             path.events.push(PathEvent {
                 after: if k == 0 { first } else { then },
                 moves: vec![m],
+                camera: None,
             });
         }
         path
@@ -116,6 +140,7 @@ impl MovePath {
             events: vec![PathEvent {
                 after,
                 moves: scene.moves.clone(),
+                camera: None,
             }],
         }
     }
@@ -134,8 +159,13 @@ impl MovePath {
     /// Every move of the path, in order, applied to `scene`: the final pose.
     pub fn final_pose(&self, scene: &Scene) -> Scene {
         let mut posed = scene.clone();
-        for m in self.events.iter().flat_map(|e| &e.moves) {
-            posed.apply(m);
+        for event in &self.events {
+            for m in &event.moves {
+                posed.apply(m);
+            }
+            if let Some(c) = &event.camera {
+                posed.camera = c.place(&posed.camera);
+            }
         }
         posed
     }

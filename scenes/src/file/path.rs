@@ -14,12 +14,14 @@
 //! A step without `after_seconds` or `after_iterations` (or with zero) moves together with the
 //! step before it. Errors name the file, the step, the field and the value.
 //!
-//! The viewer's scripts (`ppm view --script`) are path files whose steps may also, instead of
-//! an object, name a camera (`camera = { eye = [...], look_at = [...] }`) or only ask for a
-//! screenshot (`screenshot = true`, allowed on any step: taken after what the step does).
+//! A step may move the camera instead of an object: `camera = { eye = [...], look_at = [...] }`
+//! (its up vector and field of view stay). The viewer's scripts (`ppm view --script`) are
+//! path files whose steps may also only ask for a screenshot (`screenshot = true`, allowed on
+//! any step: taken after what the step does).
 
 use crate::file::scene_file::{SceneSource, euler_degrees};
 use glam::Vec3;
+pub use ppm_core::scene::path::CameraStep;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{MAX_COORDINATE, Move, Scene, SceneError};
 use serde::Deserialize;
@@ -54,15 +56,6 @@ struct CameraFile {
     look_at: [f32; 3],
 }
 
-/// Where a script step puts the camera (its up vector and field of view stay).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraStep {
-    /// Eye position.
-    pub eye: Vec3,
-    /// Point looked at.
-    pub look_at: Vec3,
-}
-
 /// What a viewer script does at one time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScriptEvent {
@@ -70,7 +63,7 @@ pub struct ScriptEvent {
     pub after: After,
     /// Rigid moves, applied in order, all in one move of the render.
     pub moves: Vec<Move>,
-    /// A new camera, after the moves (the render starts over).
+    /// A new camera, after the moves.
     pub camera: Option<CameraStep>,
     /// Write the presented frame once the rest is done.
     pub screenshot: bool,
@@ -100,10 +93,9 @@ pub fn load_script_file(path: &Path, scene: &Scene) -> Result<Script, SceneError
 pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, SceneError> {
     let (script, steps) = parse_steps(text, file, scene)?;
     if let Some((i, field)) = steps.iter().enumerate().find_map(|(i, s)| {
-        let field = match (s.object.is_none(), s.camera.is_some(), s.screenshot) {
-            (_, true, _) => "camera",
-            (_, _, true) => "screenshot",
-            (true, _, _) => "object",
+        let field = match (s.object.is_none() && s.camera.is_none(), s.screenshot) {
+            (_, true) => "screenshot",
+            (true, _) => "object",
             _ => return None,
         };
         Some((i, field))
@@ -116,8 +108,8 @@ pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, Sce
             } else {
                 "given"
             },
-            "a path moves objects: every step names one; camera and screenshot steps are \
-             for `ppm view --script`",
+            "a path moves objects or the camera: every step names an object or a camera; \
+             screenshot steps are for `ppm view --script`",
         ));
     }
     Ok(MovePath {
@@ -127,6 +119,7 @@ pub fn parse_path(text: &str, file: &str, scene: &Scene) -> Result<MovePath, Sce
             .map(|e| PathEvent {
                 after: e.after,
                 moves: e.moves,
+                camera: e.camera,
             })
             .collect(),
     })
@@ -357,7 +350,7 @@ mod tests {
     }
 
     #[test]
-    fn scripts_take_cameras_and_screenshots_and_paths_refuse_them() {
+    fn scripts_take_cameras_and_screenshots_and_paths_refuse_screenshots() {
         let text = r#"
             [[step]]
             after_iterations = 3
@@ -388,6 +381,10 @@ mod tests {
             refused.starts_with("s.toml: step[0].screenshot"),
             "{refused}"
         );
+        let camera_path = "[[step]]\nafter_iterations = 4\ncamera = { eye = [278.0, 273.0, -700.0], look_at = [278.0, 273.0, 0.0] }";
+        let path = parse_path(camera_path, "c.toml", &scene).unwrap();
+        assert_eq!(path.events[0].camera, Some(camera));
+        assert_eq!(path.final_pose(&scene).camera.eye, camera.eye);
         let bad = |text: &str| {
             parse_script(text, "s.toml", &scene)
                 .unwrap_err()

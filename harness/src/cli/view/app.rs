@@ -89,9 +89,13 @@ enum Gesture {
         plane: DragPlane,
         last: PhysicalPosition<f64>,
     },
-    Orbit {
+    /// Orbiting (right button) or panning (middle button, or right with shift) the camera:
+    /// each step goes to the render as it comes, which keeps the light a step did not change
+    /// (local mode).
+    Camera {
         last: PhysicalPosition<f64>,
         camera: Camera,
+        pan: bool,
     },
 }
 
@@ -449,16 +453,17 @@ impl Running {
                     last: self.cursor,
                 });
             }
-            (ElementState::Pressed, MouseButton::Right) if self.pane_at(self.cursor).is_some() => {
-                self.gesture = Some(Gesture::Orbit {
+            (ElementState::Pressed, MouseButton::Right | MouseButton::Middle)
+                if self.pane_at(self.cursor).is_some() =>
+            {
+                self.gesture = Some(Gesture::Camera {
                     last: self.cursor,
                     camera: self.shared.camera(),
+                    pan: button == MouseButton::Middle || self.modifiers.shift_key(),
                 });
             }
             (ElementState::Released, _) => {
-                if let Some(Gesture::Orbit { camera, .. }) = self.gesture.take() {
-                    let _ = self.commands.send(Command::Camera(camera));
-                }
+                self.gesture = None;
             }
             _ => {}
         }
@@ -496,10 +501,16 @@ impl Running {
                     });
                 }
             }
-            Some(Gesture::Orbit { last, camera }) => {
+            Some(Gesture::Camera { last, camera, pan }) => {
                 let (dx, dy) = ((to.x - last.x) as f32, (to.y - last.y) as f32);
-                *camera = orbit(camera, dx, dy);
+                *camera = if *pan {
+                    let (_, h) = self.display.size();
+                    pan_by(camera, dx, dy, h)
+                } else {
+                    orbit(camera, dx, dy)
+                };
                 *last = to;
+                let _ = self.commands.send(Command::Camera(camera.clone()));
             }
             None => {}
         }
@@ -819,6 +830,23 @@ fn pane_point(display: &Display, panes: usize, at: PhysicalPosition<f64>) -> Opt
         return None;
     }
     Some(((at.x % w) as f32, at.y as f32))
+}
+
+/// The camera and its look-at point moved together across the view, so that the scene
+/// follows the cursor: `dx`, `dy` pixels of drag in a pane `height` pixels high.
+fn pan_by(camera: &Camera, dx: f32, dy: f32, height: u32) -> Camera {
+    let forward = camera.look_at - camera.eye;
+    let right = forward.cross(camera.up).normalize_or_zero();
+    let up = right.cross(forward).normalize_or_zero();
+    // The size of a pixel at the look-at point's depth.
+    let pixel =
+        2.0 * forward.length() * (camera.fov_deg.to_radians() * 0.5).tan() / height.max(1) as f32;
+    let shift = (-dx * right + dy * up) * pixel;
+    Camera {
+        eye: camera.eye + shift,
+        look_at: camera.look_at + shift,
+        ..camera.clone()
+    }
 }
 
 /// The camera turned about its look-at point: `dx` about the up axis, `dy` about its right

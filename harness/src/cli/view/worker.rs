@@ -275,7 +275,7 @@ pub fn run(
             );
         }
         if let Some(camera) = batch.camera {
-            look_from(&mut panes, shared, camera);
+            look_from(&mut panes, shared, camera, heat);
         }
         if batch.save || quit {
             save(&mut panes, &out, quit)?;
@@ -480,31 +480,73 @@ fn reset_share(before: &[HitPoint], after: &[HitPoint], pixels: usize) -> Vec<f3
     reset
 }
 
-/// Every pane starts over from `camera`, and says so, with one iteration of the new view.
-fn look_from(panes: &mut [Pane], shared: &Shared, camera: Camera) {
+/// Every pane moves its camera to `camera` the way its mode says (local mode keeps the light
+/// of what is still seen, docs/algorithm.md 3d), then renders one iteration of the new view,
+/// and says what it kept; with `heat`, the heat map shows the slots that started over.
+fn look_from(panes: &mut [Pane], shared: &Shared, camera: Camera, heat: bool) {
     for (i, pane) in panes.iter_mut().enumerate() {
         if pane.error.is_some() {
             continue;
         }
         // One iteration at once: the new view replaces the old one on screen now.
         let t = Instant::now();
-        let restarted = pane.renderer.look_from(camera.clone());
-        let restarted = restarted.and_then(|()| pane.renderer.iteration());
+        let moved = pane.renderer.move_camera(camera.clone(), pane.mode);
+        let resets = match (&moved, heat) {
+            (Ok(_), true) => Some(pane.renderer.backend().read_hit_points().map(|after| {
+                let pixels = pane.renderer.params().width * pane.renderer.params().height;
+                started_over(&after, pixels as usize)
+            })),
+            _ => None,
+        };
+        let moved = moved.and_then(|report| {
+            pane.renderer.iteration()?;
+            Ok(report)
+        });
         pane.spent += t.elapsed().as_secs_f64();
-        match restarted.and_then(|()| present(pane, shared, i)) {
-            Ok(()) => {
+        pane.moved = true;
+        let shown = moved.and_then(|report| {
+            present(pane, shared, i)?;
+            Ok((report, resets.transpose()?))
+        });
+        match shown {
+            Ok((report, resets)) => {
                 pane.iterations_since_event = 0;
                 let mut view = shared.pane(i);
-                view.stats = PaneStats {
-                    note: Some("the camera moved: the render started over".to_owned()),
-                    ..PaneStats::default()
-                };
+                view.stats.note = Some(match &report.restarted {
+                    Some(why) => format!("the camera moved: the render started over ({why})"),
+                    None => format!(
+                        "the camera moved: {} slots kept their light, {} started over",
+                        report.kept, report.updated
+                    ),
+                });
+                view.stats.last_move = Some(report);
+                if resets.is_some() {
+                    view.resets = resets;
+                }
             }
             Err(e) => fail(pane, shared, i, &e),
         }
     }
     let mut pose = shared.pose.lock().unwrap_or_else(|p| p.into_inner());
     pose.camera = camera;
+}
+
+/// Per pixel, the share of its slots a camera move started over: right after the move they
+/// hold no photons and at most the move's own direct-light sample.
+fn started_over(after: &[HitPoint], pixels: usize) -> Vec<f32> {
+    let mut reset = vec![0.0f32; pixels];
+    let mut slots = vec![0.0f32; pixels];
+    for hp in after {
+        let p = hp.pixel as usize;
+        if p < pixels {
+            slots[p] += 1.0;
+            reset[p] += f32::from(u8::from(hp.n == 0.0 && hp.iterations <= 1));
+        }
+    }
+    for (r, s) in reset.iter_mut().zip(&slots) {
+        *r /= s.max(1.0);
+    }
+    reset
 }
 
 /// Plays one script event: its moves, its camera, then its screenshot (waiting until the
@@ -532,7 +574,7 @@ fn play(
         let mut camera = panes[0].renderer.scene().camera.clone();
         camera.eye = c.eye;
         camera.look_at = c.look_at;
-        look_from(panes, shared, camera);
+        look_from(panes, shared, camera, heat);
     }
     if event.screenshot {
         for (i, pane) in panes.iter_mut().enumerate() {

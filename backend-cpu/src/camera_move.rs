@@ -1,0 +1,49 @@
+//! A camera move's inheritance (docs/algorithm.md 3d) over the slots in parallel:
+//! [`ppm_core::camera_move::inherit_slot`] for each slot of the new view, reading the slots
+//! of the old one as they were kept when the move began.
+
+use ppm_core::camera_move::{CameraMove, CameraMoveStats, inherit_slot};
+use ppm_core::layout::{GpuMaterial, HitPoint, SlotBounds};
+use rayon::prelude::*;
+
+/// A camera move between its passes: the request and the old view's slots.
+pub struct CameraInProgress {
+    /// The cameras before and after.
+    pub request: CameraMove,
+    /// The slots of the old view, as the move found them.
+    pub before: Vec<HitPoint>,
+    /// Their bounds (empty where none were recorded).
+    pub before_bounds: Vec<SlotBounds>,
+    /// An eye pass has started every slot fresh since the move began.
+    pub traced: bool,
+}
+
+/// Each slot of `hit_points` (with its bounds, where `bounds` holds them) takes over the
+/// light of `moving`'s old slots near its visible point.
+pub fn inherit_main(
+    hit_points: &mut [HitPoint],
+    bounds: &mut [SlotBounds],
+    materials: &[GpuMaterial],
+    moving: &CameraInProgress,
+) -> CameraMoveStats {
+    let before = (moving.before.as_slice(), moving.before_bounds.as_slice());
+    let inherit = |(hp, b): (&mut HitPoint, Option<&mut SlotBounds>)| {
+        u64::from(inherit_slot(hp, b, &moving.request, materials, before))
+    };
+    let inherited: u64 = if bounds.len() == hit_points.len() {
+        hit_points
+            .par_iter_mut()
+            .zip(bounds.par_iter_mut())
+            .map(|(hp, b)| inherit((hp, Some(b))))
+            .sum()
+    } else {
+        hit_points
+            .par_iter_mut()
+            .map(|hp| inherit((hp, None)))
+            .sum()
+    };
+    CameraMoveStats {
+        inherited,
+        reset: hit_points.len() as u64 - inherited,
+    }
+}
