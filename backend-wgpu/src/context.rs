@@ -3,6 +3,11 @@
 use ppm_core::passes::BackendError;
 use std::sync::{Arc, Mutex};
 
+/// The optional features the passes use where the adapter offers them, each behind a check:
+/// timestamp queries, to measure each kernel's device time. Nothing on the required path needs
+/// them.
+pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY;
+
 /// A wgpu device and queue, with the adapter's description and error capture. Clones share
 /// the device and what it reports (two backends on one device, as the viewer's comparison).
 #[derive(Clone)]
@@ -22,16 +27,17 @@ pub struct GpuContext {
 impl GpuContext {
     /// Opens the best adapter the environment offers (`WGPU_BACKEND` may narrow the choice).
     ///
-    /// Only baseline features are requested. Limits are raised to what the adapter offers, so
-    /// large images and photon counts fit where the hardware allows; anything beyond them is
-    /// refused up front by the buffer code with the limit named.
+    /// Baseline features are requested, and those of [`OPTIONAL_FEATURES`] the adapter offers.
+    /// Limits are raised to what the adapter offers, so large images and photon counts fit
+    /// where the hardware allows; anything beyond them is refused up front by the buffer code
+    /// with the limit named.
     pub fn new() -> Result<Self, BackendError> {
         Self::open(false)
     }
 
     /// As [`GpuContext::new`], with WebGPU's baseline limits (`wgpu::Limits::default()`)
-    /// instead of the adapter's: on it, a render shows that the passes bind and dispatch no
-    /// more than any WebGPU device offers.
+    /// instead of the adapter's and no optional feature: on it, a render shows that the
+    /// passes bind and dispatch no more than any WebGPU device offers.
     pub fn baseline() -> Result<Self, BackendError> {
         Self::open(true)
     }
@@ -46,7 +52,11 @@ impl GpuContext {
         .map_err(|e| BackendError::Device(format!("no wgpu adapter: {e} (on Linux, install a Vulkan driver such as mesa-vulkan-drivers)")))?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("ppm"),
-            required_features: wgpu::Features::empty(),
+            required_features: if baseline {
+                wgpu::Features::empty()
+            } else {
+                adapter.features() & OPTIONAL_FEATURES
+            },
             required_limits: if baseline {
                 wgpu::Limits::default()
             } else {
@@ -131,6 +141,14 @@ impl GpuContext {
             return Err(BackendError::Device(format!("{pass} pass: {e}")));
         }
         Ok(())
+    }
+
+    /// Whether the device was opened with timestamp queries: then the backend measures each
+    /// kernel's device time.
+    pub fn timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// The device's limits.

@@ -3,6 +3,8 @@
 //! Layouts are explicit, not derived from the shader, so that several entry points of one
 //! shader file share one binding list even when an entry point leaves some bindings unused.
 
+use crate::timestamps::Encoder;
+
 /// What a binding slot holds.
 #[derive(Clone, Copy, Debug)]
 pub enum Slot {
@@ -135,21 +137,14 @@ impl Kernel {
         })
     }
 
-    /// Records a dispatch covering `items` work items (one invocation each); counts past
-    /// 65,535 workgroups spill into y, which the shaders fold back with `item_index`.
-    pub fn dispatch(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        group: &wgpu::BindGroup,
-        items: u32,
-    ) {
+    /// Records a dispatch covering `items` work items (one invocation each), in a compute pass
+    /// of its own, timed where the device has timestamps; counts past 65,535 workgroups spill
+    /// into y, which the shaders fold back with `item_index`.
+    pub fn dispatch(&self, encoder: &mut Encoder<'_>, group: &wgpu::BindGroup, items: u32) {
         let groups = items.div_ceil(self.workgroup).max(1);
         let x = groups.min(65_535);
         let y = groups.div_ceil(x);
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(self.label),
-            timestamp_writes: None,
-        });
+        let mut pass = encoder.compute_pass(self.label);
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(x, y, 1);

@@ -3,10 +3,12 @@
 //! Each pass is one WGSL file in `shaders/passes/`, assembled at build time with the shared
 //! modules it imports (`shaders/shared/`, twins of ppm-core's `rng`, `sampling`, `geometry`,
 //! `bsdf`, `update` and `grid`), so a same-seed run traces the CPU backend's paths up to
-//! rounding. Only baseline WebGPU features are used: no f64, no float atomics; integer atomics
-//! count and scatter, and every order that feeds a float sum is made deterministic. Small
-//! per-pass counters are read back after each pass (rays, deposits, the first non-finite
-//! slot); bulk buffers only when the harness asks ([`ReadBack`], [`Resolve`]).
+//! rounding. Only baseline WebGPU features are required: no f64, no float atomics; integer
+//! atomics count and scatter, and every order that feeds a float sum is made deterministic.
+//! Small per-pass counters are read back after each pass (rays, deposits, the first
+//! non-finite slot); bulk buffers only when the harness asks ([`ReadBack`], [`Resolve`]).
+//! Where the adapter offers timestamp queries (optional), each kernel's device time is
+//! measured too ([`Backend::device_times`]).
 
 #![warn(missing_docs)]
 
@@ -20,6 +22,7 @@ mod photon_grid;
 mod scan;
 mod specialise;
 pub mod table;
+mod timestamps;
 
 /// The assembled WGSL of every pass.
 pub mod shaders {
@@ -27,7 +30,7 @@ pub mod shaders {
 }
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
-pub use context::GpuContext;
+pub use context::{GpuContext, OPTIONAL_FEATURES};
 use layout::UpdateParams;
 use passes::{
     CheckKernel, DirectLightKernel, EyeOutputs, EyePassKernel, GatherInputs, GatherKernel,
@@ -39,6 +42,7 @@ use ppm_core::bsdf::{BsdfCase, BsdfOutcome};
 use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::check::check_hit_points;
 use ppm_core::compile::{CompiledScene, SceneFeatures};
+use ppm_core::device_time::DeviceTime;
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
@@ -55,6 +59,8 @@ use ppm_core::passes::{
 use ppm_core::update::gather::{GatherCase, SlotState};
 use scan::Scan;
 pub use specialise::Specialisation;
+use std::sync::Mutex;
+use timestamps::{Encoder, Timer};
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
 /// and their paths' weights (or pose-A partners), allocated when a region pass (or a pairing
@@ -153,6 +159,9 @@ pub struct WgpuBackend {
     partners: wgpu::Buffer,
     /// Whether each submission's wall time goes to stderr (`PPM_WGPU_TIMING=1`).
     timing: bool,
+    /// Each kernel's device time, where the device has timestamp queries (behind a lock
+    /// because passes record through `&self`).
+    timer: Option<Mutex<Timer>>,
     /// The loaded scene's features, which specialise the eye and photon pipelines.
     features: Option<SceneFeatures>,
     /// Every pipeline built with everything compiled in ([`WgpuBackend::set_general`]).
@@ -194,6 +203,7 @@ impl WgpuBackend {
         let partners = buffers::storage_init(&ctx, "partners", &[PathDeposits::default()]);
         let placeholder = buffers::storage_init(&ctx, "pending placeholder", &[0.0f32; 4]);
         let no_weights = buffers::storage_init(&ctx, "weights placeholder", &[0.0f32; 4]);
+        let timer = Timer::new(&ctx).map(Mutex::new);
         Ok(Self {
             ctx,
             kernels,
@@ -219,6 +229,7 @@ impl WgpuBackend {
             crossed,
             partners,
             timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
+            timer,
             features: None,
             general: false,
             moving: None,
@@ -259,6 +270,11 @@ impl WgpuBackend {
     /// Batches the last photon pass was split into.
     pub fn last_pass_batches(&self) -> u32 {
         self.batches
+    }
+
+    /// Whether [`Backend::device_times`] measures anything: the device has timestamp queries.
+    pub fn has_device_times(&self) -> bool {
+        self.timer.is_some()
     }
 
     /// The adapter that runs the passes, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
@@ -340,21 +356,23 @@ impl WgpuBackend {
     }
 
     /// Submits the commands `record` writes, with the counters reset first, then reads the
-    /// counters back; with `PPM_WGPU_TIMING=1`, prints the submission's wall time.
+    /// counters back; with `PPM_WGPU_TIMING=1`, prints the submission's wall time. On a
+    /// device with timestamp queries, each compute pass is timed under `pass`.
     fn run(
         &self,
         pass: &'static str,
-        record: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<(), BackendError>,
+        record: impl FnOnce(&mut Encoder<'_>) -> Result<(), BackendError>,
     ) -> Result<[u32; 4], BackendError> {
         let start = std::time::Instant::now();
         self.ctx
             .queue
             .write_buffer(&self.counters, 0, bytemuck::cast_slice(&COUNTERS_RESET));
+        let mut timer = self.timer.as_ref().map(lock);
+        if let Some(timer) = timer.as_deref_mut() {
+            timer.begin(&self.ctx, pass)?;
+        }
         self.ctx.scoped(pass, || -> Result<(), BackendError> {
-            let mut encoder = self
-                .ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(pass) });
+            let mut encoder = Encoder::new(&self.ctx.device, pass, timer.as_deref_mut());
             record(&mut encoder)?;
             self.ctx.queue.submit([encoder.finish()]);
             Ok(())
@@ -1133,6 +1151,14 @@ impl Backend for WgpuBackend {
         Some(self)
     }
 
+    /// Read back from the timestamps every submission resolved since the last call.
+    fn device_times(&mut self) -> Result<Option<Vec<DeviceTime>>, BackendError> {
+        self.timer
+            .as_ref()
+            .map(|timer| lock(timer).take(&self.ctx))
+            .transpose()
+    }
+
     /// The move's pipelines until a move, the pending sums until a deferred gather, and the
     /// code the eye and photon pipelines were specialised without.
     fn not_created(&self) -> Vec<String> {
@@ -1197,4 +1223,10 @@ impl Backend for WgpuBackend {
         }
         out
     }
+}
+
+/// The timer, even if a pass panicked while holding it: the next submission drops the pairs
+/// of one that never finished ([`Timer::begin`]).
+fn lock(timer: &Mutex<Timer>) -> std::sync::MutexGuard<'_, Timer> {
+    timer.lock().unwrap_or_else(|p| p.into_inner())
 }

@@ -6,6 +6,7 @@ use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
 use crate::shaders;
 use crate::specialise::{Specialisation, VARIANTS};
+use crate::timestamps::Encoder;
 use ppm_core::layout::{
     DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
 };
@@ -73,7 +74,7 @@ impl EyePassKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         params: &EyePassParams,
         scene: &SceneBuffers,
         slots: &Slots,
@@ -138,7 +139,7 @@ impl DirectLightKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         params: &DirectLightParams,
         scene: &SceneBuffers,
         slots: &Slots,
@@ -225,7 +226,7 @@ impl PhotonPassKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         params: &PhotonPassParams,
         scene: &SceneBuffers,
         targets: &PhotonTargets,
@@ -323,7 +324,7 @@ impl GatherKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         inputs: &GatherInputs,
         map: &crate::photon_grid::PhotonMap,
         slots: &Slots,
@@ -377,7 +378,7 @@ impl ResolveKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         params: &ResolveParams,
         hit_points: &wgpu::Buffer,
         image: &wgpu::Buffer,
@@ -408,7 +409,7 @@ impl CheckKernel {
     }
 
     /// Records the finiteness check of every hit point.
-    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, slots: &Slots) {
+    pub fn record(&self, ctx: &GpuContext, encoder: &mut Encoder<'_>, slots: &Slots) {
         let group = self
             .0
             .bind(&ctx.device, &[slots.hit_points, slots.counters]);
@@ -438,7 +439,7 @@ impl VectorsKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         (cases, results): (&wgpu::Buffer, &wgpu::Buffer),
         count: u32,
     ) {
@@ -471,7 +472,7 @@ impl RngVectorsKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         (keys, bits): (&wgpu::Buffer, &wgpu::Buffer),
         count: u32,
         stratified: bool,
@@ -507,7 +508,7 @@ impl HitPointUpdateKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         params: &crate::layout::UpdateParams,
         fresh: &wgpu::Buffer,
         pending: &wgpu::Buffer,
@@ -543,7 +544,7 @@ impl LandingPathsKernel {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         map: &crate::photon_grid::PhotonMap,
         slots: &Slots,
         landed: &wgpu::Buffer,

@@ -8,6 +8,7 @@ use crate::layout::GridBuildParams;
 use crate::scan::Scan;
 use crate::shaders;
 use crate::table::{Table, Texel};
+use crate::timestamps::Encoder;
 use ppm_core::grid::{RADIUS_BINS, bucket_count};
 use ppm_core::layout::{GridParams, GridPhoton, Photon};
 use ppm_core::passes::BackendError;
@@ -88,7 +89,7 @@ impl PhotonGridKernels {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         scan: &Scan,
         buffers: &GridBuffers,
         (photons, weights, ranks, count): (wgpu::Buffer, wgpu::Buffer, &wgpu::Buffer, u32),
@@ -122,7 +123,7 @@ impl PhotonGridKernels {
             &buffers.sorted,
             ranks,
         ];
-        let step = |kernel: &Kernel, encoder: &mut wgpu::CommandEncoder, items: u32| {
+        let step = |kernel: &Kernel, encoder: &mut Encoder<'_>, items: u32| {
             kernel.dispatch(encoder, &kernel.bind(&ctx.device, &bindings), items);
         };
         // A fixed number of workgroups, each striding over the hit points (HISTOGRAM_GROUPS).

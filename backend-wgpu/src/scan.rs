@@ -4,6 +4,7 @@ use crate::buffers::{storage_zeroed, uniform};
 use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, shader_module};
 use crate::layout::ScanParams;
+use crate::timestamps::Encoder;
 use ppm_core::passes::BackendError;
 
 /// Elements one workgroup scans (`BLOCK` in scan.wgsl).
@@ -33,7 +34,7 @@ impl Scan {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         data: &wgpu::Buffer,
         count: u32,
     ) -> Result<(), BackendError> {

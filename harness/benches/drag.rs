@@ -16,15 +16,17 @@
 //! cost).
 
 mod common;
+#[path = "common/drag.rs"]
+mod drag;
 
 use backend_cpu::CpuBackend;
 use common::{backends, setting, wgpu_if_wanted};
+use drag::{drag, step_of, warm_up};
 use glam::{Quat, Vec3};
 use harness::driver::Renderer;
-use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use ppm_core::params::{MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::{Move, Scene};
-use std::time::Instant;
 
 fn main() {
     let warmup: u32 = setting("PPM_BENCH_WARMUP", 30);
@@ -68,48 +70,23 @@ fn main() {
             println!("{name}: declares no move to take a thirtieth of");
             continue;
         };
-        let step = Move {
-            translation: declared.translation / 30.0,
-            rotation: Quat::IDENTITY.slerp(declared.rotation, 1.0 / 30.0),
-            ..declared
-        };
+        let step = step_of(declared);
         let mut p = RenderParams::for_scene(&scene);
         (p.width, p.height) = (size, size);
         let row = |backend: &mut dyn Backend| {
             let mut r =
                 Renderer::start(backend, scene.clone(), &p, &move_params).expect("the scene loads");
-            let mut iteration_ms = Vec::new();
-            for _ in 0..warmup {
-                let t = Instant::now();
-                r.iteration().expect("an iteration runs");
-                iteration_ms.push(t.elapsed().as_secs_f64() * 1e3);
-            }
-            let (mut move_ms, mut drag_ms, mut reset, mut corrected) =
-                (Vec::new(), Vec::new(), 0, 0);
-            for _ in 0..moves {
-                let t = Instant::now();
-                let m = r
-                    .move_objects(&[step], MoveMode::Local)
-                    .expect("a move runs");
-                move_ms.push(t.elapsed().as_secs_f64() * 1e3);
-                (reset, corrected) = (reset + m.updated, corrected + m.direct_corrected);
-                let t = Instant::now();
-                r.iteration().expect("an iteration runs");
-                drag_ms.push(t.elapsed().as_secs_f64() * 1e3);
-            }
-            let tail = &iteration_ms[iteration_ms.len().saturating_sub(10)..];
-            let per_iteration = tail.iter().sum::<f64>() / tail.len().max(1) as f64;
-            let mean = |ms: &[f64]| ms.iter().sum::<f64>() / ms.len().max(1) as f64;
-            let (per_move, per_drag_iteration) = (mean(&move_ms), mean(&drag_ms));
-            let largest = move_ms.iter().copied().fold(0.0, f64::max);
-            let n = u64::from(moves.max(1));
+            let per_iteration = warm_up(&mut r, warmup);
+            let d = drag(&mut r, step, moves);
             println!(
-                "{name:<14} {:<5} {per_iteration:>12.1} {per_drag_iteration:>11.1} {per_move:>9.1} \
-                 {largest:>9.1} {:>10.2} {:>9} {:>9}",
+                "{name:<14} {:<5} {per_iteration:>12.1} {:>11.1} {:>9.1} {:>9.1} {:>10.2} {:>9} {:>9}",
                 r.backend().name(),
-                per_move / per_iteration,
-                reset / n,
-                corrected / n
+                d.iteration_ms,
+                d.move_ms,
+                d.largest_ms,
+                d.move_ms / per_iteration,
+                d.reset,
+                d.corrected
             );
         };
         if backends.contains("cpu") {

@@ -1,7 +1,8 @@
-//! The JSON report of a render: parameters, counters, time per pass kind, and what the scene
-//! did not need and was left out.
+//! The JSON report of a render: parameters, counters, time per pass kind (and per kernel on
+//! the device, where it measures them), and what the scene did not need and was left out.
 
 use ppm_core::compile::{CompiledScene, SceneFeatures};
+use ppm_core::device_time::DeviceTime;
 use ppm_core::params::{DirectMode, Estimator, RenderParams};
 use ppm_core::scene::{Scene, degenerate_triangle_count};
 use serde::{Deserialize, Serialize};
@@ -71,6 +72,10 @@ pub struct RenderReport {
     pub rays: RayCounts,
     /// Seconds per pass kind.
     pub times: PassTimes,
+    /// Seconds the device spent in each kernel of each pass, as it measured them (timestamp
+    /// queries); absent where the backend cannot measure them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_times: Option<Vec<DeviceTime>>,
     /// Passes and code paths not run because the scene or settings do not need them.
     pub left_out: Vec<String>,
     /// Pixels that were not finite after a failed pass and were written as zero.
@@ -109,6 +114,7 @@ impl RenderReport {
             photons_gathered: 0,
             rays: RayCounts::default(),
             times: PassTimes::default(),
+            device_times: None,
             left_out: Vec::new(),
             non_finite_pixels_zeroed: 0,
             error: None,

@@ -19,7 +19,8 @@
 //!   resets and corrections.
 //! - [`params`], [`image`], [`metrics`], [`stats`]: render settings, images, the distances
 //!   error reports measure and the statistics of the tests of agreement; [`limits`]: the
-//!   sizes refused before anything is allocated or traced.
+//!   sizes refused before anything is allocated or traced; [`device_time`]: the time a
+//!   device measured in each kernel of each pass.
 
 #![warn(missing_docs)]
 
@@ -27,6 +28,7 @@ pub mod bsdf;
 pub mod camera_move;
 pub mod check;
 pub mod compile;
+pub mod device_time;
 pub mod direct_light;
 pub mod emission;
 pub mod eye_path;

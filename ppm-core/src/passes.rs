@@ -10,6 +10,7 @@
 
 use crate::camera_move::{CameraMove, CameraMoveStats};
 use crate::compile::CompiledScene;
+use crate::device_time::DeviceTime;
 use crate::emission::PhotonSource;
 use crate::image::Image;
 use crate::layout::{
@@ -321,6 +322,13 @@ pub trait Backend:
     /// report lists it under `left_out`.
     fn not_created(&self) -> Vec<String> {
         Vec::new()
+    }
+
+    /// The time the device spent in each kernel of each pass since the last call, as the
+    /// device measured it (timestamp queries); `None` where the backend cannot measure it (a
+    /// CPU backend, an adapter without timestamps), never zeros.
+    fn device_times(&mut self) -> Result<Option<Vec<DeviceTime>>, BackendError> {
+        Ok(None)
     }
 }
 

@@ -5,6 +5,7 @@ use crate::buffers::SceneBuffers;
 use crate::context::GpuContext;
 use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
 use crate::shaders;
+use crate::timestamps::Encoder;
 use std::sync::OnceLock;
 
 use Slot::{Read, ReadWrite, Table, Uniform, Unused};
@@ -165,7 +166,7 @@ impl LocalMoveKernels {
     pub fn record(
         &self,
         ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
+        encoder: &mut Encoder<'_>,
         (stage, glass): (MoveStage, bool),
         b: &MoveBindings,
         items: u32,

@@ -221,6 +221,16 @@ impl<'a> Renderer<'a> {
             _ => self.ordinary_pass()?,
         }
         self.report.passes += 1;
+        self.collect_device_times()
+    }
+
+    /// Adds what the backend's device measured since the last call (a move's passes, then an
+    /// iteration's) to the report; nothing where it measures nothing.
+    fn collect_device_times(&mut self) -> Result<(), BackendError> {
+        if let Some(times) = self.backend.device_times()? {
+            let total = self.report.device_times.get_or_insert_default();
+            ppm_core::device_time::add(total, &times);
+        }
         Ok(())
     }
 
@@ -249,6 +259,7 @@ impl<'a> Renderer<'a> {
         let t = Instant::now();
         let image = self.backend.resolve(&self.resolve_params())?;
         self.report.times.resolve += t.elapsed().as_secs_f64();
+        self.collect_device_times()?;
         Ok(image)
     }
 
@@ -306,7 +317,8 @@ impl<'a> Renderer<'a> {
         Ok(())
     }
 
-    /// What ran so far: counters and time per pass kind.
+    /// What ran so far: counters and time per pass kind (on the device up to the last
+    /// iteration or resolve).
     pub fn report(&self) -> &RenderReport {
         &self.report
     }

@@ -8,7 +8,7 @@ use crate::cli::interrupt;
 use crate::cli::options::BackendChoice;
 use crate::pick::{DragPlane, Picker, ray};
 use anyhow::{Context, Result, anyhow};
-use backend_wgpu::{GpuContext, WgpuBackend};
+use backend_wgpu::{GpuContext, OPTIONAL_FEATURES, WgpuBackend};
 use glam::{Quat, Vec3};
 use ppm_core::compile::gpu_camera;
 use ppm_core::passes::Backend;
@@ -265,6 +265,8 @@ impl Running {
         .context("no wgpu adapter can draw into the window (on Linux, install a Vulkan driver such as mesa-vulkan-drivers)")?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("ppm view"),
+            // Timestamps where offered: the panel then shows each pass's device time.
+            required_features: adapter.features() & OPTIONAL_FEATURES,
             required_limits: adapter.limits(),
             ..Default::default()
         }))

@@ -1,5 +1,6 @@
 //! The side panel: what each pane is doing (iterations, photons per second, milliseconds per
-//! iteration by pass, what the last move cost and kept) and the settings that change live.
+//! iteration by pass, on the device too where it measures them, what the last move cost and
+//! kept) and the settings that change live.
 
 use super::worker::{PaneStats, Shared};
 use ppm_core::params::MoveMode;
@@ -110,6 +111,13 @@ fn pane_stats(ui: &mut egui::Ui, s: &PaneStats) {
         t.gather,
         t.resolve
     ));
+    if let Some(device) = &s.device_ms {
+        let lines: Vec<String> = device
+            .iter()
+            .map(|(pass, ms)| format!("  {pass:<13} {ms:>7.2}"))
+            .collect();
+        ui.monospace(format!("device ms\n{}", lines.join("\n")));
+    }
     if let Some(m) = &s.last_move {
         let latency = s
             .last_latency_ms

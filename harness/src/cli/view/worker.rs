@@ -6,6 +6,7 @@
 use crate::cli::render::{OutputPaths, write_render};
 use crate::driver::{MoveReport, Renderer};
 use backend_wgpu::WgpuBackend;
+use ppm_core::device_time;
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -69,6 +70,9 @@ pub struct PaneStats {
     pub seconds: f64,
     pub photons_per_second: f64,
     pub last_iteration: IterationTimes,
+    /// Milliseconds the device spent per pass since the last figures (the last iteration and
+    /// any move before it), where it measures them.
+    pub device_ms: Option<Vec<(String, f64)>>,
     pub last_move: Option<MoveReport>,
     /// Milliseconds from a move's request to its first image on screen.
     pub last_latency_ms: Option<f64>,
@@ -180,6 +184,7 @@ struct Pane<'a> {
     /// Whether a move ran (the report's `left_out` then keeps the compensation passes).
     moved: bool,
     previous_times: crate::report::PassTimes,
+    previous_device_times: Vec<ppm_core::device_time::DeviceTime>,
 }
 
 /// Runs the panes until told to quit (or until the script ends, with `exit_after`), then
@@ -224,6 +229,7 @@ pub fn run(
             last_copy: Instant::now(),
             error: None,
             previous_times: Default::default(),
+            previous_device_times: Vec::new(),
         });
     }
     let mut player = script.map(|s| (s.events, 0usize));
@@ -649,6 +655,14 @@ fn update_stats(pane: &mut Pane, shared: &Shared, i: usize, present: f64) {
     view.stats.photons_per_second = report.photons_emitted as f64 / pane.spent.max(1e-9);
     view.stats.last_iteration = IterationTimes { total, ..times };
     pane.previous_times = report.times.clone();
+    view.stats.device_ms = report.device_times.as_ref().map(|now| {
+        let ran = device_time::since(now, &pane.previous_device_times);
+        pane.previous_device_times = now.clone();
+        device_time::per_pass(&ran)
+            .into_iter()
+            .map(|(pass, s)| (pass, s * 1e3))
+            .collect()
+    });
 }
 
 fn fail(pane: &mut Pane, shared: &Shared, i: usize, e: &BackendError) {
