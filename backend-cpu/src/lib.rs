@@ -573,15 +573,6 @@ impl DynamicBackend for CpuBackend {
     }
 }
 
-impl CpuBackend {
-    /// The box of each slot's eye-path vertices, slot by slot (eye passes with
-    /// `eye_flags::RECORD_BOUNDS` keep them): where a local move looks for what the slot may
-    /// have seen; empty before an eye pass.
-    pub fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        Ok(self.slot_bounds.clone())
-    }
-}
-
 impl GatherPass for CpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         let (scene, _) = loaded(&self.scene, "gather")?;

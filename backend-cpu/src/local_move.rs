@@ -110,7 +110,8 @@ pub fn resets_main(
 }
 
 /// [`ppm_core::local_move::moved_cover`], the moved triangles projected in parts, one per
-/// thread's share (cornell-bunny's 70,000 took 6 ms in one), or'ed into one.
+/// thread's share (a moved mesh of tens of thousands of triangles is a drag step's largest
+/// serial part otherwise), or'ed into one.
 fn moved_cover(scene: &SceneData, camera: &GpuCamera, objects: &[u32]) -> Vec<bool> {
     let triangles: Vec<[Vec3; 3]> = scene
         .triangles

@@ -3,8 +3,8 @@
 //! [`photon_flags::CHANGED_ONLY`] pass with the same random numbers in the same pose, so its
 //! paths are these, and which of their deposits it stores depends only on which segments cross
 //! a mover's box. Testing the kept segments against the boxes gives, bit for bit, what tracing
-//! the paths again gives, for a fraction of the time (docs/error-vs-time.md, "Pose A's
-//! correction from the last ordinary pass").
+//! the paths again gives, for a fraction of the time (docs/algorithm.md 3c, "Cost follows
+//! what the object touches").
 
 use crate::photon_pass::{Deposits, set_mask_bit};
 use crate::trace::SceneData;

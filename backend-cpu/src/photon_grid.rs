@@ -12,18 +12,17 @@ use rayon::prelude::*;
 
 /// Cells are this many times as wide as [`ppm_core::grid`]'s. A gather looks each cell up once
 /// for a run of neighbouring slots ([`crate::photon_search`]), so looking up fewer, fuller cells
-/// pays where one slot at a time would read too many photons: at 768x768 on cornell-box a
-/// gather took 92 ms with ppm-core's cells, 71 at 1.5 times, 70 at 2, 81 at 3 and 97 at 4.
-/// The cells fix which photons a slot tests, not which it finds, so sums differ from the wgpu
-/// backend's only by the order of their additions.
+/// pays where one slot at a time would read too many photons; past twice the width the extra
+/// photons each disc tests cost more than the lookups saved (`cargo bench -p harness --bench
+/// throughput` at 768x768 shows it in the gather column). The cells fix which photons a slot
+/// tests, not which it finds, so sums differ from the wgpu backend's only by the order of their
+/// additions.
 const CELL_SCALE: f32 = 2.0;
 
 /// The same for a pass every slot gathers within a floor disc (`r2_floor > 0`: local mode's
 /// corrections). Those discs are wide and find many photons in each cell, so reading fewer
-/// photons pays more than looking up fewer cells: cornell-box's canonical move at 256x256
-/// (8 passes' worth, after 15 s; three runs, alternately) gathered in 111-128 ms with
-/// [`CELL_SCALE`]'s cells and 73-79 with ppm-core's (0.7 times: no faster); a drag step's
-/// one pass in 8.7 and 11.4 ms, 7.4 and 9.7 (0.7 times: 9.0 and 10.0).
+/// photons pays more than looking up fewer cells, and ppm-core's own width gathers a large
+/// correction fastest (narrower cells gain nothing more).
 const FLOOR_CELL_SCALE: f32 = 1.0;
 
 /// A photon as the gather reads it: [`ppm_core::layout::GridPhoton`] with its normal decoded.

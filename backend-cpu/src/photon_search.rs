@@ -5,17 +5,14 @@
 //! row: at the radii in use their discs span nearly the same cells (at 768x768 a pixel covers
 //! under a unit of cornell-box, a disc several), so the run looks each cell up once and tests
 //! each of its photons against all its discs at once, in a loop the compiler vectorises (with
-//! AVX2 where the CPU has it, checked at run time). One slot at a time looked up some twenty
-//! cells per slot, most of them empty, and that, not the photons, was most of the gather's
-//! time: at 768x768 on cornell-box the gather took 202 ms one slot at a time, 92 in runs of 8
-//! (104 in runs of 4, 99 in runs of 16), 70 with cells twice as wide, 49 with AVX2. A run whose
-//! discs lie far apart (an edge between a near and a far surface) spans more cells than its
-//! slots do one by one; its halves are searched apart, down to single slots. Region passes,
-//! whose photons carry path weights, and discs that scan every photon are searched one slot at
-//! a time: both are rare, and the lanes stay free of a weight lookup per photon (which cost the
-//! ordinary gather 4 ms in 49). A local move's corrections, which also sum squared powers, run
-//! in lanes too (a lane set compiled with the squares, one without): searched one slot at a
-//! time, each of their gathers took 26 ms at 256x256 on cornell-box, in lanes 8.
+//! AVX2 where the CPU has it, checked at run time). One slot at a time would look up some
+//! twenty cells per slot, most of them empty, and those lookups, not the photons, would be
+//! most of the gather's time. A run whose discs lie far apart (an edge between a near and a
+//! far surface) spans more cells than its slots do one by one; its halves are searched apart,
+//! down to single slots. Region passes, whose photons carry path weights, and discs that scan
+//! every photon are searched one slot at a time: both are rare, and the lanes stay free of a
+//! weight lookup per photon. A local move's corrections, which also sum squared powers, run in
+//! lanes too (a lane set compiled with the squares, one without).
 //!
 //! A slot sums its photons cell by cell in z, y, x order and in bucket order within a cell,
 //! the order of [`for_photons_in_disc`], whatever the threads or the run; a run adds zero for

@@ -47,8 +47,7 @@ use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
     ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, PathDeposits, Photon,
-    PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags, gather_kind,
-    photon_flags,
+    PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags, photon_flags,
 };
 use ppm_core::local_move::LocalMove;
 use ppm_core::passes::{
@@ -56,7 +55,7 @@ use ppm_core::passes::{
     GatherStats, LocalMoveStats, LocalMoves, PhotonPass, PhotonStats, RandomSource, ReadBack,
     Resolve, SceneUpload, UpdateStats, check_gather_kind, crossed_mask_words,
 };
-use ppm_core::update::gather::{GatherCase, SlotState};
+use ppm_core::update::gather::{GatherCase, SlotState, uses_pending};
 use scan::Scan;
 pub use specialise::Specialisation;
 use std::sync::Mutex;
@@ -933,23 +932,10 @@ impl DynamicBackend for WgpuBackend {
     }
 }
 
-impl WgpuBackend {
-    /// The box of each slot's eye-path vertices, slot by slot (eye passes with
-    /// `eye_flags::RECORD_BOUNDS` keep them): where a local move looks for what the slot may
-    /// have seen; empty before an eye pass.
-    pub fn read_slot_bounds(&mut self) -> Result<Vec<SlotBounds>, BackendError> {
-        match (&self.slot_bounds, &self.hit_points) {
-            (Some(buffer), Some((_, slots))) => read_back(&self.ctx, buffer, *slots as usize),
-            _ => Ok(Vec::new()),
-        }
-    }
-}
-
 impl GatherPass for WgpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
         // Only deferred gathers and their apply touch the pending sums.
-        let kind = params.kind & gather_kind::KIND_MASK;
-        if kind == gather_kind::REGION_APPLY || params.kind & gather_kind::DEFERRED != 0 {
+        if uses_pending(params.kind) {
             self.allocate_pending("gather")?;
         }
         self.unconsumed = None;

@@ -6,9 +6,9 @@
 //! one bounds-checked load per invocation and per 32-bit word (lavapipe, which runs the WGSL
 //! on the CPU as CI does, splits them so), while a texel load is one vectorised gather; and a
 //! storage-texture load skips the mip-level arithmetic that lavapipe spends on every sampled
-//! texel fetch. `examples/table_reads.rs` reads 16-byte records at random on lavapipe: over
-//! 64 KiB, 257 ms from a storage buffer, 38 from a sampled texture and 20 from a table; over
-//! 16 MiB, 1070, 418 and 262 ms. GPUs load texels through the same caches as buffers.
+//! texel fetch. `cargo run --release -p backend-wgpu --example table_reads` reads 16-byte
+//! records at random from each, and on lavapipe the table is the fastest of the three by a
+//! wide margin (docs/performance.md). GPUs load texels through the same caches as buffers.
 //!
 //! The records keep their `#[repr(C)]` layout: a record of `n` 16-byte texels is texels
 //! `n*i .. n*i + n`, row-major in rows of [`ROW_TEXELS`] (`table_texel` in tables.wgsl), and

@@ -202,7 +202,7 @@ pub fn region_emission(
     }
 }
 
-/// A guided photon (docs/algorithm.md 3, "Guided photons must not bias").
+/// A guided photon (docs/algorithm.md 3, "Guided photons without bias").
 ///
 /// Weighted (ours): with probability `beta` an ordinary direction, otherwise a direction
 /// uniform in the cone around a recorded path's; the start point is drawn as for ordinary

@@ -3,12 +3,10 @@
 //! Cells are cubes anchored at the world origin whose edge follows the gather radii in use: the
 //! radius that [`CELL_QUANTILE`] of the visible points have at most, read from a histogram of
 //! their squared radii. A disc of that radius visits at most three cells per axis, which reads
-//! a third fewer photons than cells twice as wide (at most two per axis, measured on
-//! cornell-box at 768x768: 413 against 494 ms a gather); a larger disc visits more cells, and
-//! a disc that would visit more cells than there are photons scans the photons instead, so no
-//! spread of radii or of deposits makes a gather blow up.
-//! The cells do not depend on where the deposits lie, so a far-flung deposit starves no one
-//! (the grid the cells replace followed the bounds of all deposits and the largest radius).
+//! a third fewer photons than cells twice as wide (at most two per axis); a larger disc visits
+//! more cells, and a disc that would visit more cells than there are photons scans the photons
+//! instead, so no spread of radii or of deposits makes a gather blow up. The cells do not
+//! depend on where the deposits lie, so a far-flung deposit starves no one.
 //!
 //! A cell's coordinates hash to a 32-bit key and the key to a bucket; photons are stored in
 //! bucket order (ascending index within a bucket), each with its cell's key, so a gather reads
@@ -68,11 +66,10 @@ pub fn cell_size(histogram: &[u32]) -> f32 {
 
 /// Hash buckets for `photon_count` photons: two per photon (at least 1024), a power of two,
 /// so that few occupied cells share a bucket and a gather reads few photons of another cell.
-/// On cornell-box at 768x768 with 200,000 photons, the wgpu accumulation (which reads every
-/// photon of a bucket) and grid build (which counts and scans every bucket) took 888 + 81 ms
-/// with one bucket per four photons and 494 + 80 with two per photon, side by side; one per
-/// photon gave 530 + 72 and eight 486 + 135 (runs apart). The CPU gather, whose cells are
-/// twice as wide, took the same time with either (61 and 62 ms).
+/// The wgpu accumulation reads every photon of a bucket, so fewer buckets cost it most (one
+/// per four photons nearly doubled it); more than two per photon only lengthen the grid
+/// build, which counts and scans every bucket. The CPU gather, whose cells are twice as wide,
+/// does not notice either way.
 pub fn bucket_count(photon_count: u32) -> u32 {
     photon_count
         .saturating_mul(2)

@@ -412,9 +412,9 @@ pub const MOST_SAMPLES: u32 = 16;
 
 /// Paired samples per slot for a correction of `share` passes' worth of photons
 /// (`MoveParams::correction_for`): 4 per pass, from 4 to [`MOST_SAMPLES`]. A long history is
-/// worth a well-known change (16 samples cost cornell-box's canonical move about 60 ms on
-/// two cores); a drag step's short one is not (16 samples took a cornell-box drag step from
-/// 96 to 148 ms, 4 iterations).
+/// worth a well-known change, and 16 samples are a small part of a large move; a drag step's
+/// short one is not, and 16 samples would make each step half as dear again
+/// (docs/algorithm.md 3b).
 pub fn direct_samples_for(share: f32) -> u32 {
     (4.0 * share).round().clamp(4.0, MOST_SAMPLES as f32) as u32
 }

@@ -281,12 +281,11 @@ pub struct MoveParams {
 pub const ITERATIONS_PER_CORRECTION_PASS: u32 = 64;
 
 /// Iterations since the last move that pay for one pass of a move's correction
-/// ([`MoveParams::correction_for`]): a correction costs at most about a third of the
-/// rendering since the move before (on cornell-box at 256x256 a pass's worth, traced in both
-/// poses and gathered, takes about 30 ms against an iteration's 25-30). One pass per 8
-/// iterations left moves a second apart 3-5% further from the truth a second and two seconds
-/// after the last one (docs/error-vs-time.md, "Moves a second apart corrected as fully as a
-/// first move").
+/// ([`MoveParams::correction_for`], docs/algorithm.md 3b): a pass's worth, traced in both
+/// poses and gathered, costs about an iteration, so a correction costs at most about a
+/// quarter of the rendering since the move before. Moves a second apart then get a
+/// correction as full as a first move's; half as many passes left them further from the
+/// truth after the last one.
 pub const ITERATIONS_PAYING_A_CORRECTION_PASS: u32 = 4;
 
 impl MoveParams {
@@ -301,14 +300,11 @@ impl MoveParams {
     /// spend is what the time between them pays for: one pass per
     /// [`ITERATIONS_PAYING_A_CORRECTION_PASS`] since the last move, so that a drag, which
     /// moves at every iteration, corrects with one small and quick pass (a quarter or half
-    /// of one was measurably worse right after the drag: docs/error-vs-time.md), and moves a
+    /// of one leaves the image right after the drag further from the truth), and moves a
     /// second apart after a long history with several. At least one, at most
     /// `correction_passes`. The disc narrows as `passes^(-1/6)`, a density estimate's
     /// bandwidth rule in two dimensions, trading the correction's noise for its blur of the
-    /// change. Measured after 15 s of warm-up (about 500 iterations) on cornell-box, local
-    /// mode reached restart's error 8 s after the move 4.00 s after it with 2 passes within
-    /// 3 radii, 1.88 s with 8 within 3, 1.26 s with 8 within 2, and 1.39 s with 16 within 2
-    /// (whose move cost 531 ms).
+    /// change (docs/algorithm.md 3b).
     pub fn correction_for(&self, history: u32, since_move: u32) -> (f32, f32) {
         if self.correction_passes == 0 {
             return (0.0, self.correction_radii);

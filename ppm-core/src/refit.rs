@@ -1,6 +1,6 @@
 //! A moved pose's flat buffers without a new BVH: a drag sends many small moves in a row,
-//! and rebuilding the whole tree for each cost cornell-bunny's local moves a quarter of their
-//! time (34 ms of 148 at 256x256, its 70k triangles). A rigid move changes only the moved
+//! and rebuilding the whole tree for each would cost a scene of many triangles (cornell-bunny's
+//! 70,000) a quarter of every local move. A rigid move changes only the moved
 //! objects' triangles: they are rewritten where the tree keeps them, and the boxes of their
 //! leaves and of the leaves' ancestors are refitted, without a new leaf order and without
 //! reading the rest of the scene (a drag writes into the buffers of the pose before last). A

@@ -1,4 +1,4 @@
-//! The stress family (the stability issue): small scenes that push the renderer into corners,
+//! The stress family (docs/stability.md): small scenes that push the renderer into corners,
 //! each saying in one line what it stresses, and what the result must be: a closed form where
 //! one exists, or at least finite statistics.
 

@@ -71,8 +71,8 @@ use std::time::Instant;
 
 /// The widest correction disc, in radii of the pass's floor, for a correction of two passes'
 /// worth or more; one of `P < 2` passes' worth widens to `P` floors at most. A disc's cost
-/// grows with its area, and a drag step's one-pass correction does not widen: on the drag
-/// bench widening cost a cornell-box step 23 ms, two thirds of an iteration.
+/// grows with its area, and a drag step's one-pass correction does not widen: there it cost
+/// a step a large share of an iteration (docs/algorithm.md 3b).
 const CORRECTION_WIDEST: f32 = 2.0;
 
 /// Lights up to which the direct-light test takes each emitting triangle's box; beyond, the

@@ -40,11 +40,10 @@ use std::time::Instant;
 
 /// After a local move, one iteration in this many traces eye paths and direct light only for
 /// the slots with the fewest iterations (the ones the move reset, until they catch up); the
-/// others serve every slot. Every slot gathers every iteration's photons. Measured on
-/// cornell-box, 15 s of warm-up, pixel error 2 s / 8 s after the move: 0.038 / 0.030
-/// focusing every second iteration, 0.038 / 0.033 every one. A kept slot's direct-light
-/// correction weighs less with each sample of its own; a reset slot converges faster with
-/// cheap iterations.
+/// others serve every slot. Every slot gathers every iteration's photons. Focusing every
+/// iteration gains nothing right after the move and starves the kept slots of new samples
+/// afterwards (docs/algorithm.md 3b). A kept slot's direct-light correction weighs less with
+/// each sample of its own; a reset slot converges faster with cheap iterations.
 pub const FOCUS_PERIOD: u32 = 2;
 
 /// Which iteration, pass and pose comes next: the keys of every random stream, so that with

@@ -175,16 +175,6 @@ impl MaterialKind {
             _ => false,
         }
     }
-
-    /// Whether eye and photon paths always continue through the surface (mirror, glass,
-    /// conductor) rather than stop at it (a coated surface holds visible points under its
-    /// coat).
-    pub fn is_specular(&self) -> bool {
-        matches!(
-            self,
-            Self::Mirror { .. } | Self::Glass { .. } | Self::Conductor { .. }
-        )
-    }
 }
 
 /// A named triangle mesh with one material.

@@ -49,7 +49,7 @@ pub fn ppm_update(s: Statistics, m: f32, dtau: [f32; 3], alpha: f32) -> Statisti
 }
 
 /// Folds one gather of compensation (negative) photons into the statistics (thesis eqs 5 to
-/// 7, docs/algorithm.md 3 "Counts under negative photons").
+/// 7, docs/algorithm.md 3, "Counts that go negative").
 ///
 /// `m` counts the negative photons found (in ordinary-photon units), `dtau` is their
 /// (negative) flux. The count falls by `alpha * m` and radius and flux grow by the ratio

@@ -20,10 +20,9 @@
 use crate::layout::Photon;
 use glam::Vec3;
 
-/// Stored deposits per path that pose B pairs with pose A's: on cornell-box's drag, pairing
-/// the first 1, 2, 3 or 4 measured 0.074, 0.067, 0.063 and 0.062 a quarter second after it,
-/// pairing all of them 0.062 (docs/error-vs-time.md, "A path's two deposits counted as
-/// one").
+/// Stored deposits per path that pose B pairs with pose A's (docs/algorithm.md 3c). A drag's
+/// error right after it falls with each of the first four paired and no further when every
+/// deposit is, while pose A's record of a path stays a fixed size.
 pub const PAIRED_DEPOSITS: usize = 4;
 
 /// A pose-A deposit a pose-B deposit is paired with: where it landed, its power's luminance
@@ -86,11 +85,10 @@ pub fn variance_term(own: f32, partner_in_disc: Option<f32>, cancels: bool) -> f
 /// The share of its two squares a pair counts at least, unless it cancels exactly. Where few
 /// changed paths pass, a disc's variance rests on a handful of pairs; changed paths that land
 /// almost where they did, with the same power, would leave it near zero although another
-/// could as well have landed elsewhere, and the slot would keep its stale history whole. On
-/// wedding-band's drag, such pairs counted at nothing measured 5% to 9% above counting each
-/// deposit alone. A pair that cancels exactly is a path the move did not change: counted at
-/// nothing, it took cornell-box's drag 6% nearer the truth right after it
-/// (docs/error-vs-time.md, "Pairs that cancel count nothing").
+/// could as well have landed elsewhere, and the slot would keep its stale history whole
+/// (wedding-band's drag, whose corrections are sparse, ends further from the truth so). A
+/// pair that cancels exactly is a path the move did not change, and counts nothing
+/// (docs/algorithm.md 3c).
 pub const PAIR_FLOOR: f32 = 0.25;
 
 /// The cross term of a pair of luminances `a` (pose A) and `b` (pose B), floored
