@@ -14,8 +14,9 @@
 //! of a pixel from one centre takes mostly that pixel's). The slot inherits only where every
 //! one of them is alike: the same object and material, normals within [`NORMAL_COS`], light
 //! passed on, a history that saw that object alone, and a visible point within its gather
-//! radius of the new one, or within the diagonal of its pixel's footprint where that is
-//! larger (its visible points wandered over that footprint as its jitter drew them). A pixel
+//! radius of the new one, or within twice the diagonal of its pixel's footprint where that
+//! is larger (its visible points wandered over that footprint as its jitter drew them, and
+//! the new one over its own, up to a pixel away on each axis). A pixel
 //! near an edge, in the old view or the new, starts over: its one fresh eye path fell on one
 //! side of the edge, and inheriting that side's light would weigh one sample as a history.
 //! Each counts with its share times `a`, the ratio of the smaller footprint's area to the
@@ -265,7 +266,8 @@ pub fn inherit_slot(
             let from_position = Vec3::from(from.position);
             let (diagonal, from_area) =
                 footprint(&request.before, from_position, Vec3::from(from.normal));
-            let reach2 = from.r2.max(diagonal * diagonal);
+            // Both points lie somewhere in footprints up to a pixel apart on each axis.
+            let reach2 = from.r2.max(4.0 * diagonal * diagonal);
             let d2 = position.distance_squared(from_position);
             if d2 >= reach2 || d2.is_nan() {
                 return false;

@@ -63,6 +63,9 @@ enum Fault {
     ResetsNothing,
     /// A local move's direct-light change leaves every direct sum as it was.
     SkipsDirectChange,
+    /// A camera move's inheritance counts the slots kept but leaves each as the fresh eye
+    /// pass left it: the render starts over while it says it kept its light.
+    InheritsNothing,
 }
 
 struct Broken(CpuBackend, Fault);
@@ -88,7 +91,8 @@ impl Broken {
             | Fault::SkipsEmptiedReset
             | Fault::SkewsKind(_)
             | Fault::ResetsNothing
-            | Fault::SkipsDirectChange => *p,
+            | Fault::SkipsDirectChange
+            | Fault::InheritsNothing => *p,
         }
     }
 }
@@ -233,7 +237,12 @@ impl LocalMoves for Broken {
         self.0.begin_camera_move(request)
     }
     fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
-        self.0.inherit_light()
+        let fresh = self.0.read_hit_points()?;
+        let stats = self.0.inherit_light()?;
+        if let Fault::InheritsNothing = self.1 {
+            self.0.write_hit_points(&fresh)?;
+        }
+        Ok(stats)
     }
 }
 impl DynamicBackend for Broken {
@@ -463,14 +472,24 @@ fn conformance_fails_a_backend_that_ignores_pairing() {
 }
 
 /// A backend whose local move skips one of its passes over the slots fails the check that
-/// names that pass, and `moves/local/same-seed`; the other pass's check passes it.
+/// names that pass, and `moves/local/same-seed` where that pass is an object move's; the
+/// other passes' checks pass it.
 fn conformance_fails_a_backend_that_skips_a_local_move_pass() {
     for (fault, fails, passes) in [
-        (Fault::ResetsNothing, "local-resets", None),
+        (
+            Fault::ResetsNothing,
+            &["local-resets", "moves/local/same-seed"][..],
+            None,
+        ),
         (
             Fault::SkipsDirectChange,
-            "local-direct-change",
+            &["local-direct-change", "moves/local/same-seed"],
             Some("local-resets"),
+        ),
+        (
+            Fault::InheritsNothing,
+            &["camera-move"],
+            Some("moves/local/same-seed"),
         ),
     ] {
         let verdict = run_conformance(
@@ -479,11 +498,9 @@ fn conformance_fails_a_backend_that_skips_a_local_move_pass() {
             Tier::Local,
         );
         figure!("{verdict}");
-        assert!(!verdict.check(fails).unwrap().passed, "{fails}: {verdict}");
-        assert!(
-            !verdict.check("moves/local/same-seed").unwrap().passed,
-            "{verdict}"
-        );
+        for &fails in fails {
+            assert!(!verdict.check(fails).unwrap().passed, "{fails}: {verdict}");
+        }
         if let Some(passes) = passes {
             assert!(verdict.check(passes).unwrap().passed, "{passes}: {verdict}");
         }

@@ -6,13 +6,20 @@
 //! start over and the iterations that follow serve them first. Restart, the thesis's modes,
 //! `ppm`'s fixed hit points and a backend without the passes start over.
 
-use super::{MoveReport, Renderer, local};
+use super::{MoveReport, Renderer, local, pass_params};
 use ppm_core::camera_move::CameraMove;
 use ppm_core::compile::gpu_camera;
+use ppm_core::layout::eye_flags;
 use ppm_core::params::{Estimator, MoveMode};
 use ppm_core::passes::BackendError;
 use ppm_core::scene::Camera;
 use std::time::Instant;
+
+/// Eye and direct-light passes each iteration adds, after a camera move, for the slots that
+/// started over: an edge of the new view (a light's outline above all) starts over, and its
+/// antialiasing is what its error is made of, which only eye samples reduce; each such pass
+/// costs only the slots it serves, a few in a hundred.
+pub const CATCH_UP: u32 = 4;
 
 impl Renderer<'_> {
     /// Moves the camera to `camera` the way `mode` says: local mode keeps the light of what
@@ -77,11 +84,35 @@ impl Renderer<'_> {
         let stats = local(self.backend)?.inherit_light()?;
         self.direct_light(key, true)?;
         self.counters.iteration += 1;
-        self.counters.steps_since_move = 0;
-        // The slots that started over hold no iteration: the next ones serve them first.
+        // The slots that started over hold this one sample: the next iterations serve them
+        // first, and catch them up.
+        self.counters.steps_since_move = 1;
         self.focus = true;
+        self.catch_up = true;
         report.kept = stats.inherited;
         report.updated = stats.reset;
         Ok(None)
+    }
+}
+
+impl Renderer<'_> {
+    /// [`CATCH_UP`] eye and direct-light passes for the slots with fewer direct samples than
+    /// the iterations since the move times `CATCH_UP + 1`; the others rest. Ends the catch-up
+    /// once a pass finds no slot behind.
+    pub(super) fn catch_up(&mut self) -> Result<(), BackendError> {
+        let target = (self.counters.steps_since_move + 1) * (CATCH_UP + 1);
+        for _ in 0..CATCH_UP {
+            let key = self.counters.iteration;
+            let mut params = pass_params::eye_pass(&self.params, self.extent, key, true);
+            params.flags |= eye_flags::FOCUS;
+            params.rest_at = target;
+            if self.run_eye_pass(&params)?.rays == 0 {
+                self.catch_up = false;
+                return Ok(());
+            }
+            self.direct_light(key, true)?;
+            self.counters.iteration += 1;
+        }
+        Ok(())
     }
 }

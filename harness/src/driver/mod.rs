@@ -34,7 +34,7 @@ use ppm_core::layout::{
     PhotonPassParams, RecordedPath, ResolveParams, eye_flags, gather_kind, photon_flags,
 };
 use ppm_core::params::{Estimator, MoveParams, RenderParams};
-use ppm_core::passes::{Backend, BackendError, DynamicBackend, LocalMoves, PhotonStats};
+use ppm_core::passes::{Backend, BackendError, DynamicBackend, EyeStats, LocalMoves, PhotonStats};
 use ppm_core::scene::Scene;
 use std::time::Instant;
 
@@ -82,6 +82,9 @@ pub struct Renderer<'a> {
     counters: Counters,
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,
+    /// After a camera move, each iteration also traces eye paths and direct light again for
+    /// the slots that started over ([`camera::CATCH_UP`]), until none is behind.
+    catch_up: bool,
     /// Ordinary passes ask the backend to keep their paths
     /// ([`photon_flags::KEEP_PATHS`]): set by the first local move, so that a render that
     /// never moves records nothing, and the next moves' pose-A corrections are answered from
@@ -138,6 +141,7 @@ impl<'a> Renderer<'a> {
                 ..Counters::default()
             },
             focus: false,
+            catch_up: false,
             keep_paths: false,
             guide: None,
             counts: PhotonCounts::default(),
@@ -163,6 +167,7 @@ impl<'a> Renderer<'a> {
         self.report.times.bvh_build += self.compiled.bvh_build_time.as_secs_f64();
         self.guide = None;
         self.focus = false;
+        self.catch_up = false;
         self.counters.fresh = true;
         if self.params.estimator == Estimator::Ppm {
             self.eye_pass(self.counters.frame, false)?;
@@ -197,6 +202,9 @@ impl<'a> Renderer<'a> {
             self.direct_light(key, true)?;
             self.counters.iteration += 1;
             self.counters.fresh = false;
+            if self.catch_up {
+                self.catch_up()?;
+            }
         }
         let guided_turn = self.counters.steps_since_move.is_multiple_of(2);
         self.counters.steps_since_move += 1;
@@ -346,13 +354,17 @@ impl<'a> Renderer<'a> {
     }
 
     fn eye_pass(&mut self, key: u32, keep: bool) -> Result<(), BackendError> {
-        let params = self.eye_params(key, keep);
+        self.run_eye_pass(&self.eye_params(key, keep)).map(|_| ())
+    }
+
+    /// Runs an eye pass and counts its time and rays.
+    fn run_eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
         let t = Instant::now();
-        let stats = self.backend.eye_pass(&params)?;
+        let stats = self.backend.eye_pass(params)?;
         self.report.times.eye += t.elapsed().as_secs_f64();
         self.report.rays.eye += stats.rays;
         self.report.hit_points = stats.hit_points;
-        Ok(())
+        Ok(stats)
     }
 
     fn direct_params(&self, key: u32, accumulate: bool) -> DirectLightParams {

@@ -39,6 +39,18 @@ pub struct Camera {
     pub height: u32,
 }
 
+impl Camera {
+    /// The camera turned by `degrees` about the up hint through its look-at point, then
+    /// brought `nearer` of the way to it (0.1: a tenth nearer; negative backs away).
+    pub fn orbited(&self, degrees: f32, nearer: f32) -> Camera {
+        let turn = Quat::from_axis_angle(self.up.normalize_or(Vec3::Y), degrees.to_radians());
+        Camera {
+            eye: self.look_at + turn * (self.eye - self.look_at) * (1.0 - nearer),
+            ..self.clone()
+        }
+    }
+}
+
 /// A named material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
