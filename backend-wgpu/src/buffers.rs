@@ -102,7 +102,7 @@ pub fn read_back<T: Pod>(
 
 /// The scene, uploaded once per `load_scene`.
 pub struct SceneBuffers {
-    /// Camera uniform.
+    /// Camera uniform, written in place when only the camera changes.
     pub camera: wgpu::Buffer,
     /// Every scene record in one table (scene.wgsl): materials (eight texels each), triangles
     /// in BVH leaf order (four), flattened BVH nodes (two), emitting triangles (four), the
@@ -128,6 +128,8 @@ pub struct SceneBuffers {
     pose: u64,
     /// Where each kind starts in the table, as `index` holds it.
     layout: SceneIndex,
+    /// The movers' boxes the table holds, to write them only when they change.
+    movers: Vec<GpuBounds>,
 }
 
 /// Bytes of one scene-table texel: every record is a whole number of them.
@@ -205,8 +207,15 @@ impl SceneBuffers {
                 storage_init(ctx, "texels", all)
             }
         };
+        let camera = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("camera"),
+                contents: bytemuck::bytes_of(&scene.camera),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
         Ok(Self {
-            camera: uniform(ctx, "camera", &scene.camera),
+            camera,
             table: Table::with_data(ctx, "scene", Texel::Words4, &bytes)?,
             index: uniform(ctx, "scene index", &index),
             texels,
@@ -216,6 +225,7 @@ impl SceneBuffers {
             triangle_count: scene.triangles.len() as u32,
             pose: scene.pose,
             layout: index,
+            movers: scene.movers.clone(),
         })
     }
 
@@ -226,14 +236,14 @@ impl SceneBuffers {
 
     /// Writes `scene` over these buffers in place, if they hold the pose it was refitted
     /// from (which shares its materials and lights) or the same pose ([`CompiledScene::pose`]
-    /// names them), with the same camera and number of movers' boxes: only what the refit
-    /// wrote and the boxes travel, so a drag step uploads what moved, not the scene.
-    /// Returns whether it did; if not, nothing was written.
+    /// names them), with the same number of movers' boxes: only what the refit wrote, the
+    /// boxes and the camera travel, each where it changed, so a drag step uploads what moved
+    /// and a camera step its 64 bytes, not the scene. Returns whether it did; if not,
+    /// nothing was written.
     pub fn update(&mut self, ctx: &GpuContext, scene: &CompiledScene) -> bool {
         let writes = scene.refit_from.as_ref().filter(|w| w.pose == self.pose);
         let layout = &self.layout;
-        let unchanged = scene.camera == self.camera_value
-            && scene.lights.len() == self.light_count
+        let unchanged = scene.lights.len() == self.light_count
             && scene.movers.len() as u32 == layout.mover_count
             && scene.triangles.len() as u32 == self.triangle_count
             && !scene.nodes.is_empty();
@@ -254,8 +264,16 @@ impl SceneBuffers {
                 self.table.write(ctx, first, bytemuck::cast_slice(records));
             }
         }
-        self.table
-            .write(ctx, layout.movers, bytemuck::cast_slice(&scene.movers));
+        if scene.movers != self.movers {
+            self.table
+                .write(ctx, layout.movers, bytemuck::cast_slice(&scene.movers));
+            self.movers.clone_from(&scene.movers);
+        }
+        if scene.camera != self.camera_value {
+            ctx.queue
+                .write_buffer(&self.camera, 0, bytemuck::bytes_of(&scene.camera));
+            self.camera_value = scene.camera;
+        }
         self.pose = scene.pose;
         true
     }

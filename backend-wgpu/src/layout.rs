@@ -2,7 +2,7 @@
 //! `ppm_core::layout`). Each is mirrored in the WGSL of its pass; `tests/layout.rs` checks both.
 
 use bytemuck::{Pod, Zeroable};
-use ppm_core::layout::GpuBounds;
+use ppm_core::layout::{CameraMoveParams, GpuBounds, HitPoint};
 
 /// scan.wgsl's parameters. 16 bytes.
 #[repr(C)]
@@ -206,4 +206,35 @@ pub struct ListParams {
     pub _pad0: u32,
     /// Padding.
     pub _pad1: u32,
+}
+
+/// camera_move_vectors.wgsl's input: a fresh slot of the new view, its box, and the camera
+/// move it inherits through (the old view's slots are the call's). 288 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct InheritCase {
+    /// The slot, traced fresh in the new view.
+    pub slot: HitPoint,
+    /// The box of its paths.
+    pub bounds: GpuBounds,
+    /// The cameras before and after.
+    pub request: CameraMoveParams,
+}
+
+/// camera_move_vectors.wgsl's output: `inherit_slot`'s slot and box after. 160 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct InheritOutcome {
+    /// The slot after.
+    pub slot: HitPoint,
+    /// Its box after.
+    pub bounds: GpuBounds,
+    /// Whether it inherited (0 or 1).
+    pub inherited: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }

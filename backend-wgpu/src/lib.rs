@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 mod buffers;
+mod camera_move;
 mod context;
 mod kernel;
 pub mod layout;
@@ -102,6 +103,8 @@ struct Kernels {
     landing: Option<LandingPathsKernel>,
     /// Parsed at the first local move, each pipeline compiled when a move first runs it.
     local: Option<local_move::LocalMoveKernels>,
+    /// Compiled at the first camera move.
+    camera: Option<camera_move::CameraMoveKernel>,
     scan: Scan,
 }
 
@@ -172,6 +175,11 @@ pub struct WgpuBackend {
     /// Whether a local move takes its pose-A pairs' light from the last move's pose B where
     /// that is its pose A ([`WgpuBackend::set_keep_pairs`]).
     keep_pairs: bool,
+    /// The camera move in progress, between its first pass and its last.
+    camera_moving: Option<camera_move::CameraInProgress>,
+    /// The old view's slots and boxes, copied when a camera move begins; allocated at the
+    /// first and kept.
+    camera_copies: Option<camera_move::Copies>,
 }
 
 impl WgpuBackend {
@@ -195,6 +203,7 @@ impl WgpuBackend {
             update: None,
             landing: None,
             local: None,
+            camera: None,
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
@@ -234,6 +243,8 @@ impl WgpuBackend {
             moving: None,
             move_buffers: None,
             keep_pairs: true,
+            camera_moving: None,
+            camera_copies: None,
         })
     }
 
@@ -419,6 +430,8 @@ impl SceneUpload for WgpuBackend {
         self.features = Some(scene.features);
         self.moving = None;
         self.move_buffers = None;
+        self.camera_moving = None;
+        self.camera_copies = None;
         self.hit_points = None;
         self.slot_bounds = None;
         self.chain_light = None;
@@ -485,6 +498,9 @@ impl EyePass for WgpuBackend {
         }
         self.map = None;
         self.unconsumed = None;
+        if let Some(moving) = &mut self.camera_moving {
+            moving.traced = !keep;
+        }
         self.check("eye", &counters)?;
         Ok(EyeStats {
             rays: u64::from(counters[COUNTER_RAYS]),
@@ -798,17 +814,12 @@ impl LocalMoves for WgpuBackend {
         self.move_direct_change()
     }
 
-    fn begin_camera_move(&mut self, _: &CameraMove) -> Result<(), BackendError> {
-        Err(BackendError::Unsupported(
-            "the wgpu backend keeps no light across a camera move yet".to_owned(),
-        ))
+    fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError> {
+        self.begin_camera(request)
     }
 
     fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
-        Err(BackendError::OutOfOrder {
-            pass: "inherit light",
-            needs: "begin_camera_move",
-        })
+        self.inherit()
     }
 }
 
@@ -1195,6 +1206,7 @@ impl Backend for WgpuBackend {
             ));
         }
         out.extend(self.local_moves_not_created());
+        out.extend(self.camera_moves_not_created());
         if let Some(d) = self.deposits.as_ref().filter(|d| d.weights.is_none()) {
             out.push(format!(
                 "photon path weights: {} bytes not allocated (no region pass)",

@@ -132,6 +132,14 @@ impl MoveBuffers {
     }
 }
 
+impl MoveBuffers {
+    /// Forgets the last move's pairs in its pose B: a camera move began, and they were
+    /// traced through the old view's pixels.
+    pub fn forget_pairs(&mut self) {
+        self.known_keys = None;
+    }
+}
+
 /// How [`WgpuBackend::record_move_with`] records a submission.
 #[derive(Clone, Copy)]
 struct Recording<'a> {

@@ -6,7 +6,7 @@ use ppm_core::bsdf::{BsdfCase, BsdfOutcome, Transport};
 use ppm_core::layout::*;
 use ppm_core::update::gather::{Found, GatherCase, SlotState};
 use ppm_core::update::pairing::PAIRED_DEPOSITS;
-use ppm_core::{direct_light, local_move};
+use ppm_core::{camera_move, direct_light, local_move};
 use std::mem::{offset_of, size_of};
 
 const LAYOUT_WGSL: &str = include_str!("../shaders/shared/layout.wgsl");
@@ -15,6 +15,7 @@ const RNG_WGSL: &str = include_str!("../shaders/shared/rng.wgsl");
 const LOCAL_MOVE_WGSL: &str = include_str!("../shaders/shared/local_move.wgsl");
 const DIRECT_LIGHT_WGSL: &str = include_str!("../shaders/shared/direct_light.wgsl");
 const SCREEN_COVER_WGSL: &str = include_str!("../shaders/shared/screen_cover.wgsl");
+const CAMERA_MOVE_WGSL: &str = include_str!("../shaders/shared/camera_move.wgsl");
 
 /// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
 /// layout.wgsl or in the assembled pass shaders.
@@ -287,6 +288,14 @@ fn pass_parameters_match_their_wgsl_twins() {
         _pad0,
         _pad1
     });
+    same_layout!(CameraMoveParams {
+        before,
+        after,
+        spp,
+        _pad0,
+        _pad1,
+        _pad2
+    });
 }
 
 #[test]
@@ -410,6 +419,24 @@ fn local_move_structs_match_their_wgsl_twins() {
     });
 }
 
+#[test]
+fn camera_move_structs_match_their_wgsl_twins() {
+    use backend_wgpu::layout::{InheritCase, InheritOutcome};
+    same_layout!(InheritCase {
+        slot,
+        bounds,
+        request
+    });
+    same_layout!(InheritOutcome {
+        slot,
+        bounds,
+        inherited,
+        _pad0,
+        _pad1,
+        _pad2
+    });
+}
+
 /// The value of the WGSL constant `name` of type `ty`, declared in one of `sources`.
 fn wgsl_constant<'a>(sources: &[&'a str], name: &str, ty: &str) -> &'a str {
     let line = sources
@@ -478,6 +505,7 @@ fn shared_constants_agree() {
         ("PAIR_DIRECTION", direct_light::PAIR_DIRECTION),
         ("PAIR_LIGHT_CHOICE", direct_light::PAIR_LIGHT_CHOICE),
         ("RAYS_PER_SAMPLE", direct_light::RAYS_PER_SAMPLE),
+        ("OBJECT_GROUPS", ppm_core::compile::OBJECT_GROUPS as u32),
     ] {
         let sources = [
             LAYOUT_WGSL,
@@ -485,6 +513,7 @@ fn shared_constants_agree() {
             RNG_WGSL,
             LOCAL_MOVE_WGSL,
             DIRECT_LIGHT_WGSL,
+            CAMERA_MOVE_WGSL,
         ];
         let literal = wgsl_constant(&sources, name, "u32").trim_end_matches('u');
         let parsed = match literal.strip_prefix("0x") {
@@ -500,8 +529,16 @@ fn shared_constants_agree() {
         ("F32_MAX", f32::MAX),
         ("F32_MIN_POSITIVE", f32::MIN_POSITIVE),
         ("COVER_EPSILON", f32::EPSILON),
+        ("NORMAL_COS", camera_move::NORMAL_COS),
+        ("GRAZING_COS", camera_move::GRAZING_COS),
     ] {
-        let sources = [LAYOUT_WGSL, BSDF_WGSL, LOCAL_MOVE_WGSL, SCREEN_COVER_WGSL];
+        let sources = [
+            LAYOUT_WGSL,
+            BSDF_WGSL,
+            LOCAL_MOVE_WGSL,
+            SCREEN_COVER_WGSL,
+            CAMERA_MOVE_WGSL,
+        ];
         let literal = wgsl_constant(&sources, name, "f32");
         assert_eq!(literal.parse::<f32>().unwrap(), value, "{name}");
     }

@@ -1,9 +1,9 @@
 //! A drag step's scene update written in place (the movers' boxes of the pose held, then a
-//! refit of it: `update_scene`) renders what the same pose uploaded whole renders: every eye
-//! path and every photon, bit for bit.
+//! refit of it: `update_scene`), and a camera step's (the camera alone), render what the same
+//! scene uploaded whole renders: every eye path and every photon, bit for bit.
 
 use backend_wgpu::{GpuContext, WgpuBackend};
-use ppm_core::compile::{CompiledScene, compile_scene, mover_boxes};
+use ppm_core::compile::{CompiledScene, compile_scene, gpu_camera, mover_boxes};
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{EyePassParams, PhotonPassParams};
 use ppm_core::passes::{EyePass, LocalMoves, PhotonPass, ReadBack, SceneUpload};
@@ -68,6 +68,28 @@ fn a_drag_step_written_in_place_renders_what_a_whole_upload_renders() {
     assert!(in_place.1 == uploaded.1, "the photons differ");
 }
 
+fn a_camera_step_written_in_place_renders_what_a_whole_upload_renders() {
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let a = compile_scene(&scene, 16, 16);
+    // The same pose seen from elsewhere, as the driver's camera step makes it.
+    let mut camera = scene.camera.clone();
+    camera.eye += glam::Vec3::new(40.0, -10.0, 30.0);
+    let b = CompiledScene {
+        camera: gpu_camera(&camera, 16, 16),
+        ..a.clone()
+    };
+    assert_ne!(a.camera, b.camera);
+    let mut held = WgpuBackend::new().unwrap();
+    held.load_scene(&a).unwrap();
+    traced(&mut held);
+    held.update_scene(&b).unwrap();
+    let mut whole = WgpuBackend::new().unwrap();
+    whole.load_scene(&b).unwrap();
+    let (in_place, uploaded) = (traced(&mut held), traced(&mut whole));
+    assert!(in_place.0 == uploaded.0, "the eye paths differ");
+    assert!(in_place.1 == uploaded.1, "the photons differ");
+}
+
 fn main() -> ExitCode {
     let adapter = Need::wgpu(|| GpuContext::new().map(drop).map_err(|e| e.to_string()));
     Suite::new()
@@ -75,6 +97,11 @@ fn main() -> ExitCode {
             &[&adapter],
             "a_drag_step_written_in_place_renders_what_a_whole_upload_renders",
             a_drag_step_written_in_place_renders_what_a_whole_upload_renders,
+        )
+        .test_needing(
+            &[&adapter],
+            "a_camera_step_written_in_place_renders_what_a_whole_upload_renders",
+            a_camera_step_written_in_place_renders_what_a_whole_upload_renders,
         )
         .run()
 }

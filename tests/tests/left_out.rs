@@ -1,7 +1,7 @@
 //! What a render leaves out is what it did not compile, allocate or run: the wgpu backend
-//! compiles a move's pipelines and allocates the pending sums and the photon path weights
-//! only when a move needs them, and the report says so, with the bytes, until then and not
-//! after.
+//! compiles a move's pipelines and allocates the pending sums, the photon path weights and a
+//! camera move's copies of the slots only when a move needs them, and the report says so,
+//! with the bytes, until then and not after.
 
 use harness::driver::{Budget, Schedule, run};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -44,6 +44,18 @@ fn a_still_wgpu_render_lists_what_it_never_created_and_a_move_creates_it() {
             &report.left_out,
             "local-move pipelines: not compiled (no local move)"
         ),
+        "{:?}",
+        report.left_out
+    );
+    let copies = format!(
+        "camera-move copies of the slots: {} bytes not allocated",
+        32 * 24 * (112 + 32)
+    );
+    assert!(
+        listed(
+            &report.left_out,
+            "camera-move pipeline: not compiled (no camera move)"
+        ) && listed(&report.left_out, &copies),
         "{:?}",
         report.left_out
     );

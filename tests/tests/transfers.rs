@@ -1,6 +1,7 @@
-//! A local move reads back and writes no slot: the driver orders the backend's passes and
-//! reads back their counters. Every backend runs behind a proxy that counts what crosses the
-//! contract's read-back ([`ReadBack`]) while a drag of small moves renders.
+//! A local move reads back and writes no slot, and neither does a camera move: the driver
+//! orders the backend's passes and reads back their counters. Every backend runs behind a
+//! proxy that counts what crosses the contract's read-back ([`ReadBack`]) while a drag of
+//! small moves, or an orbit of small camera steps, renders.
 
 use ppm_core::camera_move::{CameraMove, CameraMoveStats};
 use ppm_core::compile::CompiledScene;
@@ -175,11 +176,57 @@ fn a_local_drag_transfers_no_slot(name: &str, backend: Box<dyn Backend + Send>) 
     );
 }
 
+/// An orbit of cornell-box's camera, eight steps of half a degree an iteration apart,
+/// transfers no slot through the read-back, on every backend, while the steps keep light.
+fn a_camera_orbit_transfers_no_slot(name: &str, backend: Box<dyn Backend + Send>) {
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let mut params = RenderParams::for_scene(&scene);
+    (params.width, params.height, params.photons_per_pass) = (48, 48, 10_000);
+    let mut counted = Counted {
+        inner: backend,
+        slots_read: 0,
+        slots_written: 0,
+    };
+    let mut camera = scene.camera.clone();
+    let mut render =
+        harness::driver::Renderer::start(&mut counted, scene, &params, &MoveParams::default())
+            .unwrap();
+    for _ in 0..4 {
+        render.iteration().unwrap();
+    }
+    let mut kept = 0;
+    for _ in 0..8 {
+        let turn = glam::Quat::from_rotation_y(0.5_f32.to_radians());
+        camera.eye = camera.look_at + turn * (camera.eye - camera.look_at);
+        let report = render.move_camera(camera.clone(), MoveMode::Local).unwrap();
+        assert!(report.restarted.is_none(), "{name}: {report:?}");
+        kept += report.kept;
+        render.iteration().unwrap();
+    }
+    render.resolve().unwrap();
+    drop(render);
+    figure!(
+        "{name}: {kept} slots kept over 8 camera steps; {} slots read back, {} written",
+        counted.slots_read,
+        counted.slots_written
+    );
+    assert!(kept > 0, "{name}: the steps must keep light");
+    assert_eq!(
+        (counted.slots_read, counted.slots_written),
+        (0, 0),
+        "{name}: slots read back and written"
+    );
+}
+
 fn main() -> ExitCode {
     Suite::new()
         .on_every_backend(
             "a_local_drag_transfers_no_slot",
             a_local_drag_transfers_no_slot,
+        )
+        .on_every_backend(
+            "a_camera_orbit_transfers_no_slot",
+            a_camera_orbit_transfers_no_slot,
         )
         .run()
 }

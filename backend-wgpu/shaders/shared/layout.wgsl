@@ -279,6 +279,17 @@ struct LocalMoveParams {
     _pad1: u32,
 }
 
+// A camera move's parameters (ppm_core::layout::CameraMoveParams): the cameras before and
+// after, and the slots per pixel.
+struct CameraMoveParams {
+    before: GpuCamera,
+    after: GpuCamera,
+    spp: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
 struct ResolveParams {
     width: u32,
     height: u32,
