@@ -241,7 +241,7 @@ fn single_sample_cases(edge: (u32, u32)) -> Vec<Case> {
             false,
             same,
             (5, 7, centre),
-            |h| h.position[2] = 0.5,
+            |h| h.position[2] = 2.0,
         ),
         case(
             "behind the old camera",

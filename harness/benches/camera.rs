@@ -15,7 +15,6 @@ mod common;
 
 use backend_cpu::CpuBackend;
 use common::{backends, setting, wgpu_if_wanted};
-use glam::Quat;
 use harness::driver::Renderer;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
@@ -97,10 +96,9 @@ fn orbit(
         warm.push(t.elapsed().as_secs_f64() * 1e3);
     }
     let mut camera: Camera = scene.camera.clone();
-    let turn = Quat::from_rotation_y(degrees.to_radians());
     let (mut step_ms, mut move_ms, mut kept, mut slots) = (Vec::new(), Vec::new(), 0, 0);
     for _ in 0..steps {
-        camera.eye = camera.look_at + turn * (camera.eye - camera.look_at);
+        camera = camera.orbited(degrees, 0.0);
         let t = Instant::now();
         let report = r
             .move_camera(camera.clone(), MoveMode::Local)

@@ -11,7 +11,7 @@ use ppm_core::compile::compile_scene;
 use ppm_core::metrics::{relative_rmse, relative_rmse_parts};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
-use ppm_core::scene::{Camera, Scene};
+use ppm_core::scene::Scene;
 use std::process::ExitCode;
 use tests::{BackendTrials, Suite, figure};
 
@@ -23,16 +23,6 @@ fn cornell() -> (Scene, RenderParams) {
     (p.width, p.height, p.photons_per_pass) = (SIZE, SIZE, 20_000);
     p.initial_radius = 20.0;
     (scene, p)
-}
-
-/// `camera` turned by `degrees` about its look-at point's vertical and brought `dolly` of
-/// the way nearer.
-fn orbit(camera: &Camera, degrees: f32, dolly: f32) -> Camera {
-    let offset = Quat::from_rotation_y(degrees.to_radians()) * (camera.eye - camera.look_at);
-    Camera {
-        eye: camera.look_at + offset * (1.0 - dolly),
-        ..camera.clone()
-    }
 }
 
 /// A camera put where it already is keeps every slot that saw one diffuse surface directly,
@@ -80,7 +70,7 @@ fn a_camera_that_stays_keeps_every_estimate() {
 fn an_orbit_keeps_what_it_still_sees() {
     let (scene, p) = cornell();
     let mut moved = scene.clone();
-    moved.camera = orbit(&scene.camera, 7.0, 0.1);
+    moved.camera = scene.camera.orbited(7.0, 0.1);
     let truth = tests::truth(&moved, SIZE, 1024);
     let render_after = |mode: MoveMode| {
         let mut backend = CpuBackend::new();
@@ -139,7 +129,7 @@ fn an_orbit_keeps_what_it_still_sees() {
 /// path of object moves does (relative RMSE below 0.02).
 fn every_backend_keeps_the_light_the_cpu_keeps(name: &str, mut backend: Box<dyn Backend + Send>) {
     let (scene, p) = cornell();
-    let after = orbit(&scene.camera, 7.0, 0.1);
+    let after = scene.camera.orbited(7.0, 0.1);
     let run = |backend: &mut dyn Backend| {
         let mut render =
             Renderer::start(backend, scene.clone(), &p, &MoveParams::default()).unwrap();
@@ -197,7 +187,7 @@ fn a_drag_after_a_camera_step_corrects_as_the_cpu_does(
         rotation: Quat::IDENTITY,
         ..scene.moves[0]
     };
-    let after = orbit(&scene.camera, 7.0, 0.1);
+    let after = scene.camera.orbited(7.0, 0.1);
     let run = |backend: &mut dyn Backend| {
         let mut render =
             Renderer::start(backend, scene.clone(), &p, &MoveParams::default()).unwrap();

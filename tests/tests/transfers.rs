@@ -196,8 +196,7 @@ fn a_camera_orbit_transfers_no_slot(name: &str, backend: Box<dyn Backend + Send>
     }
     let mut kept = 0;
     for _ in 0..8 {
-        let turn = glam::Quat::from_rotation_y(0.5_f32.to_radians());
-        camera.eye = camera.look_at + turn * (camera.eye - camera.look_at);
+        camera = camera.orbited(0.5, 0.0);
         let report = render.move_camera(camera.clone(), MoveMode::Local).unwrap();
         assert!(report.restarted.is_none(), "{name}: {report:?}");
         kept += report.kept;

@@ -227,7 +227,8 @@ fn inherit_slot(hp: ptr<function, HitPoint>, bounds: ptr<function, GpuBounds>, r
             // the earlier view found along the same ray.
             let earlier_footprint = footprint(request.before, earlier.position, earlier.normal);
             let diagonal = earlier_footprint.x;
-            let reach2 = max(earlier.r2, diagonal * diagonal);
+            // Both points lie somewhere in footprints up to a pixel apart on each axis.
+            let reach2 = max(earlier.r2, 4.0 * diagonal * diagonal);
             let to = position - earlier.position;
             let d2 = dot(to, to);
             if !is_finite_f32(d2) || d2 >= reach2 {
