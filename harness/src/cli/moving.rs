@@ -30,7 +30,8 @@ pub struct MovingArgs {
     #[command(flatten)]
     moves: MoveOptions,
     /// Path file of moves nobody declared in the scene (`[[step]]` after_seconds or
-    /// after_iterations, object, translate, rotate); the scene's `[[moves]]` are ignored.
+    /// after_iterations, then object, translate, rotate, or camera = { eye, look_at }); the
+    /// scene's `[[moves]]` are ignored.
     #[arg(long, conflicts_with = "random_path")]
     path: Option<PathBuf>,
     /// This many random rigid moves of random objects that are not lights, kept inside the
