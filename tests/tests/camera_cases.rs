@@ -1,0 +1,194 @@
+//! Camera moves at their hardest (docs/algorithm.md 3d), each in local mode against a restart
+//! of the same iterations and the path tracer's truth of where it ends: a view that shares
+//! nothing with the old one, dollies that make footprints much larger or smaller, a grazing
+//! view, a camera that moves into water, and camera and object moves one right after the
+//! other. In each the kept render stays finite, its brightest pixel near the truth's, and
+//! its error no worse than the restart's.
+
+use backend_cpu::CpuBackend;
+use glam::{Quat, Vec3};
+use harness::driver::{MoveReport, Renderer};
+use ppm_core::image::Image;
+use ppm_core::metrics::block_relative_rmse;
+use ppm_core::params::{MoveMode, MoveParams, RenderParams};
+use ppm_core::scene::{Camera, Move, Scene};
+use std::process::ExitCode;
+use tests::{Suite, figure};
+
+const SIZE: u32 = 32;
+
+/// What a case does after its warm-up.
+#[derive(Clone)]
+enum Step {
+    Camera(Camera),
+    Object(Move),
+}
+
+fn params(scene: &Scene) -> RenderParams {
+    let mut p = RenderParams::for_scene(scene);
+    (p.width, p.height, p.photons_per_pass) = (SIZE, SIZE, 10_000);
+    p
+}
+
+/// The image after 30 iterations, `steps` in `mode` (each followed by 2 iterations) and 8
+/// more, with the moves' reports.
+fn render(scene: &Scene, steps: &[Step], mode: MoveMode) -> (Image, Vec<MoveReport>) {
+    let p = params(scene);
+    let mut backend = CpuBackend::new();
+    let mut r = Renderer::start(&mut backend, scene.clone(), &p, &MoveParams::default()).unwrap();
+    for _ in 0..30 {
+        r.iteration().unwrap();
+    }
+    let mut reports = Vec::new();
+    for step in steps {
+        reports.push(match step {
+            Step::Camera(c) => r.move_camera(c.clone(), mode).unwrap(),
+            Step::Object(m) => r.move_objects(&[*m], mode).unwrap(),
+        });
+        for _ in 0..2 {
+            r.iteration().unwrap();
+        }
+    }
+    for _ in 0..8 {
+        r.iteration().unwrap();
+    }
+    (r.resolve().unwrap(), reports)
+}
+
+fn brightest(image: &Image) -> f32 {
+    image
+        .pixels
+        .iter()
+        .map(|p| p[0].max(p[1]).max(p[2]))
+        .fold(0.0, f32::max)
+}
+
+/// Runs `steps` in local mode and restarting, and holds the local render to the truth of
+/// where they end: finite, its brightest pixel within 1.5 times the truth's, its error over
+/// 4x4 blocks at most 1.1 times the restart's. Returns the local moves' reports.
+fn holds(name: &str, scene: &Scene, steps: &[Step]) -> Vec<MoveReport> {
+    let mut end = scene.clone();
+    for step in steps {
+        match step {
+            Step::Camera(c) => end.camera = c.clone(),
+            Step::Object(m) => end.apply(m),
+        }
+    }
+    let truth = tests::truth(&end, SIZE, 512);
+    let (local, reports) = render(scene, steps, MoveMode::Local);
+    let (restart, _) = render(scene, steps, MoveMode::Restart);
+    assert!(
+        local.pixels.iter().flatten().all(|c| c.is_finite()),
+        "{name}"
+    );
+    let (l, r) = (
+        block_relative_rmse(&local, &truth, 4),
+        block_relative_rmse(&restart, &truth, 4),
+    );
+    let (bl, bt) = (brightest(&local), brightest(&truth));
+    figure!(
+        "{name}: block error {l:.4} (restart {r:.4}), brightest {bl:.3} (truth {bt:.3}); {reports:?}"
+    );
+    assert!(bl <= 1.5 * bt, "{name}: brightest {bl} against {bt}");
+    assert!(l <= 1.1 * r, "{name}: {l} against restart's {r}");
+    reports
+}
+
+fn cornell() -> Scene {
+    scenes::builtin("cornell-box").unwrap().load().unwrap()
+}
+
+/// A camera turned to face away from everything it saw keeps no slot.
+fn a_view_that_shares_nothing_keeps_nothing() {
+    let scene = cornell();
+    let away = scene.camera.orbited(180.0, 0.0);
+    let reports = holds("turned away", &scene, &[Step::Camera(away)]);
+    assert_eq!(reports[0].kept, 0, "{reports:?}");
+}
+
+/// Footprints four times the area, and a quarter: the camera twice as far and half as far
+/// from its look-at point.
+fn large_dollies_stay_near_the_truth() {
+    let scene = cornell();
+    for (name, nearer) in [("dolly out", -1.0), ("dolly in", 0.5)] {
+        let camera = scene.camera.orbited(0.0, nearer);
+        let reports = holds(name, &scene, &[Step::Camera(camera)]);
+        assert!(reports[0].restarted.is_none(), "{reports:?}");
+    }
+}
+
+/// The camera lowered to a few millimetres above the floor, looking along it.
+fn a_grazing_view_stays_near_the_truth() {
+    let scene = cornell();
+    let grazing = Camera {
+        eye: Vec3::new(278.0, 2.0, -800.0),
+        look_at: Vec3::new(278.0, 2.0, 0.0),
+        ..scene.camera.clone()
+    };
+    holds("grazing", &scene, &[Step::Camera(grazing)]);
+}
+
+/// The camera of the half-filled water furnace moved under the water: nothing it sees now
+/// did it see directly before, and what it sees through the surface starts over.
+fn a_camera_that_moves_into_water_keeps_nothing_seen_through_it() {
+    let scene = scenes::builtin("water-furnace").unwrap().load().unwrap();
+    let under = Camera {
+        eye: scene.camera.eye - Vec3::Y * (scene.camera.eye.y + 0.5),
+        look_at: scene.camera.look_at - Vec3::Y * (scene.camera.eye.y + 0.5),
+        ..scene.camera.clone()
+    };
+    holds("into the water", &scene, &[Step::Camera(under)]);
+}
+
+/// An object move right after a camera move, and a camera move right after an object move:
+/// each keeps what it did not change (a later move resets what its inherited light saw).
+fn camera_and_object_moves_follow_each_other() {
+    let scene = cornell();
+    let block = Move {
+        object: scene.object_index("short-block").unwrap(),
+        translation: Vec3::new(-40.0, 0.0, 60.0),
+        rotation: Quat::from_rotation_y(0.3),
+    };
+    let camera = scene.camera.orbited(6.0, 0.1);
+    for (name, steps) in [
+        (
+            "camera then object",
+            [Step::Camera(camera.clone()), Step::Object(block)],
+        ),
+        (
+            "object then camera",
+            [Step::Object(block), Step::Camera(camera.clone())],
+        ),
+    ] {
+        let reports = holds(name, &scene, &steps);
+        assert!(
+            reports.iter().all(|r| r.restarted.is_none() && r.kept > 0),
+            "{reports:?}"
+        );
+    }
+}
+
+fn main() -> ExitCode {
+    Suite::new()
+        .test(
+            "a_view_that_shares_nothing_keeps_nothing",
+            a_view_that_shares_nothing_keeps_nothing,
+        )
+        .test(
+            "large_dollies_stay_near_the_truth",
+            large_dollies_stay_near_the_truth,
+        )
+        .test(
+            "a_grazing_view_stays_near_the_truth",
+            a_grazing_view_stays_near_the_truth,
+        )
+        .test(
+            "a_camera_that_moves_into_water_keeps_nothing_seen_through_it",
+            a_camera_that_moves_into_water_keeps_nothing_seen_through_it,
+        )
+        .test(
+            "camera_and_object_moves_follow_each_other",
+            camera_and_object_moves_follow_each_other,
+        )
+        .run()
+}
