@@ -92,7 +92,8 @@ fn contents(ui: &mut egui::Ui, shared: &Shared, settings: &mut Settings, actions
         "left-drag an object: move it facing the camera (Shift: along the floor)\n\
                  Q / E: turn the picked object 15 degrees\n\
                  Ctrl+Z: undo a move; S: save EXR, PNG and JSON; H: heat map\n\
-                 right-drag: orbit, wheel: dolly (both restart the render)",
+                 right-drag: orbit; middle-drag (Shift+right): pan; wheel: dolly\n\
+                 (local mode keeps the light of what is still seen)",
     );
 }
 
