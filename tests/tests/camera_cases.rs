@@ -55,14 +55,6 @@ fn render(scene: &Scene, steps: &[Step], mode: MoveMode) -> (Image, Vec<MoveRepo
     (r.resolve().unwrap(), reports)
 }
 
-fn brightest(image: &Image) -> f32 {
-    image
-        .pixels
-        .iter()
-        .map(|p| p[0].max(p[1]).max(p[2]))
-        .fold(0.0, f32::max)
-}
-
 /// Runs `steps` in local mode and restarting, and holds the local render to the truth of
 /// where they end: finite, its brightest pixel within 1.5 times the truth's, its error over
 /// 4x4 blocks at most 1.1 times the restart's. Returns the local moves' reports.
@@ -85,7 +77,7 @@ fn holds(name: &str, scene: &Scene, steps: &[Step]) -> Vec<MoveReport> {
         block_relative_rmse(&local, &truth, 4),
         block_relative_rmse(&restart, &truth, 4),
     );
-    let (bl, bt) = (brightest(&local), brightest(&truth));
+    let (bl, bt) = (tests::brightest(&local), tests::brightest(&truth));
     figure!(
         "{name}: block error {l:.4} (restart {r:.4}), brightest {bl:.3} (truth {bt:.3}); {reports:?}"
     );

@@ -7,7 +7,6 @@
 use backend_cpu::CpuBackend;
 use glam::{Quat, Vec3};
 use harness::driver::{Budget, Renderer, Schedule, run};
-use ppm_core::image::Image;
 use ppm_core::layout::hit_flags;
 use ppm_core::metrics::{block_relative_rmse, relative_rmse};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
@@ -16,7 +15,7 @@ use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{Move, Scene};
 use std::process::ExitCode;
 use tests::{BackendTrials, Suite, figure};
-use tests::{around, luminance, objects_seen};
+use tests::{around, objects_seen};
 
 fn cornell(size: u32, photons: u32) -> (Scene, RenderParams) {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
@@ -232,14 +231,6 @@ fn every_backend_agrees_with_the_cpu_on_a_path_with_independent_seeds(
 }
 
 /// Largest pixel luminance of an image.
-fn brightest(image: &Image) -> f32 {
-    image
-        .pixels
-        .iter()
-        .map(|p| luminance(*p))
-        .fold(0.0, f32::max)
-}
-
 /// Moves land on any iteration: over warm-ups of 1 to 8 iterations and two seeds, on every
 /// canonical scene, the declared move and a random unplanned one in every compensating mode
 /// leave the image finite and never negative, right after the move and two iterations
@@ -267,7 +258,7 @@ fn no_move_blows_a_pixel_up(name: &str, mut backend: Box<dyn Backend + Send>) {
         let targets = [scene.at_frame(1), random.final_pose(&scene)];
         let truths: Vec<f32> = targets
             .iter()
-            .map(|t| brightest(&tests::truth(t, SIZE, 128)))
+            .map(|t| tests::brightest(&tests::truth(t, SIZE, 128)))
             .collect();
         let mut worst = 0.0f32;
         let mut check = |backend: &mut dyn Backend, warm: u32, seed: u32| {
@@ -279,11 +270,11 @@ fn no_move_blows_a_pixel_up(name: &str, mut backend: Box<dyn Backend + Send>) {
                     for _ in 0..warm {
                         render.iteration().unwrap();
                     }
-                    let before = brightest(&render.resolve().unwrap());
+                    let before = tests::brightest(&render.resolve().unwrap());
                     render.move_to(target.clone(), mode).unwrap();
                     let what = format!("{scene_name} {name} {mode:?} warm-up {warm} seed {seed}");
                     let moved = render.resolve().unwrap();
-                    let ratio = brightest(&moved) / truth.max(before);
+                    let ratio = tests::brightest(&moved) / truth.max(before);
                     worst = worst.max(ratio);
                     assert!(
                         ratio <= 2.0,

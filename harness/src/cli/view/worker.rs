@@ -468,22 +468,33 @@ fn reset_share(before: &[HitPoint], after: &[HitPoint], pixels: usize) -> Vec<f3
     if after.len() != before.len() {
         return vec![1.0; pixels];
     }
-    let mut reset = vec![0.0f32; pixels];
-    let mut slots = vec![0.0f32; pixels];
-    for (a, b) in before.iter().zip(after) {
-        let p = b.pixel as usize;
+    share_per_pixel(before.iter().zip(after), pixels, |(a, b)| {
+        let held = a.n > 0.0 || a.iterations > 0;
+        (b.pixel, held && b.n == 0.0 && b.iterations == 0)
+    })
+}
+
+/// Per pixel, the share of its slots for which `test` (giving the slot's pixel and whether
+/// it counts) says yes.
+fn share_per_pixel<T>(
+    slots: impl Iterator<Item = T>,
+    pixels: usize,
+    test: impl Fn(T) -> (u32, bool),
+) -> Vec<f32> {
+    let mut yes = vec![0.0f32; pixels];
+    let mut all = vec![0.0f32; pixels];
+    for slot in slots {
+        let (p, counts) = test(slot);
+        let p = p as usize;
         if p < pixels {
-            slots[p] += 1.0;
-            let held = a.n > 0.0 || a.iterations > 0;
-            if held && b.n == 0.0 && b.iterations == 0 {
-                reset[p] += 1.0;
-            }
+            all[p] += 1.0;
+            yes[p] += f32::from(u8::from(counts));
         }
     }
-    for (r, s) in reset.iter_mut().zip(&slots) {
-        *r /= s.max(1.0);
+    for (y, a) in yes.iter_mut().zip(&all) {
+        *y /= a.max(1.0);
     }
-    reset
+    yes
 }
 
 /// Every pane moves its camera to `camera` the way its mode says (local mode keeps the light
@@ -540,19 +551,9 @@ fn look_from(panes: &mut [Pane], shared: &Shared, camera: Camera, heat: bool) {
 /// Per pixel, the share of its slots a camera move started over: right after the move they
 /// hold no photons and at most the move's own direct-light sample.
 fn started_over(after: &[HitPoint], pixels: usize) -> Vec<f32> {
-    let mut reset = vec![0.0f32; pixels];
-    let mut slots = vec![0.0f32; pixels];
-    for hp in after {
-        let p = hp.pixel as usize;
-        if p < pixels {
-            slots[p] += 1.0;
-            reset[p] += f32::from(u8::from(hp.n == 0.0 && hp.iterations <= 1));
-        }
-    }
-    for (r, s) in reset.iter_mut().zip(&slots) {
-        *r /= s.max(1.0);
-    }
-    reset
+    share_per_pixel(after.iter(), pixels, |hp| {
+        (hp.pixel, hp.n == 0.0 && hp.iterations <= 1)
+    })
 }
 
 /// Plays one script event: its moves, its camera, then its screenshot (waiting until the
