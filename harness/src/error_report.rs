@@ -7,13 +7,14 @@ use crate::driver::{
     Budget, MoveReport, Observer, ObserverResult, PhotonCounts, Progress, Renderer, RunError,
     Schedule, Stoppable, run,
 };
+use ppm_core::camera_move;
 use ppm_core::image::Image;
 use ppm_core::layout::{HitPoint, hit_flags};
 use ppm_core::metrics::relative_rmse_parts;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
-use ppm_core::scene::Scene;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
+use ppm_core::scene::{Camera, Scene};
 use ppm_core::update::luminance;
 use serde::Serialize;
 use std::path::Path;
@@ -76,7 +77,10 @@ pub struct ModeRun {
 
 /// The pixels whose slots some move of the path resets (any of their slots), including slots
 /// that gain or lose their visible point (an object's silhouette over the void), with one
-/// iteration before each move.
+/// iteration before each move. A path that moves the camera is followed in local mode, the
+/// one that keeps light across a camera move, with 16 iterations before each move so that
+/// there is light to keep and the jitter has found the edges a pixel straddles (whose slots
+/// start over): a camera move resets the pixels whose slots started over.
 pub fn reset_pixels(
     backend: &mut dyn Backend,
     scene: &Scene,
@@ -85,6 +89,7 @@ pub fn reset_pixels(
     /// Compares the slots before and after each move.
     struct Resets {
         before: Vec<HitPoint>,
+        camera: Camera,
         mask: Vec<bool>,
     }
     impl Observer for Resets {
@@ -93,14 +98,28 @@ pub fn reset_pixels(
             Ok(())
         }
         fn moved(&mut self, _: &Progress, _: &MoveReport, r: &mut Renderer) -> ObserverResult {
-            for (a, b) in self.before.iter().zip(r.backend().read_hit_points()?) {
-                if b.flags & hit_flags::UPDATED != 0 || a.is_valid() != b.is_valid() {
+            let after = r.backend().read_hit_points()?;
+            if r.scene().camera != self.camera {
+                self.camera = r.scene().camera.clone();
+                for b in after.iter().filter(|b| camera_move::started_over(b)) {
                     self.mask[b.pixel as usize] = true;
                 }
+            } else {
+                for (a, b) in self.before.iter().zip(&after) {
+                    if b.flags & hit_flags::UPDATED != 0 || a.is_valid() != b.is_valid() {
+                        self.mask[b.pixel as usize] = true;
+                    }
+                }
             }
+            self.before = after;
             Ok(())
         }
     }
+    let moves_camera = settings.path.events.iter().any(|e| e.camera.is_some());
+    let (mode, before_each) = match moves_camera {
+        true => (MoveMode::Local, 16),
+        false => (MoveMode::Difference, 1),
+    };
     // Moves with no compensation passes: difference mode needs no emitting region, so the
     // slots are updated (docs/algorithm.md 2.4's test) whatever the objects' shape around the
     // lights; the split is the same for every mode.
@@ -114,15 +133,16 @@ pub fn reset_pixels(
             .events
             .iter()
             .map(|e| PathEvent {
-                after: After::Iterations(1),
+                after: After::Iterations(before_each),
                 ..e.clone()
             })
             .collect(),
     };
-    let schedule = Schedule::path(&path, MoveMode::Difference, Budget::iterations(0));
+    let schedule = Schedule::path(&path, mode, Budget::iterations(0));
     let p = &settings.params;
     let mut resets = Resets {
         before: Vec::new(),
+        camera: scene.camera.clone(),
         mask: vec![false; (p.width * p.height) as usize],
     };
     run(backend, scene, p, &moves, &schedule, &mut resets)?;

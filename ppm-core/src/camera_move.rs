@@ -208,6 +208,13 @@ fn pixel_centre_before(hp: &HitPoint, request: &CameraMove) -> Option<(f32, f32)
     Some((x + (centre.0 - xa) * scale, y + (centre.1 - ya) * scale))
 }
 
+/// Whether `hp`, right after a camera move's passes (its fresh eye path, the inheritance and
+/// the move's direct-light sample), started over: a slot that inherited holds at least one
+/// earlier iteration besides that sample ([`inherit_slot`] keeps none where it would be 0).
+pub fn started_over(hp: &HitPoint) -> bool {
+    hp.iterations <= 1
+}
+
 /// A slot of the new view, just traced from scratch (no statistics yet), takes over the
 /// light of the earlier slots `before` (with their bounds `before_bounds`, empty where the
 /// backend keeps none) near its visible point, as the module says. Its box grows by theirs

@@ -6,12 +6,14 @@
 use backend_cpu::CpuBackend;
 use glam::Quat;
 use harness::driver::Renderer;
+use harness::error_report::{ErrorSettings, reset_pixels};
 use ppm_core::camera_move::passes_light_on;
 use ppm_core::compile::compile_scene;
 use ppm_core::metrics::{relative_rmse, relative_rmse_parts};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::Scene;
+use ppm_core::scene::path::{After, CameraStep, MovePath, PathEvent};
 use std::process::ExitCode;
 use tests::{BackendTrials, Suite, figure};
 
@@ -226,6 +228,68 @@ fn a_drag_after_a_camera_step_corrects_as_the_cpu_does(
     assert!(rmse < 0.02, "{name}: {rmse}");
 }
 
+/// The error report splits a camera path's error at the pixels whose slots started over: as
+/// many as local mode's camera move reports, some but far from all on a small orbit.
+fn the_error_report_splits_a_camera_move_where_slots_started_over() {
+    let (scene, p) = cornell();
+    let moved = scene.camera.orbited(7.0, 0.1);
+    let step = CameraStep {
+        eye: moved.eye,
+        look_at: moved.look_at,
+    };
+    let settings = ErrorSettings {
+        params: p.clone(),
+        moves: MoveParams::default(),
+        path: MovePath {
+            events: vec![PathEvent {
+                after: After::Iterations(1),
+                moves: Vec::new(),
+                camera: Some(step),
+            }],
+        },
+        seconds: 0.0,
+    };
+    let mask = reset_pixels(&mut CpuBackend::new(), &scene, &settings).unwrap();
+    let marked = mask.iter().filter(|&&m| m).count();
+    let mut backend = CpuBackend::new();
+    let mut render = Renderer::start(&mut backend, scene, &p, &MoveParams::default()).unwrap();
+    for _ in 0..16 {
+        render.iteration().unwrap();
+    }
+    let report = render.move_camera(moved, MoveMode::Local).unwrap();
+    figure!("{marked} of {} pixels marked; {report:?}", mask.len());
+    assert_eq!(marked as u64, report.updated);
+    assert!(marked > 0 && marked < mask.len() / 2, "{marked}");
+}
+
+/// The catch-up after a camera move ends once the slots that started over are level with
+/// the kept ones: from then on an iteration traces no more eye rays than one before the move
+/// (not every slot five times, as a target that grows as fast as every slot would).
+fn the_catch_up_ends_once_the_fresh_slots_are_level() {
+    let (scene, p) = cornell();
+    let mut backend = CpuBackend::new();
+    let mut render =
+        Renderer::start(&mut backend, scene.clone(), &p, &MoveParams::default()).unwrap();
+    let eye_rays = |render: &mut Renderer, iterations: u32| {
+        let before = render.report().rays.eye;
+        for _ in 0..iterations {
+            render.iteration().unwrap();
+        }
+        (render.report().rays.eye - before) / u64::from(iterations)
+    };
+    let still = eye_rays(&mut render, 30);
+    let moved = scene.camera.orbited(7.0, 0.1);
+    render.move_camera(moved, MoveMode::Local).unwrap();
+    let catching_up = eye_rays(&mut render, 2);
+    eye_rays(&mut render, 10);
+    let level = eye_rays(&mut render, 10);
+    figure!(
+        "eye rays per iteration: {still} before the move, {catching_up} right after, {level} once level"
+    );
+    assert!(catching_up > still, "{catching_up} against {still}");
+    assert!(level <= still, "{level} against {still}");
+}
+
 fn main() -> ExitCode {
     Suite::new()
         .test(
@@ -243,6 +307,14 @@ fn main() -> ExitCode {
         .against_the_cpu(
             "a_drag_after_a_camera_step_corrects_as_the_cpu_does",
             a_drag_after_a_camera_step_corrects_as_the_cpu_does,
+        )
+        .test(
+            "the_error_report_splits_a_camera_move_where_slots_started_over",
+            the_error_report_splits_a_camera_move_where_slots_started_over,
+        )
+        .test(
+            "the_catch_up_ends_once_the_fresh_slots_are_level",
+            the_catch_up_ends_once_the_fresh_slots_are_level,
         )
         .run()
 }

@@ -88,7 +88,8 @@ impl Renderer<'_> {
         // first, and catch them up.
         self.counters.steps_since_move = 1;
         self.focus = true;
-        self.catch_up = true;
+        // No slot holds more samples than there were eye passes before this one.
+        self.catch_up = Some(key);
         report.kept = stats.inherited;
         report.updated = stats.reset;
         Ok(None)
@@ -98,16 +99,23 @@ impl Renderer<'_> {
 impl Renderer<'_> {
     /// [`CATCH_UP`] eye and direct-light passes for the slots with fewer direct samples than
     /// the iterations since the move times `CATCH_UP + 1`; the others rest. Ends the catch-up
-    /// once a pass finds no slot behind.
-    pub(super) fn catch_up(&mut self) -> Result<(), BackendError> {
+    /// once a pass finds no slot behind, or once that many would pass `level`, the samples
+    /// a kept slot may hold: the slots that started over are level with the kept ones then,
+    /// and every slot gains the same again (else every slot would fall behind the target
+    /// that grows as fast as they do, and every iteration would trace them all five times).
+    pub(super) fn catch_up(&mut self, level: u32) -> Result<(), BackendError> {
         let target = (self.counters.steps_since_move + 1) * (CATCH_UP + 1);
+        if target > level {
+            self.catch_up = None;
+            return Ok(());
+        }
         for _ in 0..CATCH_UP {
             let key = self.counters.iteration;
             let mut params = pass_params::eye_pass(&self.params, self.extent, key, true);
             params.flags |= eye_flags::FOCUS;
             params.rest_at = target;
             if self.run_eye_pass(&params)?.rays == 0 {
-                self.catch_up = false;
+                self.catch_up = None;
                 return Ok(());
             }
             self.direct_light(key, true)?;

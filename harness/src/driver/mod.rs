@@ -83,8 +83,9 @@ pub struct Renderer<'a> {
     /// Iterations serve the slots with the fewest iterations first (after a local move).
     focus: bool,
     /// After a camera move, each iteration also traces eye paths and direct light again for
-    /// the slots that started over ([`camera::CATCH_UP`]), until none is behind.
-    catch_up: bool,
+    /// the slots that started over ([`camera::CATCH_UP`]), until none is behind or they
+    /// would pass this many samples, the most a slot the move kept holds.
+    catch_up: Option<u32>,
     /// Ordinary passes ask the backend to keep their paths
     /// ([`photon_flags::KEEP_PATHS`]): set by the first local move, so that a render that
     /// never moves records nothing, and the next moves' pose-A corrections are answered from
@@ -141,7 +142,7 @@ impl<'a> Renderer<'a> {
                 ..Counters::default()
             },
             focus: false,
-            catch_up: false,
+            catch_up: None,
             keep_paths: false,
             guide: None,
             counts: PhotonCounts::default(),
@@ -167,7 +168,7 @@ impl<'a> Renderer<'a> {
         self.report.times.bvh_build += self.compiled.bvh_build_time.as_secs_f64();
         self.guide = None;
         self.focus = false;
-        self.catch_up = false;
+        self.catch_up = None;
         self.counters.fresh = true;
         if self.params.estimator == Estimator::Ppm {
             self.eye_pass(self.counters.frame, false)?;
@@ -202,8 +203,8 @@ impl<'a> Renderer<'a> {
             self.direct_light(key, true)?;
             self.counters.iteration += 1;
             self.counters.fresh = false;
-            if self.catch_up {
-                self.catch_up()?;
+            if let Some(level) = self.catch_up {
+                self.catch_up(level)?;
             }
         }
         let guided_turn = self.counters.steps_since_move.is_multiple_of(2);

@@ -6,13 +6,13 @@
 use crate::cli::render::{OutputPaths, write_render};
 use crate::driver::{MoveReport, Renderer};
 use backend_wgpu::WgpuBackend;
-use ppm_core::device_time;
 use ppm_core::image::Image;
 use ppm_core::layout::HitPoint;
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, BackendError};
 use ppm_core::scene::path::After;
 use ppm_core::scene::{Camera, Move, Scene};
+use ppm_core::{camera_move, device_time};
 use scenes::file::path::{Script, ScriptEvent};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Mutex, MutexGuard};
@@ -548,11 +548,10 @@ fn look_from(panes: &mut [Pane], shared: &Shared, camera: Camera, heat: bool) {
     pose.camera = camera;
 }
 
-/// Per pixel, the share of its slots a camera move started over: right after the move they
-/// hold no photons and at most the move's own direct-light sample.
+/// Per pixel, the share of its slots a camera move started over.
 fn started_over(after: &[HitPoint], pixels: usize) -> Vec<f32> {
     share_per_pixel(after.iter(), pixels, |hp| {
-        (hp.pixel, hp.n == 0.0 && hp.iterations <= 1)
+        (hp.pixel, camera_move::started_over(hp))
     })
 }
 
