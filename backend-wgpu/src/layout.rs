@@ -192,8 +192,8 @@ pub struct CoverOutcome {
     pub words: [u32; 8],
 }
 
-/// local_move.wgsl's `ListParams`: how many slots a kernel over a list walks (those listed
-/// in pose A, or for the probe). 16 bytes.
+/// layout.wgsl's `ListParams`: how many slots a kernel over a list walks (those a local move
+/// listed in pose A or for its probe, or a focus eye pass's slots behind). 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ListParams {
@@ -202,10 +202,10 @@ pub struct ListParams {
     /// Whether the last move's pairs in its pose B are this move's in pose A, keyed and
     /// traced alike (1), or not (0).
     pub known: u32,
+    /// Whether the eye and direct-light passes walk a focus pass's list (1) or every slot (0).
+    pub focus: u32,
     /// Padding.
     pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
 }
 
 /// camera_move_vectors.wgsl's input: a fresh slot of the new view, its box, and the camera

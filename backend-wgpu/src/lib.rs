@@ -15,6 +15,7 @@
 mod buffers;
 mod camera_move;
 mod context;
+mod focus;
 mod kernel;
 pub mod layout;
 mod local_move;
@@ -79,6 +80,8 @@ const COUNTER_GATHERED: usize = 2;
 const COUNTER_FIRST_BAD: usize = 3;
 /// Photon passes count culled paths in the gathers' slot.
 const COUNTER_CULLED: usize = 2;
+/// A focus eye pass counts the slots it lists there too (focus.wgsl).
+const COUNTER_LISTED: usize = 2;
 const COUNTERS_RESET: [u32; 4] = [0, 0, 0, u32::MAX];
 
 /// gather_pass.wgsl's `radii` uniform: the initial squared radius, and the photon pass's
@@ -90,6 +93,8 @@ fn radii(ctx: &GpuContext, r2_initial: f32, r2_floor: f32) -> wgpu::Buffer {
 /// Every pass's pipelines, compiled once per device.
 struct Kernels {
     eye: EyePassKernel,
+    /// A focus eye pass's rest test, compiled at the first.
+    focus: focus::FocusKernel,
     direct: DirectLightKernel,
     photon: PhotonPassKernel,
     grid: PhotonGridKernels,
@@ -133,6 +138,12 @@ pub struct WgpuBackend {
     no_weights: wgpu::Buffer,
     /// The initial squared radius of the last eye pass.
     r2_initial: Option<f32>,
+    /// The slots the last eye pass listed, where it was a focus pass, while they are those
+    /// that do not rest: the direct light walks them alone. Every pass that may change which
+    /// slots rest forgets it.
+    focus: Option<focus::FocusList>,
+    /// Bound where the eye and direct-light passes walk every slot.
+    every_slot: focus::FocusList,
     /// Where photon passes append their deposits, kept from pass to pass.
     deposits: Option<DepositBuffers>,
     /// Deposits per path of the last photon pass: sizes the next pass's buffers.
@@ -193,6 +204,7 @@ impl WgpuBackend {
     pub fn on(ctx: GpuContext) -> Result<Self, BackendError> {
         let kernels = ctx.scoped("shader compilation", || Kernels {
             eye: EyePassKernel::new(&ctx),
+            focus: focus::FocusKernel::new(&ctx),
             direct: DirectLightKernel::new(&ctx),
             photon: PhotonPassKernel::new(&ctx),
             grid: PhotonGridKernels::new(&ctx),
@@ -211,6 +223,7 @@ impl WgpuBackend {
         let partners = buffers::storage_init(&ctx, "partners", &[PathDeposits::default()]);
         let placeholder = buffers::storage_init(&ctx, "pending placeholder", &[0.0f32; 4]);
         let no_weights = buffers::storage_init(&ctx, "weights placeholder", &[0.0f32; 4]);
+        let every_slot = focus::FocusList::every_slot(&ctx);
         let timer = Timer::new(&ctx).map(Mutex::new);
         Ok(Self {
             ctx,
@@ -225,6 +238,8 @@ impl WgpuBackend {
             placeholder,
             no_weights,
             r2_initial: None,
+            focus: None,
+            every_slot,
             deposits: None,
             deposits_per_path: 1.5,
             grid_buffers: None,
@@ -439,12 +454,14 @@ impl SceneUpload for WgpuBackend {
         self.pending = None;
         self.map = None;
         self.unconsumed = None;
+        self.focus = None;
         Ok(())
     }
 }
 
 impl EyePass for WgpuBackend {
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
+        self.focus = None;
         let camera = self.scene("eye")?.camera_value;
         let slots64 = u64::from(camera.width) * u64::from(camera.height) * u64::from(params.spp);
         let slots = u32::try_from(slots64)
@@ -483,14 +500,24 @@ impl EyePass for WgpuBackend {
             count: slots,
         };
         let spec = self.specialisation(false);
-        let counters = self.run("eye", |encoder| {
-            self.kernels
-                .eye
-                .record(&self.ctx, encoder, params, scene, &targets, &outputs, spec);
-            self.kernels.check.record(&self.ctx, encoder, &targets);
-            Ok(())
-        })?;
+        let focused = eye_flags::FOCUS | eye_flags::KEEP_STATISTICS;
+        let (counters, focus) = if params.flags & focused == focused {
+            let (counters, focus) =
+                self.focus_eye_pass(params, scene, (&targets, &outputs), spec)?;
+            (counters, Some(focus))
+        } else {
+            let counters = self.run("eye", |encoder| {
+                let walk = (spec, &self.every_slot);
+                self.kernels
+                    .eye
+                    .record(&self.ctx, encoder, params, scene, &targets, &outputs, walk);
+                self.kernels.check.record(&self.ctx, encoder, &targets);
+                Ok(())
+            })?;
+            (counters, None)
+        };
         self.hit_points = Some((hit_points, slots));
+        self.focus = focus;
         if !keep {
             self.accumulated = Some(storage_zeroed(&self.ctx, "accumulated", slots64 * 32)?);
             self.pending = None;
@@ -522,10 +549,18 @@ impl DirectLight for WgpuBackend {
             pass: "direct light",
             needs: "an eye pass",
         })?;
+        // After a focus eye pass, only the slots it listed do not rest.
+        let walk = self.focus.as_ref().unwrap_or(&self.every_slot);
         let counters = self.run("direct light", |encoder| {
-            self.kernels
-                .direct
-                .record(&self.ctx, encoder, params, scene, &targets, chain_light);
+            self.kernels.direct.record(
+                &self.ctx,
+                encoder,
+                params,
+                scene,
+                &targets,
+                chain_light,
+                walk,
+            );
             self.kernels.check.record(&self.ctx, encoder, &targets);
             Ok(())
         })?;
@@ -789,6 +824,7 @@ impl LocalMoves for WgpuBackend {
             moving.scene_updated();
         }
         self.map = None;
+        self.focus = None;
         // A refit of the pose held, or the same pose with new movers' boxes: written in place.
         if let Some(held) = self.scene.as_mut()
             && held.update(&self.ctx, scene)
@@ -803,22 +839,27 @@ impl LocalMoves for WgpuBackend {
     }
 
     fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
+        self.focus = None;
         self.begin_move(request)
     }
 
     fn local_resets(&mut self) -> Result<LocalMoveStats, BackendError> {
+        self.focus = None;
         self.move_resets()
     }
 
     fn local_direct_change(&mut self) -> Result<LocalMoveStats, BackendError> {
+        self.focus = None;
         self.move_direct_change()
     }
 
     fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError> {
+        self.focus = None;
         self.begin_camera(request)
     }
 
     fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError> {
+        self.focus = None;
         self.inherit()
     }
 }
@@ -836,6 +877,7 @@ impl DynamicBackend for WgpuBackend {
             self.kernels.update = Some(kernel);
         }
         self.allocate_pending("hit-point update")?;
+        self.focus = None;
         let scene = self.scene("hit-point update")?;
         let (hit_points, slots) = self.hit_points("hit-point update")?;
         let (_, pending, _) = self.gather_state("hit-point update")?;
@@ -877,7 +919,7 @@ impl DynamicBackend for WgpuBackend {
                 scene,
                 &eye_targets,
                 &outputs,
-                spec,
+                (spec, &self.every_slot),
             );
             Ok(())
         })?;
@@ -1015,6 +1057,7 @@ impl ReadBack for WgpuBackend {
     }
 
     fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError> {
+        self.focus = None;
         let (buffer, slots) = self.hit_points("write hit points")?;
         if hit_points.len() != *slots as usize {
             return Err(BackendError::OutOfOrder {

@@ -3,6 +3,7 @@
 
 use crate::buffers::{SceneBuffers, uniform};
 use crate::context::GpuContext;
+use crate::focus::FocusList;
 use crate::kernel::{Kernel, Slot, WORKGROUP, shader_module};
 use crate::shaders;
 use crate::specialise::{Specialisation, VARIANTS};
@@ -53,6 +54,7 @@ impl EyePassKernel {
         self.variants[spec.index()].get_or_init(|| {
             let slots = [
                 Uniform, Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Read, ReadWrite,
+                Read, Uniform,
             ];
             // The eye pass declares SPECULAR and GLASS, not MOVERS.
             let mut constants = spec.constants();
@@ -68,8 +70,9 @@ impl EyePassKernel {
         })
     }
 
-    /// Records the eye pass over every hit-point slot; `outputs.bounds` holds a box per slot,
-    /// which the pass extends with [`ppm_core::layout::eye_flags::RECORD_BOUNDS`].
+    /// Records the eye pass over the slots `walk` names (every slot, or a focus pass's list);
+    /// `outputs.bounds` holds a box per slot, which the pass extends with
+    /// [`ppm_core::layout::eye_flags::RECORD_BOUNDS`].
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -79,7 +82,7 @@ impl EyePassKernel {
         scene: &SceneBuffers,
         slots: &Slots,
         outputs: &EyeOutputs,
-        spec: Specialisation,
+        (spec, walk): (Specialisation, &FocusList),
     ) {
         let kernel = self.kernel(ctx, spec);
         let params = uniform(ctx, "eye params", params);
@@ -95,9 +98,11 @@ impl EyePassKernel {
                 outputs.bounds,
                 &scene.texels,
                 outputs.chain_light,
+                &walk.listed,
+                &walk.list,
             ],
         );
-        kernel.dispatch(encoder, &group, slots.count);
+        kernel.dispatch(encoder, &group, walk.items(slots.count));
     }
 }
 
@@ -124,7 +129,9 @@ impl DirectLightKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "direct_light", shaders::DIRECT_LIGHT);
-        let slots = [Uniform, Table, Uniform, ReadWrite, ReadWrite, Read];
+        let slots = [
+            Uniform, Table, Uniform, ReadWrite, ReadWrite, Read, Read, Uniform,
+        ];
         Self(Kernel::new(
             &ctx.device,
             &module,
@@ -134,8 +141,9 @@ impl DirectLightKernel {
         ))
     }
 
-    /// Records the direct-light pass over every hit point, adding what `chain_light` holds
-    /// ([`EyeOutputs::chain_light`]).
+    /// Records the direct-light pass over the slots `walk` names (every slot, or a focus
+    /// pass's list), adding what `chain_light` holds ([`EyeOutputs::chain_light`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -144,6 +152,7 @@ impl DirectLightKernel {
         scene: &SceneBuffers,
         slots: &Slots,
         chain_light: &wgpu::Buffer,
+        walk: &FocusList,
     ) {
         let params = uniform(ctx, "direct params", params);
         let group = self.0.bind(
@@ -155,9 +164,11 @@ impl DirectLightKernel {
                 slots.hit_points,
                 slots.counters,
                 chain_light,
+                &walk.listed,
+                &walk.list,
             ],
         );
-        self.0.dispatch(encoder, &group, slots.count);
+        self.0.dispatch(encoder, &group, walk.items(slots.count));
     }
 }
 

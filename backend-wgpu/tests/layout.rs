@@ -414,8 +414,8 @@ fn local_move_structs_match_their_wgsl_twins() {
     same_layout!(ListParams {
         count,
         known,
-        _pad0,
-        _pad1
+        focus,
+        _pad0
     });
 }
 

@@ -11,11 +11,20 @@
 // What each slot's eye path found at glossy bounces (eye_pass.wgsl), in a scene with glossy
 // surfaces; else one placeholder element.
 @group(0) @binding(5) var<storage, read> chain_light: array<ChainLight>;
+// The slots the focus eye pass before listed (focus.wgsl), while the others rest: walked
+// alone where `list.focus` says so.
+@group(0) @binding(6) var<storage, read> listed: array<u32>;
+@group(0) @binding(7) var<uniform> list: ListParams;
 
 @compute @workgroup_size(64)
 fn direct_light_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let slot = item_index(gid, groups);
-    if slot >= arrayLength(&hit_points) {
+    var slot = item_index(gid, groups);
+    if list.focus != 0u {
+        if slot >= list.count {
+            return;
+        }
+        slot = listed[slot];
+    } else if slot >= arrayLength(&hit_points) {
         return;
     }
     let hp = hit_points[slot];

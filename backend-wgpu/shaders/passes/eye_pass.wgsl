@@ -1,7 +1,8 @@
 // #import layout rng qmc sampling geometry bsdf bvh lights tables scene materials textures eye_path
 // Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs and
 // ppm_core::eye_path::slot_eye_path. Writes each slot's visible point, its eye path traced by
-// eye_path.wgsl; the slot starts fresh or keeps its statistics as `params.flags` says.
+// eye_path.wgsl; the slot starts fresh or keeps its statistics as `params.flags` says. A focus
+// pass traces only the slots focus.wgsl listed, the others resting.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
@@ -13,6 +14,9 @@
 @group(0) @binding(7) var<storage, read> scene_texels: array<vec2<u32>>;
 // One per slot in a scene with glossy surfaces, else one placeholder element.
 @group(0) @binding(8) var<storage, read_write> chain_light: array<ChainLight>;
+// The slots a focus pass listed (focus.wgsl), walked alone where `list.focus` says so.
+@group(0) @binding(9) var<storage, read> listed: array<u32>;
+@group(0) @binding(10) var<uniform> list: ListParams;
 
 // False for a scene without mirrors, glass or conductors: every surface is diffuse, and the
 // bounces through them are compiled out (backend_wgpu::Specialisation).
@@ -37,20 +41,17 @@ fn cleared_slot(slot: u32, pixel: u32) -> HitPoint {
 
 @compute @workgroup_size(64)
 fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let slot = item_index(gid, groups);
-    if slot >= arrayLength(&hit_points) {
+    var slot = item_index(gid, groups);
+    if list.focus != 0u {
+        // A focus pass: the slots behind, each keyed by its own index; the others rest.
+        if slot >= list.count {
+            return;
+        }
+        slot = listed[slot];
+    } else if slot >= arrayLength(&hit_points) {
         return;
     }
     let pixel = slot / params.spp;
-    let focus = EYE_KEEP_STATISTICS | EYE_FOCUS;
-    if (params.flags & focus) == focus && hit_points[slot].iterations >= params.rest_at {
-        // Ahead of the slots a move reset: keep the last visible point and sit this one out.
-        hit_points[slot].flags |= HIT_RESTING;
-        if (hit_points[slot].flags & HIT_VALID) != 0u {
-            atomicAdd(&counters[COUNTER_ITEMS], 1u);
-        }
-        return;
-    }
     let key = StreamKey(params.seed, PASS_EYE, params.iteration, slot);
     var jitter = vec2<f32>(0.5);
     if params.spp != 1u || (params.flags & EYE_JITTER) != 0u {

@@ -47,17 +47,6 @@
 // writes this move's here, once pose A has read them).
 @group(0) @binding(17) var<storage, read_write> known_store: array<f32>;
 
-// How many slots a kernel over a list walks: those listed in pose A (the pair kernels), or
-// for the probe (backend_wgpu::layout::ListParams).
-struct ListParams {
-    count: u32,
-    // Whether `known` and `known_store` hold the last move's pairs in this pose, keyed and
-    // traced as this move's (1), or not (0).
-    known: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
-
 // A pair's first word in `pair_store` where it cannot change: its eye path goes straight to
 // its visible point (or out of the scene) past every moved box, and no ray from there to a
 // light may cross one (ppm_core::local_move::Pair::difference). Light is never negative.

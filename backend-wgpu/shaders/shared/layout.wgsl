@@ -27,6 +27,8 @@ const COUNTER_GATHERED: u32 = 2u;
 const COUNTER_FIRST_BAD: u32 = 3u;
 // Photon passes count the paths they cull in the gathers' slot.
 const COUNTER_CULLED: u32 = 2u;
+// A focus eye pass counts the slots it lists in the gathers' slot (focus.wgsl).
+const COUNTER_LISTED: u32 = 2u;
 
 struct HitPoint {
     position: vec3<f32>,
@@ -294,6 +296,20 @@ struct ResolveParams {
     width: u32,
     height: u32,
     spp: u32,
+    _pad0: u32,
+}
+
+// How many slots a kernel over a list walks (backend_wgpu::layout::ListParams): those a
+// local move listed in pose A (its pair kernels) or for its probe, or a focus eye pass's
+// slots behind.
+struct ListParams {
+    count: u32,
+    // A local move's pair kernels: whether `known` and `known_store` hold the last move's
+    // pairs in this pose, keyed and traced as this move's (1), or not (0).
+    known: u32,
+    // The eye and direct-light passes: whether they walk a focus pass's list (1) or every
+    // slot (0).
+    focus: u32,
     _pad0: u32,
 }
 
