@@ -91,15 +91,21 @@ impl WgpuBackend {
     /// A focus eye pass over `slots`: rests the slots ahead and lists those behind, then, once
     /// the count is read back, traces the listed ones (and checks every slot). Returns the
     /// counters a pass over every slot would have (the rays, the slots with a visible point,
-    /// resting or traced) and the list; where no slot is behind, nothing is traced.
+    /// resting or traced) and the list; where no slot is behind, nothing is traced. The list
+    /// goes into `last`'s store where it holds every slot (the catch-up's passes follow each
+    /// other).
     pub(crate) fn focus_eye_pass(
         &self,
         params: &EyePassParams,
         scene: &SceneBuffers,
         (slots, outputs): (&Slots, &EyeOutputs),
-        spec: Specialisation,
+        (spec, last): (Specialisation, Option<FocusList>),
     ) -> Result<([u32; 4], FocusList), BackendError> {
-        let listed = storage_zeroed(&self.ctx, "focus list", u64::from(slots.count) * 4)?;
+        let bytes = u64::from(slots.count) * 4;
+        let listed = match last {
+            Some(last) if last.listed.size() >= bytes => last.listed,
+            _ => storage_zeroed(&self.ctx, "focus list", bytes)?,
+        };
         let rested = self.run("eye focus", |encoder| {
             self.kernels
                 .focus

@@ -461,7 +461,7 @@ impl SceneUpload for WgpuBackend {
 
 impl EyePass for WgpuBackend {
     fn eye_pass(&mut self, params: &EyePassParams) -> Result<EyeStats, BackendError> {
-        self.focus = None;
+        let last_focus = self.focus.take();
         let camera = self.scene("eye")?.camera_value;
         let slots64 = u64::from(camera.width) * u64::from(camera.height) * u64::from(params.spp);
         let slots = u32::try_from(slots64)
@@ -503,7 +503,7 @@ impl EyePass for WgpuBackend {
         let focused = eye_flags::FOCUS | eye_flags::KEEP_STATISTICS;
         let (counters, focus) = if params.flags & focused == focused {
             let (counters, focus) =
-                self.focus_eye_pass(params, scene, (&targets, &outputs), spec)?;
+                self.focus_eye_pass(params, scene, (&targets, &outputs), (spec, last_focus))?;
             (counters, Some(focus))
         } else {
             let counters = self.run("eye", |encoder| {

@@ -265,11 +265,13 @@ fn the_error_report_splits_a_camera_move_where_slots_started_over() {
 /// The catch-up after a camera move ends once the slots that started over are level with
 /// the kept ones: from then on an iteration traces no more eye rays than one before the move
 /// (not every slot five times, as a target that grows as fast as every slot would).
-fn the_catch_up_ends_once_the_fresh_slots_are_level() {
+fn the_catch_up_ends_once_the_fresh_slots_are_level(
+    name: &str,
+    mut backend: Box<dyn Backend + Send>,
+) {
     let (scene, p) = cornell();
-    let mut backend = CpuBackend::new();
     let mut render =
-        Renderer::start(&mut backend, scene.clone(), &p, &MoveParams::default()).unwrap();
+        Renderer::start(backend.as_mut(), scene.clone(), &p, &MoveParams::default()).unwrap();
     let eye_rays = |render: &mut Renderer, iterations: u32| {
         let before = render.report().rays.eye;
         for _ in 0..iterations {
@@ -284,7 +286,7 @@ fn the_catch_up_ends_once_the_fresh_slots_are_level() {
     eye_rays(&mut render, 10);
     let level = eye_rays(&mut render, 10);
     figure!(
-        "eye rays per iteration: {still} before the move, {catching_up} right after, {level} once level"
+        "{name}: eye rays per iteration: {still} before the move, {catching_up} right after, {level} once level"
     );
     assert!(catching_up > still, "{catching_up} against {still}");
     assert!(level <= still, "{level} against {still}");
@@ -312,7 +314,7 @@ fn main() -> ExitCode {
             "the_error_report_splits_a_camera_move_where_slots_started_over",
             the_error_report_splits_a_camera_move_where_slots_started_over,
         )
-        .test(
+        .on_every_backend(
             "the_catch_up_ends_once_the_fresh_slots_are_level",
             the_catch_up_ends_once_the_fresh_slots_are_level,
         )
