@@ -7,7 +7,9 @@
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
 //! last ten, and the mean of those between the moves, which keep their photon paths for the
 //! next move and serve the reset slots first) and per move (mean and largest), the move's
-//! ratio to a warm-up iteration, and the slots the moves reset and corrected on average.
+//! ratio to a warm-up iteration, and the slots the moves reset and corrected on average,
+//! then where a move's time goes (each part's median: the host's refit and request, the
+//! backend's passes).
 //! The `crowd` row drags cornell-bunny's short block past 14 more small bunnies (1.05
 //! million triangles): a move must cost what the moved object touches, not the scene.
 //! Figures only, no threshold: machines are noisy, compare rows of one
@@ -87,6 +89,16 @@ fn main() {
                 d.move_ms / per_iteration,
                 d.reset,
                 d.corrected
+            );
+            let parts: Vec<String> = d
+                .parts
+                .iter()
+                .map(|(p, ms)| format!("{p} {ms:.1}"))
+                .collect();
+            println!(
+                "{:<20} median ms: {}",
+                "  where a move goes",
+                parts.join(", ")
             );
         };
         if backends.contains("cpu") {

@@ -40,11 +40,14 @@ pub struct Drag {
     /// Slots reset and direct-light corrections per move.
     pub reset: u64,
     pub corrected: u64,
+    /// Where a move's time goes: each part's median milliseconds, in order.
+    pub parts: Vec<(&'static str, f64)>,
 }
 
 /// Moves by `step` `moves` times in local mode, an iteration after each.
 pub fn drag(r: &mut Renderer, step: Move, moves: u32) -> Drag {
     let (mut move_ms, mut iteration_ms, mut reset, mut corrected) = (Vec::new(), Vec::new(), 0, 0);
+    let mut parts: Vec<(&'static str, Vec<f64>)> = Vec::new();
     for _ in 0..moves {
         let t = Instant::now();
         let m = r
@@ -52,6 +55,12 @@ pub fn drag(r: &mut Renderer, step: Move, moves: u32) -> Drag {
             .expect("a move runs");
         move_ms.push(t.elapsed().as_secs_f64() * 1e3);
         (reset, corrected) = (reset + m.updated, corrected + m.direct_corrected);
+        for p in &m.parts {
+            match parts.iter_mut().find(|(name, _)| *name == p.part) {
+                Some((_, ms)) => ms.push(p.seconds * 1e3),
+                None => parts.push((p.part, vec![p.seconds * 1e3])),
+            }
+        }
         let t = Instant::now();
         r.iteration().expect("an iteration runs");
         iteration_ms.push(t.elapsed().as_secs_f64() * 1e3);
@@ -63,7 +72,13 @@ pub fn drag(r: &mut Renderer, step: Move, moves: u32) -> Drag {
         largest_ms: move_ms.iter().copied().fold(0.0, f64::max),
         reset: reset / n,
         corrected: corrected / n,
+        parts: parts.into_iter().map(|(p, ms)| (p, median(ms))).collect(),
     }
+}
+
+fn median(mut ms: Vec<f64>) -> f64 {
+    ms.sort_by(f64::total_cmp);
+    ms.get(ms.len() / 2).copied().unwrap_or(0.0)
 }
 
 fn mean(ms: &[f64]) -> f64 {

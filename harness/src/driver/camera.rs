@@ -90,6 +90,7 @@ impl Renderer<'_> {
         self.focus = true;
         // No slot holds more samples than there were eye passes before this one.
         self.catch_up = Some(key);
+        self.traced = true;
         report.kept = stats.inherited;
         report.updated = stats.reset;
         Ok(None)

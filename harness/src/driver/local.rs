@@ -51,7 +51,7 @@
 //!
 //! [`MoveParams::correction_radii`]: ppm_core::params::MoveParams::correction_radii
 
-use super::moves::MoveReport;
+use super::moves::{Laps, MoveReport};
 use super::{Renderer, local, pass_params};
 use glam::Vec3;
 use ppm_core::compile::{mover_boxes, object_group};
@@ -153,6 +153,7 @@ impl Renderer<'_> {
         mut report: MoveReport,
         start: Instant,
     ) -> Result<MoveReport, BackendError> {
+        let mut laps = Laps::from(start);
         // From now on ordinary passes keep their paths for the next move's pose A.
         self.keep_paths = true;
         // The passes of both poses test the moved objects' boxes in both poses: a path is the
@@ -162,8 +163,10 @@ impl Renderer<'_> {
         let mut compiled = recompile_moved(&self.compiled, &next, changed, self.spare.take());
         compiled.movers = movers.clone();
         self.compiled.movers = movers;
+        laps.lap("refit");
         let size = self.local_correction();
         let request = self.local_move(&next, changed, &size);
+        laps.lap("request");
         // Deposits per photon of the passes so far (counters a caller may reset aside).
         let per_photon =
             self.report.photons_deposited as f64 / self.report.photons_emitted.max(1) as f64;
@@ -171,6 +174,7 @@ impl Renderer<'_> {
         let emitted_before = self.counts.compensation.emitted + self.counts.region.emitted;
         local(self.backend)?.update_scene(&self.compiled)?;
         local(self.backend)?.begin_local_move(&request)?;
+        laps.lap("begin");
         // One pass per pose; a drag step's draws the numbers of the ordinary pass just traced.
         let pass_index = self
             .reused_pass(size.photons, 1)
@@ -187,17 +191,22 @@ impl Renderer<'_> {
             let stats = self.correction_photons(&before)?;
             self.counts.compensation.add(&stats);
         }
+        laps.lap("pose A photons");
         local(self.backend)?.update_scene(&compiled)?;
         self.report.times.bvh_build += compiled.bvh_build_time.as_secs_f64();
         self.adopt(next, compiled);
         self.counters.frame += 1;
+        laps.lap("update");
         let resets = local(self.backend)?.local_resets()?;
+        laps.lap("resets");
         local(self.backend)?.local_direct_change()?;
+        laps.lap("direct change");
         report.updated = resets.reset;
         report.kept = resets.kept;
         report.direct_corrected = resets.direct_corrected;
         if size.photons > 0 {
             let positive = self.correction_photons(&after)?;
+            laps.lap("pose B photons");
             self.counts.region.add(&positive);
             if positive.emitted > 0 {
                 report.culled_share = Some(positive.culled as f64 / positive.emitted as f64);
@@ -210,6 +219,7 @@ impl Renderer<'_> {
             let stats = local(self.backend)?.apply_correction(&apply)?;
             self.report.times.gather += t.elapsed().as_secs_f64();
             self.report.photons_gathered += stats.photons_gathered;
+            laps.lap("apply");
         }
         self.counters.difference_pass += size.passes;
         let stored = self.counts.compensation.deposited + self.counts.region.deposited;
@@ -222,6 +232,7 @@ impl Renderer<'_> {
         self.guide = None;
         self.counters.steps_since_move = 0;
         report.seconds = start.elapsed().as_secs_f64();
+        report.parts = laps.parts;
         self.report.times.moves += report.seconds;
         Ok(report)
     }

@@ -18,8 +18,9 @@ pub mod moves;
 pub mod pass_params;
 pub mod schedule;
 
+pub use camera::CATCH_UP;
 pub use local::local_move_request;
-pub use moves::{MoveReport, PhotonCounts};
+pub use moves::{MovePart, MoveReport, PhotonCounts};
 pub use schedule::{
     Budget, Observer, ObserverResult, Outcome, Progress, Resume, RunError, Schedule, Step,
     Stoppable, run, run_from,
@@ -86,6 +87,9 @@ pub struct Renderer<'a> {
     /// the slots that started over ([`camera::CATCH_UP`]), until none is behind or they
     /// would pass this many samples, the most a slot the move kept holds.
     catch_up: Option<u32>,
+    /// The slots hold this iteration's visible points and direct light already: a camera
+    /// move traced them, and the iteration after it does not trace them again.
+    traced: bool,
     /// Ordinary passes ask the backend to keep their paths
     /// ([`photon_flags::KEEP_PATHS`]): set by the first local move, so that a render that
     /// never moves records nothing, and the next moves' pose-A corrections are answered from
@@ -143,6 +147,7 @@ impl<'a> Renderer<'a> {
             },
             focus: false,
             catch_up: None,
+            traced: false,
             keep_paths: false,
             guide: None,
             counts: PhotonCounts::default(),
@@ -169,6 +174,7 @@ impl<'a> Renderer<'a> {
         self.guide = None;
         self.focus = false;
         self.catch_up = None;
+        self.traced = false;
         self.counters.fresh = true;
         if self.params.estimator == Estimator::Ppm {
             self.eye_pass(self.counters.frame, false)?;
@@ -193,16 +199,18 @@ impl<'a> Renderer<'a> {
         self.spare = Some(before).filter(|b| refitted_from == Some(b.pose));
     }
 
-    /// One iteration: for `sppm` an eye pass and direct light, then for both estimators one
-    /// photon pass and its gather (after a move, guided and ordinary passes alternate while
-    /// there are recorded paths).
+    /// One iteration: for `sppm` an eye pass and direct light (where a camera move has not
+    /// just traced them), then for both estimators one photon pass and its gather (after a
+    /// move, guided and ordinary passes alternate while there are recorded paths).
     pub fn iteration(&mut self) -> Result<(), BackendError> {
         if self.params.estimator == Estimator::Sppm {
-            let key = self.counters.iteration;
-            self.eye_pass(key, !self.counters.fresh)?;
-            self.direct_light(key, true)?;
-            self.counters.iteration += 1;
-            self.counters.fresh = false;
+            if !std::mem::take(&mut self.traced) {
+                let key = self.counters.iteration;
+                self.eye_pass(key, !self.counters.fresh)?;
+                self.direct_light(key, true)?;
+                self.counters.iteration += 1;
+                self.counters.fresh = false;
+            }
             if let Some(level) = self.catch_up {
                 self.catch_up(level)?;
             }

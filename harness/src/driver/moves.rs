@@ -79,6 +79,42 @@ pub struct MoveReport {
     pub restarted: Option<String>,
     /// Seconds the move took (compensation, update, region and testing passes).
     pub seconds: f64,
+    /// Local mode: where those seconds went, part by part in order (the host's refit and
+    /// request, then each of the backend's passes), to see what a step costs.
+    pub parts: Vec<MovePart>,
+}
+
+/// A part of a move and the seconds it took.
+#[derive(Clone, Debug, Serialize)]
+pub struct MovePart {
+    /// What it did.
+    pub part: &'static str,
+    /// Seconds it took.
+    pub seconds: f64,
+}
+
+/// Times a move part by part: each [`Laps::lap`] names the part that ended.
+pub(super) struct Laps {
+    last: Instant,
+    pub parts: Vec<MovePart>,
+}
+
+impl Laps {
+    /// Laps from `start` on.
+    pub fn from(start: Instant) -> Self {
+        Self {
+            last: start,
+            parts: Vec::new(),
+        }
+    }
+
+    /// The part since the last lap (or the start) ended: `part` names it.
+    pub fn lap(&mut self, part: &'static str) {
+        let now = Instant::now();
+        let seconds = (now - self.last).as_secs_f64();
+        self.parts.push(MovePart { part, seconds });
+        self.last = now;
+    }
 }
 
 impl MoveReport {
@@ -95,6 +131,7 @@ impl MoveReport {
             recorded_paths: 0,
             restarted: None,
             seconds: 0.0,
+            parts: Vec::new(),
         }
     }
 }
@@ -159,6 +196,8 @@ impl Renderer<'_> {
             report.seconds = start.elapsed().as_secs_f64();
             return Ok(report);
         }
+        // What moved may change what the slots see: the next iteration traces them.
+        self.traced = false;
         let passes = match mode {
             MoveMode::Local => self.backend.local_moves().is_some(),
             _ => self.backend.dynamic().is_some(),
