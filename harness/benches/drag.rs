@@ -90,16 +90,7 @@ fn main() {
                 d.reset,
                 d.corrected
             );
-            let parts: Vec<String> = d
-                .parts
-                .iter()
-                .map(|(p, ms)| format!("{p} {ms:.1}"))
-                .collect();
-            println!(
-                "{:<20} median ms: {}",
-                "  where a move goes",
-                parts.join(", ")
-            );
+            println!("  where a move goes, median ms: {}", d.parts_line());
         };
         if backends.contains("cpu") {
             row(&mut CpuBackend::new());

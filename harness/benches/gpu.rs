@@ -123,6 +123,7 @@ fn main() {
         d.reset,
         d.corrected
     );
+    println!("  where a move goes, median ms: {}", d.parts_line());
     if let Some(line) = device_line(r.report(), &before, f64::from(moves.max(1))) {
         println!("  device ms per move and its iteration: {line}");
     }

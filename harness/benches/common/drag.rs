@@ -41,7 +41,19 @@ pub struct Drag {
     pub reset: u64,
     pub corrected: u64,
     /// Where a move's time goes: each part's median milliseconds, in order.
-    pub parts: Vec<(&'static str, f64)>,
+    parts: Vec<(&'static str, f64)>,
+}
+
+impl Drag {
+    /// Where a move's time goes: each part and its median milliseconds, in order.
+    pub fn parts_line(&self) -> String {
+        let parts: Vec<String> = self
+            .parts
+            .iter()
+            .map(|(p, ms)| format!("{p} {ms:.1}"))
+            .collect();
+        parts.join(", ")
+    }
 }
 
 /// Moves by `step` `moves` times in local mode, an iteration after each.
