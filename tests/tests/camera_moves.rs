@@ -265,8 +265,8 @@ fn the_error_report_splits_a_camera_move_where_slots_started_over() {
 /// The iteration right after a camera move traces only the catch-up of the slots that
 /// started over (the move traced every slot's eye path already), and the catch-up ends once
 /// they are level with the kept ones: from then on an iteration traces no more eye rays than
-/// one before the move (not every slot `CATCH_UP + 1` times, as a target that grows as fast
-/// as every slot would).
+/// one before the move (not every slot five times, as a target that grows as fast as every
+/// slot would).
 fn the_catch_up_ends_once_the_fresh_slots_are_level(
     name: &str,
     mut backend: Box<dyn Backend + Send>,

@@ -19,7 +19,7 @@ use std::time::Instant;
 /// started over: an edge of the new view (a light's outline above all) starts over, and its
 /// antialiasing is what its error is made of, which only eye samples reduce; each such pass
 /// costs only the slots it serves, a few in a hundred.
-pub const CATCH_UP: u32 = 8;
+pub const CATCH_UP: u32 = 4;
 
 impl Renderer<'_> {
     /// Moves the camera to `camera` the way `mode` says: local mode keeps the light of what
@@ -103,8 +103,7 @@ impl Renderer<'_> {
     /// once a pass finds no slot behind, or once that many would pass `level`, the samples
     /// a kept slot may hold: the slots that started over are level with the kept ones then,
     /// and every slot gains the same again (else every slot would fall behind the target
-    /// that grows as fast as they do, and every iteration would trace them all
-    /// `CATCH_UP + 1` times).
+    /// that grows as fast as they do, and every iteration would trace them all five times).
     pub(super) fn catch_up(&mut self, level: u32) -> Result<(), BackendError> {
         let target = (self.counters.steps_since_move + 1) * (CATCH_UP + 1);
         if target > level {
