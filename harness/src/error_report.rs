@@ -15,7 +15,6 @@ use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::Backend;
 use ppm_core::scene::path::{After, MovePath, PathEvent};
 use ppm_core::scene::{Camera, Scene};
-use ppm_core::update::luminance;
 use serde::Serialize;
 use std::path::Path;
 
@@ -167,7 +166,7 @@ struct AfterMove<'a> {
 impl AfterMove<'_> {
     fn measure(&mut self, r: &mut Renderer, seconds: f64, passes: u32) -> ObserverResult {
         let image = r.resolve()?;
-        let brightest = Some(brightest(&image) / brightest(self.truth));
+        let brightest = Some(image.brightest() / self.truth.brightest());
         if passes == 0 {
             self.brightest.0 = brightest;
         }
@@ -282,15 +281,6 @@ pub fn run_mode(
         iteration_ms,
         measurements: observer.measurements,
     })
-}
-
-/// Largest pixel luminance of an image.
-fn brightest(image: &Image) -> f32 {
-    image
-        .pixels
-        .iter()
-        .map(|&p| luminance(p))
-        .fold(0.0, f32::max)
 }
 
 /// The error a perfect compensation that costs nothing would reach, over time: its kept

@@ -42,6 +42,15 @@ impl Image {
         sum.map(|s| s / count)
     }
 
+    /// The luminance of the brightest pixel (0 for a black or empty image): how far a
+    /// render's highlights stray from the truth's.
+    pub fn brightest(&self) -> f32 {
+        self.pixels
+            .iter()
+            .map(|&p| crate::update::luminance(p))
+            .fold(0.0, f32::max)
+    }
+
     /// Whether every channel of every pixel is finite.
     pub fn is_finite(&self) -> bool {
         self.pixels.iter().flatten().all(|v| v.is_finite())
@@ -79,5 +88,14 @@ mod tests {
         assert_eq!(srgb_encode(f32::NAN), 0.0);
         assert_eq!(srgb_encode(5.0), 1.0);
         assert!(srgb_encode(0.2) < srgb_encode(0.21));
+    }
+
+    #[test]
+    fn the_brightest_pixel_is_weighed_by_luminance() {
+        let mut image = Image::new(2, 1);
+        assert_eq!(image.brightest(), 0.0);
+        // Blue carries the least luminance: the green pixel is the brighter.
+        image.pixels = vec![[0.0, 0.0, 2.0], [0.0, 1.0, 0.0]];
+        approx::assert_relative_eq!(image.brightest(), 0.7152);
     }
 }

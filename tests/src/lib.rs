@@ -140,15 +140,6 @@ pub fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// The luminance of an image's brightest pixel.
-pub fn brightest(image: &ppm_core::image::Image) -> f32 {
-    image
-        .pixels
-        .iter()
-        .map(|p| luminance(*p))
-        .fold(0.0, f32::max)
-}
-
 /// Per pixel of a `size` x `size` image, the object an eye ray through its centre meets
 /// first in `scene`.
 pub fn objects_seen(scene: &Scene, size: u32) -> Vec<Option<u32>> {

@@ -77,7 +77,7 @@ fn holds(name: &str, scene: &Scene, steps: &[Step]) -> Vec<MoveReport> {
         block_relative_rmse(&local, &truth, 4),
         block_relative_rmse(&restart, &truth, 4),
     );
-    let (bl, bt) = (tests::brightest(&local), tests::brightest(&truth));
+    let (bl, bt) = (local.brightest(), truth.brightest());
     figure!(
         "{name}: block error {l:.4} (restart {r:.4}), brightest {bl:.3} (truth {bt:.3}); {reports:?}"
     );

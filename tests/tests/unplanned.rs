@@ -258,7 +258,7 @@ fn no_move_blows_a_pixel_up(name: &str, mut backend: Box<dyn Backend + Send>) {
         let targets = [scene.at_frame(1), random.final_pose(&scene)];
         let truths: Vec<f32> = targets
             .iter()
-            .map(|t| tests::brightest(&tests::truth(t, SIZE, 128)))
+            .map(|t| tests::truth(t, SIZE, 128).brightest())
             .collect();
         let mut worst = 0.0f32;
         let mut check = |backend: &mut dyn Backend, warm: u32, seed: u32| {
@@ -270,11 +270,11 @@ fn no_move_blows_a_pixel_up(name: &str, mut backend: Box<dyn Backend + Send>) {
                     for _ in 0..warm {
                         render.iteration().unwrap();
                     }
-                    let before = tests::brightest(&render.resolve().unwrap());
+                    let before = render.resolve().unwrap().brightest();
                     render.move_to(target.clone(), mode).unwrap();
                     let what = format!("{scene_name} {name} {mode:?} warm-up {warm} seed {seed}");
                     let moved = render.resolve().unwrap();
-                    let ratio = tests::brightest(&moved) / truth.max(before);
+                    let ratio = moved.brightest() / truth.max(before);
                     worst = worst.max(ratio);
                     assert!(
                         ratio <= 2.0,
