@@ -195,18 +195,20 @@ impl WgpuBackend {
     }
 
     /// Runs camera_move_vectors.wgsl on `cases` over the old view `before` (its slots and
-    /// their boxes) with `materials`: a test compares the outcomes with
-    /// [`ppm_core::camera_move::inherit_slot`] (tests/camera_move.rs). Compiles its kernel on
-    /// every call.
+    /// their boxes) with `materials`, and its edge test at every slot of the new view
+    /// `after` of `request`: a test compares the outcomes and the edges (1 on an edge) with
+    /// [`ppm_core::camera_move::inherit_slot`] and [`ppm_core::camera_move::on_an_edge`]
+    /// (tests/camera_move.rs). Compiles its kernel on every call.
     pub fn camera_move_vectors(
         &self,
         (before, before_bounds): (&[HitPoint], &[SlotBounds]),
         materials: &[GpuMaterial],
         cases: &[InheritCase],
-    ) -> Result<Vec<InheritOutcome>, BackendError> {
+        (after, request): (&[HitPoint], &CameraMove),
+    ) -> Result<(Vec<InheritOutcome>, Vec<u32>), BackendError> {
         const NAME: &str = "camera_move_vectors";
         let module = shader_module(&self.ctx.device, NAME, shaders::CAMERA_MOVE_VECTORS);
-        let slots = [Read, Read, Read, Read, ReadWrite];
+        let slots = [Read, Read, Read, Read, ReadWrite, Read, Uniform, ReadWrite];
         let kernel = Kernel::new(
             &self.ctx.device,
             &module,
@@ -219,18 +221,27 @@ impl WgpuBackend {
             buffers::storage_init(&self.ctx, "slots before", before),
             buffers::storage_init(&self.ctx, "bounds before", before_bounds),
             buffers::storage_init(&self.ctx, "case materials", materials),
+            buffers::storage_init(&self.ctx, "slots after", after),
+            buffers::uniform(&self.ctx, "edge request", &request.params()),
         ];
         let size = (cases.len() * size_of::<InheritOutcome>()) as u64;
         let outcomes = storage_zeroed(&self.ctx, NAME, size)?;
+        let edges = storage_zeroed(&self.ctx, "edges", (after.len() * 4) as u64)?;
         self.run(NAME, |encoder| {
             let group = kernel.bind(
                 &self.ctx.device,
-                &[&inputs[0], &inputs[1], &inputs[2], &inputs[3], &outcomes],
+                &[
+                    &inputs[0], &inputs[1], &inputs[2], &inputs[3], &outcomes, &inputs[4],
+                    &inputs[5], &edges,
+                ],
             );
-            kernel.dispatch(encoder, &group, cases.len() as u32);
+            kernel.dispatch(encoder, &group, cases.len().max(after.len()) as u32);
             Ok(())
         })?;
-        read_back(&self.ctx, &outcomes, cases.len())
+        Ok((
+            read_back(&self.ctx, &outcomes, cases.len())?,
+            read_back(&self.ctx, &edges, after.len())?,
+        ))
     }
 
     /// What [`crate::Backend::not_created`] says of camera moves: their pipeline and the

@@ -31,6 +31,10 @@ pub struct FocusList {
     pub list: wgpu::Buffer,
     /// Slots listed; none where the passes walk every slot.
     count: Option<u32>,
+    /// The focus pass's `rest_at`: a next focus pass with the same walks this list again.
+    rest_at: u32,
+    /// Slots with a visible point that focus.wgsl rested (left off the list).
+    rested: u32,
 }
 
 impl FocusList {
@@ -40,6 +44,8 @@ impl FocusList {
             listed: storage_init(ctx, "no focus list", &[0u32]),
             list: uniform(ctx, "no focus list", &ListParams::default()),
             count: None,
+            rest_at: 0,
+            rested: 0,
         }
     }
 
@@ -91,9 +97,13 @@ impl WgpuBackend {
     /// A focus eye pass over `slots`: rests the slots ahead and lists those behind, then, once
     /// the count is read back, traces the listed ones (and checks every slot). Returns the
     /// counters a pass over every slot would have (the rays, the slots with a visible point,
-    /// resting or traced) and the list; where no slot is behind, nothing is traced. The list
-    /// goes into `last`'s store where it holds every slot (the catch-up's passes follow each
-    /// other).
+    /// resting or traced) and the list; where no slot is behind, nothing is traced.
+    ///
+    /// `last`, the list of the focus pass just before, is walked again where that pass rested
+    /// at the same count (the catch-up's passes of one iteration): a slot only gains direct
+    /// samples between them, so the slots it left off are still ahead, and eye_pass.wgsl rests
+    /// the listed ones that have caught up, as focus.wgsl would. Otherwise its store takes the
+    /// new list where it holds every slot.
     pub(crate) fn focus_eye_pass(
         &self,
         params: &EyePassParams,
@@ -101,6 +111,33 @@ impl WgpuBackend {
         (slots, outputs): (&Slots, &EyeOutputs),
         (spec, last): (Specialisation, Option<FocusList>),
     ) -> Result<([u32; 4], FocusList), BackendError> {
+        let focus = match last {
+            Some(last) if last.count.is_some() && last.rest_at == params.rest_at => last,
+            last => self.focus_list(params, slots, last)?,
+        };
+        let mut counters = COUNTERS_RESET;
+        if focus.count.is_some_and(|count| count > 0) {
+            counters = self.run("eye", |encoder| {
+                let walk = (spec, &focus);
+                self.kernels
+                    .eye
+                    .record(&self.ctx, encoder, params, scene, slots, outputs, walk);
+                self.kernels.check.record(&self.ctx, encoder, slots);
+                Ok(())
+            })?;
+        }
+        counters[COUNTER_ITEMS] += focus.rested;
+        Ok((counters, focus))
+    }
+
+    /// focus.wgsl over `slots`: rests those at `params.rest_at` direct samples or more, and
+    /// lists the others into `last`'s store where it holds every slot.
+    fn focus_list(
+        &self,
+        params: &EyePassParams,
+        slots: &Slots,
+        last: Option<FocusList>,
+    ) -> Result<FocusList, BackendError> {
         let bytes = u64::from(slots.count) * 4;
         let listed = match last {
             Some(last) if last.listed.size() >= bytes => last.listed,
@@ -118,23 +155,12 @@ impl WgpuBackend {
             focus: 1,
             ..ListParams::default()
         };
-        let focus = FocusList {
+        Ok(FocusList {
             listed,
             list: uniform(&self.ctx, "focus list", &list),
             count: Some(count),
-        };
-        let mut counters = COUNTERS_RESET;
-        if count > 0 {
-            counters = self.run("eye", |encoder| {
-                let walk = (spec, &focus);
-                self.kernels
-                    .eye
-                    .record(&self.ctx, encoder, params, scene, slots, outputs, walk);
-                self.kernels.check.record(&self.ctx, encoder, slots);
-                Ok(())
-            })?;
-        }
-        counters[COUNTER_ITEMS] += rested[COUNTER_ITEMS];
-        Ok((counters, focus))
+            rest_at: params.rest_at,
+            rested: rested[COUNTER_ITEMS],
+        })
     }
 }

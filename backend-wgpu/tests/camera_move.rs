@@ -4,12 +4,14 @@
 //! whose paths met two objects), a pixel at the border, textured, coated and chained
 //! materials, another object or normal, and a point behind the earlier camera, with one
 //! and two slots per pixel. Each slot inherits or not as on the CPU, and what it inherits
-//! agrees within rounding; a camera move's passes refuse to run out of order.
+//! agrees within rounding; its `on_an_edge` finds the same edges of a new view (another
+//! object, a crease, the void, a reflection, a coated patch, a step) as ppm_core's; a camera
+//! move's passes refuse to run out of order.
 
 use backend_wgpu::layout::{InheritCase, InheritOutcome};
 use backend_wgpu::{GpuContext, WgpuBackend};
 use glam::Vec3;
-use ppm_core::camera_move::{CameraMove, inherit_slot};
+use ppm_core::camera_move::{CameraMove, inherit_slot, on_an_edge};
 use ppm_core::compile::{compile_scene, gpu_camera};
 use ppm_core::eye_path::camera_segment;
 use ppm_core::layout::{
@@ -366,6 +368,33 @@ fn compare(
     true
 }
 
+/// A new view of the plane with `spp` fresh slots a pixel, and edges of each kind in it:
+/// another object, a crease, the void, a mirror's reflection, a coated patch and a step of
+/// the same object in front of itself; the move to it from nearer.
+fn view_with_edges(spp: u32) -> (Vec<HitPoint>, CameraMove) {
+    let near = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
+    let after = camera(Vec3::new(0.3, 0.1, 5.5), Vec3::ZERO);
+    let (mut slots, _) = old_view(&after, spp, u32::MAX);
+    for hp in &mut slots {
+        let (x, y) = (hp.pixel % SIZE, hp.pixel / SIZE);
+        match (x, y) {
+            (10..=12, 4..=7) => hp.flags ^= 1 << hit_flags::OBJECT_SHIFT,
+            (3, 3) => hp.normal = [0.0, 0.6, 0.8],
+            (5, 12) => hp.flags &= !hit_flags::VALID,
+            (8, 12) => hp.flags |= hit_flags::EYE_CHAINED,
+            (13, 13) => hp.material = 2,
+            (2..=4, 8..=10) => hp.position[2] += 0.5,
+            _ => {}
+        }
+    }
+    let request = CameraMove {
+        before: near,
+        after,
+        spp,
+    };
+    (slots, request)
+}
+
 fn the_wgsl_inheritance_of_a_camera_move_is_the_core_s() {
     let gpu = WgpuBackend::new().unwrap();
     let near = camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
@@ -375,19 +404,31 @@ fn the_wgsl_inheritance_of_a_camera_move_is_the_core_s() {
         single_sample_cases(edge),
     )];
     batches.push((old_view(&near, 2, u32::MAX), two_sample_cases()));
-    let (mut inherited, mut cases) = (0, 0);
+    let (mut inherited, mut cases, mut edges) = (0, 0, 0);
     for ((before, before_bounds), batch) in &batches {
         let inputs: Vec<InheritCase> = batch.iter().map(|c| c.2).collect();
-        let got = gpu
-            .camera_move_vectors((before, before_bounds), &materials(), &inputs)
+        let spp = inputs[0].request.spp;
+        let (after, request) = view_with_edges(spp);
+        let (got, wgsl_edges) = gpu
+            .camera_move_vectors(
+                (before, before_bounds),
+                &materials(),
+                &inputs,
+                (&after, &request),
+            )
             .unwrap();
+        let core_edges: Vec<u32> = (0..after.len())
+            .map(|slot| u32::from(on_an_edge(&after, slot, &request, &materials())))
+            .collect();
+        assert_eq!(wgsl_edges, core_edges, "edges with {spp} slots a pixel");
+        edges += core_edges.iter().sum::<u32>();
         assert_eq!(got.len(), batch.len());
         for (case, wgsl) in batch.iter().zip(&got) {
             inherited += usize::from(compare(case, wgsl, (before, before_bounds)));
             cases += 1;
         }
     }
-    figure!("{cases} cases, {inherited} inherited on both sides alike");
+    figure!("{cases} cases, {inherited} inherited on both sides alike; {edges} slots on edges");
 }
 
 /// What a refused pass needs.

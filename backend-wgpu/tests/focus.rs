@@ -1,6 +1,7 @@
 //! A focus eye pass and the direct light after it walk only the slots behind (focus.rs): each
 //! of those ends bit for bit as a pass over every slot leaves it, each slot ahead rests as it
-//! was, and a pass with no slot behind traces nothing.
+//! was, and a pass with no slot behind traces nothing. A second focus pass at the same count
+//! walks the first one's list again, and ends as one that lists the slots anew.
 
 use backend_wgpu::{GpuContext, WgpuBackend};
 use ppm_core::compile::compile_scene;
@@ -103,6 +104,59 @@ fn a_focus_pass_leaves_the_slots_behind_as_a_whole_pass_and_rests_the_others() {
     }
 }
 
+/// Two focus passes at the same count, the second walking the first one's list (the
+/// catch-up's passes of one iteration), leave every slot and count as when the second lists
+/// the slots anew: a slot one behind traces in the first and rests in the second.
+fn a_list_walked_again_rests_the_slots_that_caught_up() {
+    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
+    let mut backend = WgpuBackend::new().unwrap();
+    backend.load_scene(&compile_scene(&scene, 24, 20)).unwrap();
+    iteration(&mut backend, 0, 0, 0);
+    let (mut start, _) = iteration(&mut backend, eye_flags::KEEP_STATISTICS, 0, 1);
+    // Slots two behind and slots one behind a rest at three direct samples; the others ahead.
+    for (i, hp) in start.iter_mut().enumerate() {
+        hp.iterations = match (i % 7, i % 5) {
+            (0, _) => 1,
+            (_, 0) => 2,
+            _ => 5,
+        };
+    }
+    let focus = eye_flags::KEEP_STATISTICS | eye_flags::FOCUS;
+    backend.write_hit_points(&start).unwrap();
+    iteration(&mut backend, focus, 3, 2);
+    let (again, again_stats) = iteration(&mut backend, focus, 3, 3);
+    backend.write_hit_points(&start).unwrap();
+    let (first, _) = iteration(&mut backend, focus, 3, 2);
+    // Written back, the slots are the same and the list is gone: the next pass lists anew.
+    backend.write_hit_points(&first).unwrap();
+    let (anew, anew_stats) = iteration(&mut backend, focus, 3, 3);
+    for (a, b) in again.iter().zip(&anew) {
+        assert_eq!(bytes(a), bytes(b), "a slot differs");
+    }
+    assert_eq!(
+        (again_stats.rays, again_stats.hit_points),
+        (anew_stats.rays, anew_stats.hit_points)
+    );
+    // The slots one behind caught up in the first pass, and rest as they were in the second.
+    let mut caught_up = 0;
+    for ((start, first), again) in start.iter().zip(&first).zip(&again) {
+        if start.iterations == 2 && first.iterations == 3 {
+            caught_up += 1;
+            let rested = HitPoint {
+                flags: first.flags | hit_flags::RESTING,
+                ..*first
+            };
+            assert_eq!(
+                bytes(again),
+                bytes(&rested),
+                "a slot that caught up changed"
+            );
+        }
+    }
+    assert!(caught_up > 0);
+    assert!(again_stats.rays > 0);
+}
+
 fn main() -> ExitCode {
     let adapter = Need::wgpu(|| GpuContext::new().map(drop).map_err(|e| e.to_string()));
     Suite::new()
@@ -110,6 +164,11 @@ fn main() -> ExitCode {
             &[&adapter],
             "a_focus_pass_leaves_the_slots_behind_as_a_whole_pass_and_rests_the_others",
             a_focus_pass_leaves_the_slots_behind_as_a_whole_pass_and_rests_the_others,
+        )
+        .test_needing(
+            &[&adapter],
+            "a_list_walked_again_rests_the_slots_that_caught_up",
+            a_list_walked_again_rests_the_slots_that_caught_up,
         )
         .run()
 }

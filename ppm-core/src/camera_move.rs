@@ -17,8 +17,10 @@
 //! radius of the new one, or within twice the diagonal of its pixel's footprint where that
 //! is larger (its visible points wandered over that footprint as its jitter drew them, and
 //! the new one over its own, up to a pixel away on each axis). A pixel
-//! near an edge, in the old view or the new, starts over: its one fresh eye path fell on one
-//! side of the edge, and inheriting that side's light would weigh one sample as a history.
+//! near an edge, in the old view or the new ([`on_an_edge`]: an edge the move brought
+//! crosses pixels whose earlier slots all saw one surface), starts over: its one fresh eye
+//! path fell on one side of the edge, and inheriting that side's light would weigh one
+//! sample as a history.
 //! Each counts with its share times `a`, the ratio of the smaller footprint's area to the
 //! larger's (after a dolly a pixel covers more or less of the surface than those it
 //! inherits from). The slot takes the weighted mean of their estimates and keeps of their
@@ -80,11 +82,16 @@ pub struct CameraMoveStats {
 /// passes its coat at the angle it is seen at, and a texture changes within the footprint
 /// a slot averages over: both start over.
 pub fn passes_light_on(hp: &HitPoint, materials: &[GpuMaterial]) -> bool {
-    let seen_directly = hp.flags & hit_flags::VALID != 0 && hp.flags & hit_flags::EYE_CHAINED == 0;
-    seen_directly
+    seen_directly(hp)
         && materials
             .get(hp.material as usize)
             .is_some_and(|m| m.kind == material_kind::DIFFUSE && m.texture == 0)
+}
+
+/// Whether `hp`'s eye paths found a visible point with no mirror, glass or glossy bounce
+/// before it.
+fn seen_directly(hp: &HitPoint) -> bool {
+    hp.flags & hit_flags::VALID != 0 && hp.flags & hit_flags::EYE_CHAINED == 0
 }
 
 /// The object a slot's visible point lies on.
@@ -213,6 +220,60 @@ fn pixel_centre_before(hp: &HitPoint, request: &CameraMove) -> Option<(f32, f32)
 /// earlier iteration besides that sample ([`inherit_slot`] keeps none where it would be 0).
 pub fn started_over(hp: &HitPoint) -> bool {
     hp.iterations <= 1
+}
+
+/// Whether the pixel of slot `slot` of the new view `after` (its slots just traced fresh)
+/// lies on an edge of that view: the fresh visible point of another slot of it or of one of
+/// the eight pixels around it is not seen directly (the void, a mirror, glass), lies on
+/// another object or material, faces another way ([`NORMAL_COS`]), or lies farther than
+/// twice the larger of the two footprint diagonals from its own (an edge of the same object
+/// in front of itself). Such a pixel averages two surfaces, and an edge the move brought
+/// (one object now in front of another) is no edge of the old view: its one fresh eye path
+/// fell on one side, and inheriting that side's light would keep the other side out of the
+/// pixel for as long as the history weighs. It starts over. A slot that passes no light on
+/// ([`passes_light_on`]) starts over anyway, and counts as on an edge without a look around.
+pub fn on_an_edge(
+    after: &[HitPoint],
+    slot: usize,
+    request: &CameraMove,
+    materials: &[GpuMaterial],
+) -> bool {
+    let Some(hp) = after.get(slot).filter(|hp| passes_light_on(hp, materials)) else {
+        return true;
+    };
+    let (width, height) = (request.after.width as i64, request.after.height as i64);
+    let spp = request.spp.max(1) as i64;
+    let (x, y) = (
+        hp.pixel as i64 % width.max(1),
+        hp.pixel as i64 / width.max(1),
+    );
+    let (position, normal) = (Vec3::from(hp.position), Vec3::from(hp.normal));
+    let reach = 2.0 * footprint(&request.after, position, normal).0;
+    // `o` on `hp`'s material (so diffuse and untextured as well), near enough.
+    let alike = |o: &HitPoint| {
+        let (o_position, o_normal) = (Vec3::from(o.position), Vec3::from(o.normal));
+        let d2 = position.distance_squared(o_position);
+        seen_directly(o)
+            && object(o) == object(hp)
+            && o.material == hp.material
+            && o_normal.dot(normal) >= NORMAL_COS
+            && (d2 < reach * reach || {
+                let o_reach = 2.0 * footprint(&request.after, o_position, o_normal).0;
+                d2 < o_reach * o_reach
+            })
+    };
+    for (nx, ny) in (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy))) {
+        if nx < 0 || nx >= width || ny < 0 || ny >= height {
+            continue;
+        }
+        for s in 0..spp {
+            let other = ((ny * width + nx) * spp + s) as usize;
+            if other != slot && !after.get(other).is_some_and(alike) {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// A slot of the new view, just traced from scratch (no statistics yet), takes over the
@@ -476,6 +537,44 @@ mod tests {
         let mut hp = fresh(&cam, pixel);
         let inputs = (before.as_slice(), before_bounds.as_slice());
         assert!(!inherit_slot(&mut hp, None, &request, &white(), inputs));
+    }
+
+    #[test]
+    fn a_pixel_next_to_another_surface_is_on_an_edge_and_a_plane_has_none() {
+        let cam = camera(Vec3::new(0.0, 0.0, 5.0));
+        let request = CameraMove {
+            before: cam,
+            after: cam,
+            spp: 1,
+        };
+        let mut view = image(&cam, 0);
+        let edges = |view: &[HitPoint]| -> Vec<u32> {
+            (0..view.len())
+                .filter(|&slot| on_an_edge(view, slot, &request, &white()))
+                .map(|slot| slot as u32)
+                .collect()
+        };
+        assert_eq!(edges(&view), Vec::<u32>::new(), "a plane has no edge");
+        // Another object at pixel (20, 10): it and the eight around it.
+        view[10 * 64 + 20].flags ^= 1 << hit_flags::OBJECT_SHIFT;
+        let ring: Vec<u32> = (9..=11)
+            .flat_map(|y| (19..=21).map(move |x| y * 64 + x))
+            .collect();
+        assert_eq!(edges(&view), ring);
+        // The same object half a unit nearer the camera at (40, 30): a step, not a plane.
+        let mut view = image(&cam, 0);
+        view[30 * 64 + 40].position[2] += 0.5;
+        assert_eq!(edges(&view).len(), 9);
+        // A crease is an edge, and so is the void or a reflection.
+        for edit in [
+            (|hp: &mut HitPoint| hp.normal = [0.0, 0.6, 0.8]) as fn(&mut HitPoint),
+            |hp| hp.flags &= !hit_flags::VALID,
+            |hp| hp.flags |= hit_flags::EYE_CHAINED,
+        ] {
+            let mut view = image(&cam, 0);
+            edit(&mut view[5 * 64 + 5]);
+            assert_eq!(edges(&view).len(), 9);
+        }
     }
 
     #[test]

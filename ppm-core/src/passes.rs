@@ -408,9 +408,11 @@ pub trait LocalMoves: Backend {
     fn begin_camera_move(&mut self, request: &CameraMove) -> Result<(), BackendError>;
 
     /// After [`LocalMoves::begin_camera_move`], the scene update to the new camera and an eye
-    /// pass that started every slot fresh: each slot takes over the light of the earlier
-    /// slots near its visible point ([`inherit_slot`](crate::camera_move::inherit_slot)),
-    /// and the kept slots are let go. Refused out of that order.
+    /// pass that started every slot fresh: each slot not on an edge of the new view
+    /// ([`on_an_edge`](crate::camera_move::on_an_edge), tested on the fresh slots before any
+    /// inherits) takes over the light of the earlier slots near its visible point
+    /// ([`inherit_slot`](crate::camera_move::inherit_slot)), and the kept slots are let go.
+    /// Refused out of that order.
     fn inherit_light(&mut self) -> Result<CameraMoveStats, BackendError>;
 }
 

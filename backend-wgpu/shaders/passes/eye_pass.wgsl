@@ -2,7 +2,7 @@
 // Eye pass (docs/algorithm.md 1.1): the twin of backend-cpu's eye_pass.rs and
 // ppm_core::eye_path::slot_eye_path. Writes each slot's visible point, its eye path traced by
 // eye_path.wgsl; the slot starts fresh or keeps its statistics as `params.flags` says. A focus
-// pass traces only the slots focus.wgsl listed, the others resting.
+// pass traces only the slots focus.wgsl listed that are still behind, the others resting.
 
 @group(0) @binding(0) var<uniform> params: EyePassParams;
 @group(0) @binding(1) var<uniform> camera: GpuCamera;
@@ -48,6 +48,15 @@ fn eye_pass_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
             return;
         }
         slot = listed[slot];
+        // A listed slot that caught up since the list was made (backend_wgpu's focus.rs
+        // walks a list again) rests, as focus.wgsl rests it.
+        if hit_points[slot].iterations >= params.rest_at {
+            hit_points[slot].flags |= HIT_RESTING;
+            if (hit_points[slot].flags & HIT_VALID) != 0u {
+                atomicAdd(&counters[COUNTER_ITEMS], 1u);
+            }
+            return;
+        }
     } else if slot >= arrayLength(&hit_points) {
         return;
     }

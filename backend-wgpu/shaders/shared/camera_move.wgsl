@@ -2,9 +2,11 @@
 // function for function. A slot of the new view, traced fresh, takes over the light of the
 // four earlier slots around where its pixel's centre lands in the old image, where all are
 // alike and what its visible point sends towards the eye does not depend on the view.
-// Needs, in the importing pass: `scene_material` (materials.wgsl, or a test's own), and the
+// Needs, in the importing pass: `scene_material` (materials.wgsl, or a test's own), the
 // old view's slots and their boxes as `before_slots` (an array of HitPoint) and
-// `before_bounds` (an array of GpuBounds, a box per slot).
+// `before_bounds` (an array of GpuBounds, a box per slot), and the new view's fresh slots as
+// `hit_points` (an array of HitPoint, whose visible points `on_an_edge` reads field by
+// field: a pass that inherits writes only the fields `inherited_write` sets).
 
 // ppm_core::camera_move's constants.
 const NORMAL_COS: f32 = 0.95;
@@ -33,12 +35,17 @@ fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
 // ppm_core::camera_move::passes_light_on: a visible point of a diffuse, untextured surface
 // that no eye path of the slot reached through a mirror, glass or a glossy surface.
 fn passes_light_on(hp: HitPoint) -> bool {
-    let seen_directly = (hp.flags & HIT_VALID) != 0u && (hp.flags & HIT_EYE_CHAINED) == 0u;
-    if !seen_directly {
+    if !seen_directly(hp.flags) {
         return false;
     }
     let m = scene_material(hp.material);
     return m.kind == MATERIAL_DIFFUSE && m.texture == 0u;
+}
+
+// ppm_core::camera_move::seen_directly, from a slot's `flags`: a visible point found with no
+// mirror, glass or glossy bounce before it.
+fn seen_directly(flags: u32) -> bool {
+    return (flags & HIT_VALID) != 0u && (flags & HIT_EYE_CHAINED) == 0u;
 }
 
 // ppm_core::camera_move::object: the object a slot's visible point lies on.
@@ -165,6 +172,79 @@ fn pixel_centre_before(hp: HitPoint, request: CameraMoveParams) -> ImagePoint {
     let scale = pixel_side(request.after, hp.position)
         / max(pixel_side(request.before, hp.position), F32_MIN_POSITIVE);
     return ImagePoint(before.at + (centre - after.at) * scale, true);
+}
+
+// What `on_an_edge` reads of a slot of the new view: its visible point.
+struct Seen {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    material: u32,
+    flags: u32,
+}
+
+// The visible point of `hit_points[i]`, read field by field.
+fn seen(i: u32) -> Seen {
+    return Seen(hit_points[i].position, hit_points[i].normal, hit_points[i].material, hit_points[i].flags);
+}
+
+// ppm_core::camera_move::on_an_edge: whether the pixel of slot `slot` of the new view lies
+// on an edge of it, where a fresh visible point of another slot of it or of one of the
+// eight pixels around is not seen directly, lies on another object or material, faces
+// another way, or lies farther than twice the larger footprint diagonal; true at once for
+// a slot that passes no light on.
+fn on_an_edge(slot: u32, request: CameraMoveParams) -> bool {
+    let count = arrayLength(&hit_points);
+    if slot >= count {
+        return true;
+    }
+    let hp = seen(slot);
+    let m = scene_material(hp.material);
+    if !seen_directly(hp.flags) || m.kind != MATERIAL_DIFFUSE || m.texture != 0u {
+        return true;
+    }
+    let width = i32(request.after.width);
+    let height = i32(request.after.height);
+    let spp = i32(max(request.spp, 1u));
+    let pixel = i32(hit_points[slot].pixel);
+    let x = pixel % max(width, 1);
+    let y = pixel / max(width, 1);
+    let reach = 2.0 * footprint(request.after, hp.position, hp.normal).x;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let nx = x + dx;
+            let ny = y + dy;
+            if nx < 0 || nx >= width || ny < 0 || ny >= height {
+                continue;
+            }
+            for (var s = 0; s < spp; s++) {
+                let other = u32((ny * width + nx) * spp + s);
+                if other == slot {
+                    continue;
+                }
+                if other >= count {
+                    return true;
+                }
+                // On `hp`'s material (so diffuse and untextured as well), near enough.
+                let o = seen(other);
+                let to = hp.position - o.position;
+                let d2 = dot(to, to);
+                let same_surface = seen_directly(o.flags)
+                    && (o.flags >> HIT_OBJECT_SHIFT) == (hp.flags >> HIT_OBJECT_SHIFT)
+                    && o.material == hp.material
+                    && dot(o.normal, hp.normal) >= NORMAL_COS;
+                if !same_surface {
+                    return true;
+                }
+                if d2 >= reach * reach {
+                    let o_reach = 2.0 * footprint(request.after, o.position, o.normal).x;
+                    if d2 >= o_reach * o_reach {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    return false;
 }
 
 // ppm_core::camera_move::inherit_slot: `hp`, just traced from scratch, takes over the light

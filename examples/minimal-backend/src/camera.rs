@@ -3,7 +3,7 @@
 //! light with ppm-core's per-slot function.
 
 use crate::{MinimalBackend, loaded};
-use ppm_core::camera_move::{CameraMove, CameraMoveStats, inherit_slot};
+use ppm_core::camera_move::{CameraMove, CameraMoveStats, inherit_slot, on_an_edge};
 use ppm_core::check::check_hit_points;
 use ppm_core::layout::{HitPoint, SlotBounds};
 use ppm_core::passes::BackendError;
@@ -49,9 +49,15 @@ impl MinimalBackend {
                         pass that starts the slots fresh",
             })?;
         let before = (moving.before.as_slice(), moving.before_bounds.as_slice());
+        // Edges first, over the fresh slots: no slot reads a neighbour that inherited.
+        let edges: Vec<bool> = (0..self.hit_points.len())
+            .map(|slot| on_an_edge(&self.hit_points, slot, &moving.request, &scene.materials))
+            .collect();
         let mut stats = CameraMoveStats::default();
-        for (hp, bounds) in self.hit_points.iter_mut().zip(&mut self.slot_bounds) {
-            let took = inherit_slot(hp, Some(bounds), &moving.request, &scene.materials, before);
+        let slots = self.hit_points.iter_mut().zip(&mut self.slot_bounds);
+        for ((hp, bounds), edge) in slots.zip(edges) {
+            let took =
+                !edge && inherit_slot(hp, Some(bounds), &moving.request, &scene.materials, before);
             stats.inherited += u64::from(took);
             stats.reset += u64::from(!took);
         }

@@ -18,8 +18,11 @@ use std::time::Instant;
 /// Eye and direct-light passes each iteration adds, after a camera move, for the slots that
 /// started over: an edge of the new view (a light's outline above all) starts over, and its
 /// antialiasing is what its error is made of, which only eye samples reduce; each such pass
-/// costs only the slots it serves, a few in a hundred.
-pub const CATCH_UP: u32 = 4;
+/// costs only the slots it serves, a few in a hundred. Six rather than four bring
+/// cornell-box and cornell-bunny to restart's 8-s error in about 1.6 s rather than 2.1, and
+/// keep a camera step within two iterations on both backends, which eight do not on wgpu
+/// (docs/moves.md).
+pub const CATCH_UP: u32 = 6;
 
 impl Renderer<'_> {
     /// Moves the camera to `camera` the way `mode` says: local mode keeps the light of what
