@@ -61,12 +61,18 @@ fn bytes(hp: &HitPoint) -> &[u8] {
     bytemuck::bytes_of(hp)
 }
 
-fn a_focus_pass_leaves_the_slots_behind_as_a_whole_pass_and_rests_the_others() {
+/// A backend with two iterations of cornell-box at 24x20, and its slots.
+fn two_iterations() -> (WgpuBackend, Vec<HitPoint>) {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
     let mut backend = WgpuBackend::new().unwrap();
     backend.load_scene(&compile_scene(&scene, 24, 20)).unwrap();
     iteration(&mut backend, 0, 0, 0);
-    let (mut start, _) = iteration(&mut backend, eye_flags::KEEP_STATISTICS, 0, 1);
+    let (slots, _) = iteration(&mut backend, eye_flags::KEEP_STATISTICS, 0, 1);
+    (backend, slots)
+}
+
+fn a_focus_pass_leaves_the_slots_behind_as_a_whole_pass_and_rests_the_others() {
+    let (mut backend, mut start) = two_iterations();
     // One slot in seven falls behind, as a move's resets scatter them.
     for hp in start.iter_mut().step_by(7) {
         hp.iterations = 1;
@@ -108,11 +114,7 @@ fn a_focus_pass_leaves_the_slots_behind_as_a_whole_pass_and_rests_the_others() {
 /// catch-up's passes of one iteration), leave every slot and count as when the second lists
 /// the slots anew: a slot one behind traces in the first and rests in the second.
 fn a_list_walked_again_rests_the_slots_that_caught_up() {
-    let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
-    let mut backend = WgpuBackend::new().unwrap();
-    backend.load_scene(&compile_scene(&scene, 24, 20)).unwrap();
-    iteration(&mut backend, 0, 0, 0);
-    let (mut start, _) = iteration(&mut backend, eye_flags::KEEP_STATISTICS, 0, 1);
+    let (mut backend, mut start) = two_iterations();
     // Slots two behind and slots one behind a rest at three direct samples; the others ahead.
     for (i, hp) in start.iter_mut().enumerate() {
         hp.iterations = match (i % 7, i % 5) {
