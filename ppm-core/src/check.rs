@@ -43,12 +43,19 @@ pub fn check_hit_points(pass: &'static str, hit_points: &[HitPoint]) -> Result<(
 /// or slot (the field-by-field search that names the culprit took a twentieth of a CPU
 /// iteration, run after every pass).
 fn all_finite(hit_points: &[HitPoint]) -> bool {
+    hit_points
+        .iter()
+        .fold(true, |ok, hp| ok & slot_is_finite(hp))
+}
+
+/// Whether every field [`check_hit_points`] checks of `hp` is finite, without a branch: a
+/// pass that writes every slot anyway screens each as it goes, and sweeps the slots with
+/// [`check_hit_points`] only where one failed, to name it.
+pub fn slot_is_finite(hp: &HitPoint) -> bool {
     let finite = |values: &[f32]| values.iter().fold(true, |ok, v| ok & v.is_finite());
-    hit_points.iter().fold(true, |ok, hp| {
-        let statistics = finite(&hp.direct) & finite(&hp.tau) & finite(&[hp.r2, hp.n, hp.emitted]);
-        let visible = finite(&hp.position) & finite(&hp.throughput);
-        ok & statistics & (visible | !hp.is_valid())
-    })
+    let statistics = finite(&hp.direct) & finite(&hp.tau) & finite(&[hp.r2, hp.n, hp.emitted]);
+    let visible = finite(&hp.position) & finite(&hp.throughput);
+    statistics & (visible | !hp.is_valid())
 }
 
 #[cfg(test)]
