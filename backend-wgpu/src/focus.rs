@@ -31,7 +31,8 @@ pub struct FocusList {
     pub list: wgpu::Buffer,
     /// Slots listed; none where the passes walk every slot.
     count: Option<u32>,
-    /// The focus pass's `rest_at`: a next focus pass with the same walks this list again.
+    /// The focus pass's `rest_at`: a next focus pass at the same `rest_at` walks this list
+    /// again.
     rest_at: u32,
     /// Slots with a visible point that focus.wgsl rested (left off the list).
     rested: u32,

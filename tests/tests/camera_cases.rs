@@ -31,21 +31,37 @@ fn params(scene: &Scene) -> RenderParams {
     p
 }
 
-/// The image after 30 iterations, `steps` in `mode` (each followed by 2 iterations) and 8
-/// more, with the moves' reports.
-fn render(scene: &Scene, steps: &[Step], mode: MoveMode) -> (Image, Vec<MoveReport>) {
+/// A render after its steps.
+struct Rendered {
+    image: Image,
+    /// The moves' reports.
+    reports: Vec<MoveReport>,
+    /// Per pixel, whether its slots kept their light at the last camera step (none without
+    /// one).
+    kept: Vec<bool>,
+}
+
+/// The render after 30 iterations, `steps` in `mode` (each followed by 2 iterations) and 8
+/// more.
+fn render(scene: &Scene, steps: &[Step], mode: MoveMode) -> Rendered {
     let p = params(scene);
     let mut backend = CpuBackend::new();
     let mut r = Renderer::start(&mut backend, scene.clone(), &p, &MoveParams::default()).unwrap();
     for _ in 0..30 {
         r.iteration().unwrap();
     }
-    let mut reports = Vec::new();
+    let (mut reports, mut kept) = (Vec::new(), vec![false; (SIZE * SIZE) as usize]);
     for step in steps {
         reports.push(match step {
             Step::Camera(c) => r.move_camera(c.clone(), mode).unwrap(),
             Step::Object(m) => r.move_objects(&[*m], mode).unwrap(),
         });
+        if let Step::Camera(_) = step {
+            kept.fill(false);
+            for hp in r.backend().read_hit_points().unwrap() {
+                kept[hp.pixel as usize] |= !started_over(&hp);
+            }
+        }
         for _ in 0..2 {
             r.iteration().unwrap();
         }
@@ -53,13 +69,18 @@ fn render(scene: &Scene, steps: &[Step], mode: MoveMode) -> (Image, Vec<MoveRepo
     for _ in 0..8 {
         r.iteration().unwrap();
     }
-    (r.resolve().unwrap(), reports)
+    let image = r.resolve().unwrap();
+    Rendered {
+        image,
+        reports,
+        kept,
+    }
 }
 
 /// Runs `steps` in local mode and restarting, and holds the local render to the truth of
 /// where they end: finite, its brightest pixel within 1.5 times the truth's, its error over
-/// 4x4 blocks at most 1.1 times the restart's. Returns the local moves' reports.
-fn holds(name: &str, scene: &Scene, steps: &[Step]) -> Vec<MoveReport> {
+/// 4x4 blocks at most 1.1 times the restart's. Returns the local render and the truth.
+fn holds(name: &str, scene: &Scene, steps: &[Step]) -> (Rendered, Image) {
     let mut end = scene.clone();
     for step in steps {
         match step {
@@ -68,23 +89,24 @@ fn holds(name: &str, scene: &Scene, steps: &[Step]) -> Vec<MoveReport> {
         }
     }
     let truth = tests::truth(&end, SIZE, 512);
-    let (local, reports) = render(scene, steps, MoveMode::Local);
-    let (restart, _) = render(scene, steps, MoveMode::Restart);
+    let local = render(scene, steps, MoveMode::Local);
+    let restart = render(scene, steps, MoveMode::Restart).image;
+    let (image, reports) = (&local.image, &local.reports);
     assert!(
-        local.pixels.iter().flatten().all(|c| c.is_finite()),
+        image.pixels.iter().flatten().all(|c| c.is_finite()),
         "{name}"
     );
     let (l, r) = (
-        block_relative_rmse(&local, &truth, 4),
+        block_relative_rmse(image, &truth, 4),
         block_relative_rmse(&restart, &truth, 4),
     );
-    let (bl, bt) = (local.brightest(), truth.brightest());
+    let (bl, bt) = (image.brightest(), truth.brightest());
     figure!(
         "{name}: block error {l:.4} (restart {r:.4}), brightest {bl:.3} (truth {bt:.3}); {reports:?}"
     );
     assert!(bl <= 1.5 * bt, "{name}: brightest {bl} against {bt}");
     assert!(l <= 1.1 * r, "{name}: {l} against restart's {r}");
-    reports
+    (local, truth)
 }
 
 fn cornell() -> Scene {
@@ -95,7 +117,9 @@ fn cornell() -> Scene {
 fn a_view_that_shares_nothing_keeps_nothing() {
     let scene = cornell();
     let away = scene.camera.orbited(180.0, 0.0);
-    let reports = holds("turned away", &scene, &[Step::Camera(away)]);
+    let reports = holds("turned away", &scene, &[Step::Camera(away)])
+        .0
+        .reports;
     assert_eq!(reports[0].kept, 0, "{reports:?}");
 }
 
@@ -105,7 +129,7 @@ fn large_dollies_stay_near_the_truth() {
     let scene = cornell();
     for (name, nearer) in [("dolly out", -1.0), ("dolly in", 0.5)] {
         let camera = scene.camera.orbited(0.0, nearer);
-        let reports = holds(name, &scene, &[Step::Camera(camera)]);
+        let reports = holds(name, &scene, &[Step::Camera(camera)]).0.reports;
         assert!(reports[0].restarted.is_none(), "{reports:?}");
     }
 }
@@ -123,34 +147,19 @@ fn a_grazing_view_stays_near_the_truth() {
         look_at: Vec3::new(278.0, 2.0, 0.0),
         ..scene.camera.clone()
     };
-    holds("grazing", &scene, &[Step::Camera(grazing.clone())]);
+    let (local, truth) = holds("grazing", &scene, &[Step::Camera(grazing.clone())]);
     let mut end = scene.clone();
-    end.camera = grazing.clone();
-    let truth = tests::truth(&end, SIZE, 512);
-    let p = params(&scene);
-    let mut backend = CpuBackend::new();
-    let mut r = Renderer::start(&mut backend, scene.clone(), &p, &MoveParams::default()).unwrap();
-    for _ in 0..30 {
-        r.iteration().unwrap();
-    }
-    r.move_camera(grazing, MoveMode::Local).unwrap();
-    let mut kept = vec![false; (SIZE * SIZE) as usize];
-    for hp in r.backend().read_hit_points().unwrap() {
-        kept[hp.pixel as usize] |= !started_over(&hp);
-    }
-    for _ in 0..10 {
-        r.iteration().unwrap();
-    }
-    let local = r.resolve().unwrap();
+    end.camera = grazing;
     let mut still = CpuBackend::new();
-    let mut s = Renderer::start(&mut still, end, &p, &MoveParams::default()).unwrap();
+    let mut s = Renderer::start(&mut still, end, &params(&scene), &MoveParams::default()).unwrap();
     for _ in 0..40 {
         s.iteration().unwrap();
     }
     let as_old = s.resolve().unwrap();
+    let kept = &local.kept;
     let (l, o) = (
-        relative_rmse_parts(&local, &truth, &kept).1,
-        relative_rmse_parts(&as_old, &truth, &kept).1,
+        relative_rmse_parts(&local.image, &truth, kept).1,
+        relative_rmse_parts(&as_old, &truth, kept).1,
     );
     let count = kept.iter().filter(|&&k| k).count();
     figure!("grazing: the {count} kept pixels' error {l:.4}, a render as old {o:.4}");
@@ -189,7 +198,7 @@ fn camera_and_object_moves_follow_each_other() {
             [Step::Object(block), Step::Camera(camera.clone())],
         ),
     ] {
-        let reports = holds(name, &scene, &steps);
+        let reports = holds(name, &scene, &steps).0.reports;
         assert!(
             reports.iter().all(|r| r.restarted.is_none() && r.kept > 0),
             "{reports:?}"

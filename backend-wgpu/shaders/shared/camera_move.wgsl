@@ -197,11 +197,10 @@ fn on_an_edge(slot: u32, request: CameraMoveParams) -> bool {
     if slot >= count {
         return true;
     }
-    let hp = seen(slot);
-    let m = scene_material(hp.material);
-    if !seen_directly(hp.flags) || m.kind != MATERIAL_DIFFUSE || m.texture != 0u {
+    if !passes_light_on(hit_points[slot]) {
         return true;
     }
+    let hp = seen(slot);
     let width = i32(request.after.width);
     let height = i32(request.after.height);
     let spp = i32(max(request.spp, 1u));
