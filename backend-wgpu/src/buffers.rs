@@ -252,13 +252,13 @@ impl SceneBuffers {
         }
         if let Some(writes) = writes {
             let triangle_texels = (size_of::<GpuTriangle>() / TEXEL_BYTES) as u32;
-            for run in runs(&writes.triangles) {
+            for run in &writes.triangles {
                 let records = &scene.triangles[run.start as usize..run.end as usize];
                 let first = layout.triangles + run.start * triangle_texels;
                 self.table.write(ctx, first, bytemuck::cast_slice(records));
             }
             let node_texels = (size_of::<BvhNode>() / TEXEL_BYTES) as u32;
-            for run in runs(&writes.nodes) {
+            for run in &writes.nodes {
                 let records = &scene.nodes[run.start as usize..run.end as usize];
                 let first = layout.nodes + run.start * node_texels;
                 self.table.write(ctx, first, bytemuck::cast_slice(records));
@@ -277,19 +277,4 @@ impl SceneBuffers {
         self.pose = scene.pose;
         true
     }
-}
-
-/// The runs of consecutive indices in `indices`, in increasing order.
-fn runs(indices: &[u32]) -> Vec<std::ops::Range<u32>> {
-    let mut sorted = indices.to_vec();
-    sorted.sort_unstable();
-    let mut runs: Vec<std::ops::Range<u32>> = Vec::new();
-    for i in sorted {
-        match runs.last_mut() {
-            Some(run) if run.end == i => run.end += 1,
-            Some(run) if run.end > i => {}
-            _ => runs.push(i..i + 1),
-        }
-    }
-    runs
 }

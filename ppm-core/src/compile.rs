@@ -5,11 +5,12 @@ use crate::layout::{
     BvhNode, GpuBounds, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, NO_MATERIAL, material_kind,
 };
 use crate::scene::{Camera, MaterialKind, Scene};
+use crate::scene_tree::{ObjectSpan, SceneTree, build_scene_tree};
 use crate::textures::{SurfaceTextures, compile_textures};
 use glam::{Vec3, Vec3A};
-use obvhs::bvh2::builder::build_bvh2_from_tris;
 use obvhs::bvh2::{Bvh2, node::Bvh2Node};
 use obvhs::{BvhBuildParams, triangle::Triangle};
+use std::ops::Range;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -109,6 +110,8 @@ pub struct CompiledScene {
     /// Each object's box as its triangles here are posed (`[min, max]`): a refit recomputes
     /// the moved objects' alone, and `extent` is the box around them all.
     pub object_bounds: Vec<[Vec3; 2]>,
+    /// Where each object's triangles and subtree lie ([`crate::scene_tree`]).
+    pub spans: Vec<ObjectSpan>,
     /// This pose's number, unique in the process. It names the pose's geometry, materials
     /// and lights: a backend holding a pose of the same number rewrites only the movers'
     /// boxes (and checks the camera), so whoever changes anything else compiles anew.
@@ -119,15 +122,30 @@ pub struct CompiledScene {
     pub refit_from: Option<RefitWrites>,
 }
 
+impl CompiledScene {
+    /// Object `o`'s box as posed here (`(min, max)`), exactly its vertices' (its subtree's
+    /// root holds it, so a move need not read the vertices again); `min > max` for an
+    /// object without triangles.
+    pub fn object_box(&self, o: usize) -> (Vec3, Vec3) {
+        match self.spans[o].root {
+            u32::MAX => (Vec3::INFINITY, Vec3::NEG_INFINITY),
+            root => {
+                let aabb = self.bvh.nodes[root as usize].aabb;
+                (aabb.min.into(), aabb.max.into())
+            }
+        }
+    }
+}
+
 /// The entries a refit wrote over the pose it started from.
 #[derive(Clone)]
 pub struct RefitWrites {
     /// The pose refitted ([`CompiledScene::pose`]).
     pub pose: u64,
-    /// Indices of the triangles rewritten.
-    pub triangles: Vec<u32>,
-    /// Indices of the nodes whose boxes changed (in both `nodes` and `bvh`).
-    pub nodes: Vec<u32>,
+    /// Blocks of triangles rewritten.
+    pub triangles: Vec<Range<u32>>,
+    /// Blocks of nodes rewritten (in both `nodes` and `bvh`).
+    pub nodes: Vec<Range<u32>>,
 }
 
 /// A number no other pose of this process holds.
@@ -153,20 +171,26 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
             tris.push((t, object.material as u32, object_index as u32));
         }
     }
-    let obvhs_tris: Vec<Triangle> = tris
+    let per_object: Vec<Vec<Triangle>> = scene
+        .objects
         .iter()
-        .map(|(t, _, _)| Triangle {
-            v0: Vec3A::from(t[0]),
-            v1: Vec3A::from(t[1]),
-            v2: Vec3A::from(t[2]),
+        .map(|o| {
+            o.triangles
+                .iter()
+                .map(|t| Triangle {
+                    v0: Vec3A::from(t[0]),
+                    v1: Vec3A::from(t[1]),
+                    v2: Vec3A::from(t[2]),
+                })
+                .collect()
         })
         .collect();
     let start = Instant::now();
-    let mut core_time = Duration::ZERO;
-    let mut bvh = build_bvh2_from_tris(&obvhs_tris, BVH_PARAMS, &mut core_time);
-    // What a move's refit walks from a moved triangle to the root (refit.rs).
-    bvh.init_primitives_to_nodes_if_uninit();
-    bvh.init_parents_if_uninit();
+    let SceneTree {
+        bvh,
+        spans,
+        depth: bvh_depth,
+    } = build_scene_tree(&per_object, BVH_PARAMS);
     let bvh_build_time = start.elapsed();
 
     // Lights in the scene's order, not the BVH's: a move rebuilds the BVH, and the paired
@@ -209,7 +233,6 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let textures = compile_textures(scene, &bvh.primitive_indices, &mut materials);
     let light_power = assign_light_distribution(&mut lights, &materials);
     let nodes = flat_nodes(&bvh);
-    let bvh_depth = tree_depth(&nodes);
     let bvh_built_cost = tree_cost(&bvh);
     let object_bounds = object_bounds(&triangles, scene.objects.len());
     let extent = extent_of(&object_bounds);
@@ -254,6 +277,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
         movers: Vec::new(),
         textures,
         object_bounds,
+        spans,
         pose: next_pose(),
         refit_from: None,
     }
@@ -268,10 +292,17 @@ pub fn mover_boxes(
     objects: &[usize],
     extent: f32,
 ) -> Vec<GpuBounds> {
+    let boxes = [before, after]
+        .into_iter()
+        .flat_map(|scene| objects.iter().map(move |&o| scene.objects[o].bounds()));
+    widened_boxes(boxes, extent)
+}
+
+/// Boxes (`(min, max)`) widened as [`mover_boxes`] widens them, for a caller that has them.
+pub fn widened_boxes(boxes: impl IntoIterator<Item = (Vec3, Vec3)>, extent: f32) -> Vec<GpuBounds> {
     let margin = Vec3::splat(MOVER_MARGIN_RELATIVE * extent);
-    [before, after]
-        .iter()
-        .flat_map(|scene| objects.iter().map(move |&o| scene.objects[o].bounds()))
+    boxes
+        .into_iter()
         .map(|(lo, hi)| GpuBounds::new(lo - margin, hi + margin))
         .collect()
 }
@@ -295,21 +326,6 @@ pub(crate) fn flat_node(n: &Bvh2Node) -> BvhNode {
 /// the scene visits, which is what a refit lets grow.
 pub fn tree_cost(bvh: &Bvh2) -> f32 {
     bvh.nodes.iter().map(|n| n.aabb.half_area()).sum()
-}
-
-/// Depth of the flattened tree, walked iteratively (the deepest tree must not overflow this).
-fn tree_depth(nodes: &[BvhNode]) -> usize {
-    let mut deepest = 0;
-    let mut stack = vec![(0usize, 1usize)];
-    while let Some((i, depth)) = stack.pop() {
-        let Some(node) = nodes.get(i) else { continue };
-        deepest = deepest.max(depth);
-        if node.count == 0 {
-            stack.push((node.first as usize, depth + 1));
-            stack.push((node.first as usize + 1, depth + 1));
-        }
-    }
-    deepest
 }
 
 /// Selects lights in proportion to their power, and returns the total power.

@@ -49,6 +49,7 @@ pub mod region;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
+pub mod scene_tree;
 pub mod screen_cover;
 pub mod stats;
 pub mod textures;

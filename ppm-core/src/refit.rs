@@ -1,12 +1,13 @@
 //! A moved pose's flat buffers without a new BVH: a drag sends many small moves in a row,
 //! and rebuilding the whole tree for each would cost a scene of many triangles (cornell-bunny's
-//! 70,000) a quarter of every local move. A rigid move changes only the moved
-//! objects' triangles: they are rewritten where the tree keeps them, and the boxes of their
-//! leaves and of the leaves' ancestors are refitted, without a new leaf order and without
-//! reading the rest of the scene (a drag writes into the buffers of the pose before last). A
-//! refit keeps the tree's topology while the objects wander away from where it was built,
-//! so its boxes grow: once they cost [`REFIT_LIMIT`] times the last build's, the scene is
-//! compiled anew.
+//! 70,000) a quarter of every local move. A rigid move changes only the moved objects'
+//! triangles, and each object's triangles and subtree are blocks of their own
+//! ([`crate::scene_tree`]): a move rewrites the moved objects' blocks, refits their subtrees
+//! in one sweep from the last node to the first, and lays out the top tree over the objects
+//! anew, without reading the rest of the scene (a drag writes into the buffers of the pose
+//! before last). A subtree keeps its topology while its object rotates away from the pose it
+//! was built in, so its boxes may grow: once the tree costs [`REFIT_LIMIT`] times the last
+//! build's, the scene is compiled anew.
 
 use crate::compile::{
     CompiledScene, EMPTY_BOX, RefitWrites, add_to_box, compile_scene, extent_of, flat_node,
@@ -14,8 +15,11 @@ use crate::compile::{
 };
 use crate::layout::{BvhNode, GpuTriangle};
 use crate::scene::{MaterialKind, Scene};
+use crate::scene_tree::{half_areas, lay_out_top, top_nodes};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::{Bvh2, node::Bvh2Node};
+use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -25,12 +29,15 @@ use std::time::Instant;
 /// against a move.
 pub const REFIT_LIMIT: f32 = 1.25;
 
+/// Triangles or nodes a thread takes at a time: a moved mesh of tens of thousands would
+/// otherwise be a drag step's largest serial part.
+const CHUNK: usize = 4096;
+
 /// `before`, the flattened scene of the pose before a move, with the `changed` objects posed
-/// as in `after`: their triangles rewritten in the BVH's leaf order and the tree refitted, or
-/// `after` compiled anew where a refit cannot stand for it (a light or a triangle count
-/// changed, or the boxes grew past [`REFIT_LIMIT`]). Everything else (camera, materials,
-/// lights, their distribution) is `before`'s: a rigid move of objects that do not emit
-/// leaves it as it was.
+/// as in `after`: their triangles rewritten and their subtrees refitted, or `after` compiled
+/// anew where a refit cannot stand for it (a light or a triangle count changed, or the boxes
+/// grew past [`REFIT_LIMIT`]). Everything else (camera, materials, lights, their
+/// distribution) is `before`'s: a rigid move of objects that do not emit leaves it as it was.
 ///
 /// `spare`, the pose `before` was refitted from if the caller kept it, lends its buffers:
 /// they become `before`'s by copying what that refit wrote, then this pose's, so that a
@@ -49,9 +56,9 @@ pub fn recompile_moved(
 }
 
 /// The refitted scene, or `None` where only a full compile stands for `after`. Apart from
-/// copying the pose's arrays, it touches only the moved objects' leaves and their ancestors
-/// (`Bvh2::primitives_to_nodes` and `Bvh2::parents`, kept since the build), so a small
-/// object dragged through a large scene costs in proportion to the object.
+/// copying the pose's arrays when no spare lends them, it touches only the moved objects'
+/// blocks and the top tree, so a small object dragged through a large scene costs in
+/// proportion to the object.
 fn refit(
     before: &CompiledScene,
     after: &Scene,
@@ -63,24 +70,43 @@ fn refit(
         let material = after.objects[o].material;
         matches!(after.materials[material].kind, MaterialKind::Light { .. })
     };
-    // Each object's first triangle in the order compile_scene numbers them.
-    let mut first = Vec::with_capacity(after.objects.len() + 1);
-    first.push(0usize);
-    for object in &after.objects {
-        first.push(first.last()? + object.triangles.len());
-    }
+    let spans = &before.spans;
     if changed
         .iter()
         .any(|&o| o >= after.objects.len() || emits(o))
-        || *first.last()? != before.triangles.len()
+        || spans.len() != after.objects.len()
+        || spans
+            .iter()
+            .zip(&after.objects)
+            .any(|(s, o)| s.triangles.len() != o.triangles.len())
     {
         return None;
     }
-    let mut moved = vec![false; after.objects.len()];
-    for &o in changed {
-        moved[o] = true;
-    }
-    let (mut triangles, mut bvh, mut nodes) = match spare.and_then(|s| lent(s, before)) {
+    // Each object's first triangle in scene order, which `primitive_indices` numbers.
+    let first: Vec<u32> = spans
+        .iter()
+        .scan(0u32, |next, s| {
+            let at = *next;
+            *next += s.triangles.len() as u32;
+            Some(at)
+        })
+        .collect();
+    let mut moved: Vec<usize> = changed.to_vec();
+    moved.sort_unstable();
+    moved.dedup();
+    let placed = spans.iter().filter(|s| s.root != u32::MAX).count();
+    let top = top_nodes(placed) as u32;
+    // What this refit writes whole: the moved objects' blocks and the top tree.
+    let rewritten = |r: &Range<u32>| {
+        r.end <= top
+            || moved.iter().any(|&o| {
+                let s = &spans[o];
+                s.triangles.start <= r.start && r.end <= s.triangles.end
+                    || s.nodes.start <= r.start && r.end <= s.nodes.end
+            })
+    };
+    let lent = spare.and_then(|s| lent(s, before, rewritten));
+    let (mut triangles, mut bvh, mut nodes) = match lent {
         Some(buffers) => buffers,
         None => (
             Vec::clone(&before.triangles),
@@ -88,70 +114,109 @@ fn refit(
             Vec::clone(&before.nodes),
         ),
     };
-    // The leaves that hold a moved triangle.
-    let mut leaves: Vec<usize> = changed
-        .iter()
-        .flat_map(|&o| first[o]..first[o + 1])
-        .map(|p| bvh.primitives_to_nodes.get(p).map(|&n| n as usize))
-        .collect::<Option<_>>()?;
-    leaves.sort_unstable();
-    leaves.dedup();
-    // Leaf boxes from the original vertices, as obvhs built them.
-    let posed = |leaf: usize, triangles: &[GpuTriangle]| {
-        let o = triangles[leaf].object as usize;
-        let [a, b, c] = after.objects[o].triangles[bvh.primitive_indices[leaf] as usize - first[o]];
-        Aabb::from_points(&[a.into(), b.into(), c.into()])
+    let mut spans = spans.clone();
+    let top = top as usize;
+    let mut cost = f64::from(before.bvh_cost) - half_areas(&before.bvh.nodes[..top]);
+    let mut written = RefitWrites {
+        pose: before.pose,
+        triangles: Vec::new(),
+        nodes: Vec::new(),
     };
-    let mut cost = f64::from(before.bvh_cost);
-    let mut written = Vec::new();
-    for &leaf in &leaves {
-        let node = bvh.nodes[leaf];
-        let slots = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        for slot in slots.clone() {
-            let t = &mut triangles[slot];
-            let o = t.object as usize;
-            if moved.get(o).copied().unwrap_or(false) {
-                written.push(slot as u32);
-                let index = bvh.primitive_indices[slot] as usize - first[o];
-                *t = GpuTriangle {
-                    light: t.light,
-                    ..gpu_triangle(&after.objects[o].triangles[index], t.material, t.object)
-                };
-            }
+    let mut fitted = vec![None; spans.len()];
+    let mut object_bounds = before.object_bounds.clone();
+    for &o in &moved {
+        let span = &mut spans[o];
+        if span.root == u32::MAX {
+            continue;
         }
-        let aabb = slots
-            .map(|l| posed(l, &triangles))
-            .reduce(|a, b| a.union(&b))?;
-        cost += f64::from(aabb.half_area()) - f64::from(node.aabb.half_area());
-        bvh.nodes[leaf].aabb = aabb;
+        let object = &after.objects[o].triangles;
+        let Bvh2 {
+            nodes: tree,
+            primitive_indices,
+            ..
+        } = &mut bvh;
+        let corners = |slot: u32| &object[(primitive_indices[slot as usize] - first[o]) as usize];
+        // A leaf's box from its triangles' vertices, as obvhs boxes them at a build.
+        let leaf_box = |n: &Bvh2Node| {
+            (n.first_index..n.first_index + n.prim_count).fold(Aabb::empty(), |a, slot| {
+                let [p, q, r] = corners(slot).map(Into::into);
+                a.union(&Aabb::from_points(&[p, q, r]))
+            })
+        };
+        let block = |r: &Range<u32>| r.start as usize..r.end as usize;
+        let (slots, below) = (block(&span.triangles), block(&span.nodes));
+        // The triangles rewritten, and the object's box around them as it is posed (a
+        // minimum and maximum: the same whatever the threads).
+        object_bounds[o] = triangles[slots.clone()]
+            .par_chunks_mut(CHUNK)
+            .zip(slots.into_par_iter().step_by(CHUNK))
+            .map(|(part, first_slot)| {
+                let mut bounds = EMPTY_BOX;
+                for (t, slot) in part.iter_mut().zip(first_slot as u32..) {
+                    *t = GpuTriangle {
+                        light: t.light,
+                        ..gpu_triangle(corners(slot), t.material, t.object)
+                    };
+                    add_to_box(&mut bounds, t);
+                }
+                bounds
+            })
+            .reduce(|| EMPTY_BOX, |[a, b], [c, d]| [a.min(c), b.max(d)]);
+        // The leaves in parallel, then the inner nodes from the last to the first; the
+        // subtree's cost summed chunk by chunk in order, the same sum whatever the threads.
+        tree[below.clone()].par_chunks_mut(CHUNK).for_each(|part| {
+            for n in part.iter_mut().filter(|n| n.is_leaf()) {
+                n.aabb = leaf_box(n);
+            }
+        });
+        for i in below.clone().rev() {
+            if tree[i].is_leaf() {
+                continue;
+            }
+            let children = tree[i].first_index as usize;
+            tree[i].aabb = tree[children].aabb.union(&tree[children + 1].aabb);
+        }
+        let costs: Vec<f64> = nodes[below.clone()]
+            .par_chunks_mut(CHUNK)
+            .zip(tree[below].par_chunks(CHUNK))
+            .map(|(flat, part)| {
+                flat.iter_mut()
+                    .zip(part)
+                    .for_each(|(f, node)| *f = flat_node(node));
+                half_areas(part)
+            })
+            .collect();
+        let refitted: f64 = costs.iter().sum();
+        cost += refitted - span.cost;
+        span.cost = refitted;
+        // The root as `before` holds it (the top tree of lent buffers is another pose's).
+        let mut root = before.bvh.nodes[span.root as usize];
+        root.aabb = if root.is_leaf() {
+            leaf_box(&root)
+        } else {
+            let children = root.first_index as usize;
+            tree[children].aabb.union(&tree[children + 1].aabb)
+        };
+        fitted[o] = Some(root);
+        written.triangles.push(span.triangles.clone());
+        written.nodes.push(span.nodes.clone());
     }
-    // Their ancestors, each once, children before parents.
-    let above = ancestors(&bvh, &leaves);
-    for &node in &above {
-        let n = bvh.nodes[node];
-        let first_child = n.first_index as usize;
-        let aabb = bvh.nodes[first_child]
-            .aabb
-            .union(&bvh.nodes[first_child + 1].aabb);
-        cost += f64::from(aabb.half_area()) - f64::from(n.aabb.half_area());
-        bvh.nodes[node].aabb = aabb;
-        nodes[node] = flat_node(&bvh.nodes[node]);
+    // The top tree over the objects' roots as they now lie.
+    let roots: Vec<Bvh2Node> = (spans.iter().zip(fitted))
+        .filter(|(s, _)| s.root != u32::MAX)
+        .map(|(s, root)| root.unwrap_or(before.bvh.nodes[s.root as usize]))
+        .collect();
+    let depth = lay_out_top(&mut bvh, &mut spans, &roots);
+    for (flat, node) in nodes.iter_mut().zip(&bvh.nodes[..top]) {
+        *flat = flat_node(node);
     }
-    for &leaf in &leaves {
-        nodes[leaf] = flat_node(&bvh.nodes[leaf]);
-    }
+    written.nodes.push(0..top as u32);
+    cost += half_areas(&bvh.nodes[..top]);
     let bvh_cost = cost as f32;
     if bvh_cost > REFIT_LIMIT * before.bvh_built_cost {
         return None;
     }
-    let mut object_bounds = before.object_bounds.clone();
-    for &o in changed {
-        object_bounds[o] = EMPTY_BOX;
-    }
-    for &t in &written {
-        let t = &triangles[t as usize];
-        add_to_box(&mut object_bounds[t.object as usize], t);
-    }
+    bvh.max_depth = bvh.max_depth.max(depth + 1);
     Some(CompiledScene {
         camera: before.camera,
         triangles: Arc::new(triangles),
@@ -166,24 +231,23 @@ fn refit(
         bvh_build_time: start.elapsed(),
         bvh_built_cost: before.bvh_built_cost,
         bvh_cost,
-        bvh_depth: before.bvh_depth,
+        bvh_depth: depth,
         movers: Vec::new(),
         textures: before.textures.clone(),
         object_bounds,
+        spans,
         pose: next_pose(),
-        refit_from: Some(RefitWrites {
-            pose: before.pose,
-            triangles: written,
-            nodes: leaves.iter().chain(&above).map(|&n| n as u32).collect(),
-        }),
+        refit_from: Some(written),
     })
 }
 
 /// The buffers of `spare` made `before`'s, if `before` was refitted from it and nothing
-/// else holds them.
+/// else holds them: the blocks that refit wrote copied from `before`, except those the
+/// caller will write whole (`rewritten`).
 fn lent(
     spare: CompiledScene,
     before: &CompiledScene,
+    rewritten: impl Fn(&Range<u32>) -> bool,
 ) -> Option<(Vec<GpuTriangle>, Bvh2, Vec<BvhNode>)> {
     let writes = before
         .refit_from
@@ -192,51 +256,17 @@ fn lent(
     let mut triangles = Arc::try_unwrap(spare.triangles).ok()?;
     let mut bvh = Arc::try_unwrap(spare.bvh).ok()?;
     let mut nodes = Arc::try_unwrap(spare.nodes).ok()?;
-    for &t in &writes.triangles {
-        triangles[t as usize] = before.triangles[t as usize];
+    let copied = |r: &&Range<u32>| !rewritten(r);
+    let range = |r: &Range<u32>| r.start as usize..r.end as usize;
+    for r in writes.triangles.iter().filter(copied).map(range) {
+        triangles[r.clone()].copy_from_slice(&before.triangles[r]);
     }
-    for &n in &writes.nodes {
-        bvh.nodes[n as usize] = before.bvh.nodes[n as usize];
-        nodes[n as usize] = before.nodes[n as usize];
+    for r in writes.nodes.iter().filter(copied).map(range) {
+        bvh.nodes[r.clone()].copy_from_slice(&before.bvh.nodes[r.clone()]);
+        nodes[r.clone()].copy_from_slice(&before.nodes[r]);
     }
+    bvh.max_depth = before.bvh.max_depth;
     Some((triangles, bvh, nodes))
-}
-
-/// The inner nodes above `leaves`, each once, ordered so that a node's children come
-/// before it: deepest first. Each walk up stops at a node an earlier walk reached, whose
-/// depth it knows, so the cost follows the nodes returned.
-fn ancestors(bvh: &Bvh2, leaves: &[usize]) -> Vec<usize> {
-    // 1 + depth of each node reached so far; 0 for the others.
-    let mut level = vec![0u32; bvh.nodes.len()];
-    level[0] = 1;
-    let mut by_level: Vec<Vec<usize>> = vec![vec![0]];
-    let mut chain = Vec::new();
-    for &leaf in leaves {
-        chain.clear();
-        let mut node = leaf;
-        while node != 0 {
-            node = bvh.parents[node] as usize;
-            if level[node] != 0 {
-                break;
-            }
-            chain.push(node);
-        }
-        // `node` is known: the chain below it, from the top down.
-        let mut depth = level[node];
-        for &n in chain.iter().rev() {
-            depth += 1;
-            level[n] = depth;
-            if by_level.len() < depth as usize {
-                by_level.resize_with(depth as usize, Vec::new);
-            }
-            by_level[depth as usize - 1].push(n);
-        }
-    }
-    // A root that is itself a leaf has nothing above it.
-    if leaves.is_empty() || bvh.nodes[0].is_leaf() {
-        return Vec::new();
-    }
-    by_level.into_iter().rev().flatten().collect()
 }
 
 #[cfg(test)]
@@ -323,16 +353,16 @@ mod tests {
         t
     }
 
-    /// A drag of the cube in small steps: each pose's refitted tree bounds its triangles
-    /// tightly, holds exactly the triangles a full compile of the pose holds, and costs at
-    /// most REFIT_LIMIT times the last build; its flat nodes, cost and extent, updated where
-    /// the cube moved, are what full passes over the tree and the triangles give; the long
-    /// drag rebuilds at least once, and the small steps mostly refit.
+    /// A drag of the cube in small steps, far across the floor and turning: each pose's
+    /// refitted tree bounds its triangles tightly, holds exactly the triangles a full compile
+    /// of the pose holds, and costs at most REFIT_LIMIT times the last build; its flat nodes,
+    /// cost, depth, extent and the cube's box, updated where the cube moved, are what full
+    /// passes over the tree and the triangles give. The top tree follows the cube, so no step rebuilds; the
+    /// floor's own subtree turned by 45 degrees grows past the limit, and is built anew.
     #[test]
     fn a_drag_refits_tight_trees_and_rebuilds_when_they_grow() {
         let mut scene = drag_room();
         let mut compiled = compile_scene(&scene, 8, 8);
-        let (mut refits, mut rebuilds) = (0, 0);
         for i in 0..60 {
             scene.apply(&step(1, Vec3::new(0.25, 0.1, 0.05), 3.0 * i as f32));
             let next = recompile_moved(&compiled, &scene, &[1], None);
@@ -353,18 +383,37 @@ mod tests {
             refitted.refit_all();
             assert_eq!(flat_nodes(&refitted), *next.nodes);
             approx::assert_relative_eq!(next.bvh_cost, tree_cost(&next.bvh), max_relative = 1e-5);
+            assert_eq!(next.bvh_depth, depth(&next.nodes));
+            assert_eq!(next.object_box(1), scene.objects[1].bounds());
             assert_eq!(next.extent, compile_scene(&scene, 8, 8).extent);
-            if next.bvh_built_cost == compiled.bvh_built_cost {
-                refits += 1;
-            } else {
-                rebuilds += 1;
-            }
+            assert_eq!(
+                next.bvh_built_cost, compiled.bvh_built_cost,
+                "step {i} rebuilt"
+            );
             compiled = next;
         }
-        assert!(
-            rebuilds >= 1 && refits > 4 * rebuilds,
-            "{refits} refits, {rebuilds} rebuilds"
-        );
+        let fresh = compile_scene(&scene, 8, 8);
+        for o in 0..scene.objects.len() {
+            assert_eq!(fresh.object_box(o), scene.objects[o].bounds());
+        }
+        scene.apply(&step(0, Vec3::ZERO, 45.0));
+        let turned = recompile_moved(&compiled, &scene, &[0], None);
+        assert!(turned.refit_from.is_none(), "the turned floor refitted");
+        assert_eq!(turned.bvh_cost, tree_cost(&turned.bvh));
+    }
+
+    /// Levels of a flattened tree, walked from the root.
+    fn depth(nodes: &[BvhNode]) -> usize {
+        let mut deepest = 0;
+        let mut stack = vec![(0usize, 1usize)];
+        while let Some((i, level)) = stack.pop() {
+            deepest = deepest.max(level);
+            if nodes[i].count == 0 {
+                stack.push((nodes[i].first as usize, level + 1));
+                stack.push((nodes[i].first as usize + 1, level + 1));
+            }
+        }
+        deepest
     }
 
     /// A drag of two cubes in turns that lends each pose's buffers to the pose after next,

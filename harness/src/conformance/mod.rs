@@ -753,8 +753,7 @@ fn local_passes(
     );
     let movers = mover_boxes(scene, &next, &[step.object], a.extent);
     (a.movers, b.movers) = (movers.clone(), movers);
-    let pose = (a.extent, &a.lights[..]);
-    let request = local_move_request((scene, &next), &[step.object], p, pose, (1.0, 1.0, 8));
+    let request = local_move_request((&a, &b), &[step.object], p, (1.0, 1.0, 8));
     let backend = render.backend();
     let local = backend.local_moves().ok_or_else(|| {
         BackendError::Unsupported("no local-move passes (Backend::local_moves is None)".into())

@@ -54,7 +54,7 @@
 use super::moves::{Laps, MoveReport};
 use super::{Renderer, local, pass_params};
 use glam::Vec3;
-use ppm_core::compile::{mover_boxes, object_group};
+use ppm_core::compile::{CompiledScene, object_group, widened_boxes};
 use ppm_core::eye_path::EyePathSettings;
 use ppm_core::layout::GpuLight;
 use ppm_core::layout::gather_kind;
@@ -158,14 +158,15 @@ impl Renderer<'_> {
         self.keep_paths = true;
         // The passes of both poses test the moved objects' boxes in both poses: a path is the
         // same in A and B until it crosses one.
-        let movers = mover_boxes(&self.scene, &next, changed, self.extent);
         // Pose A's tree refitted to pose B, rebuilt only once it has grown (ppm_core::refit).
         let mut compiled = recompile_moved(&self.compiled, &next, changed, self.spare.take());
-        compiled.movers = movers.clone();
-        self.compiled.movers = movers;
         laps.lap("refit");
         let size = self.local_correction();
-        let request = self.local_move(&next, changed, &size);
+        let request = self.local_move(&compiled, changed, &size);
+        let boxes = request.before.iter().chain(&request.after);
+        let movers = widened_boxes(boxes.map(|b| (b.lo, b.hi)), self.extent);
+        compiled.movers = movers.clone();
+        self.compiled.movers = movers;
         laps.lap("request");
         // Deposits per photon of the passes so far (counters a caller may reset aside).
         let per_photon =
@@ -248,36 +249,43 @@ impl Renderer<'_> {
         Ok(stats)
     }
 
-    /// The move of the `changed` objects to their pose in `next` as the backend's passes see
+    /// The move of the `changed` objects to their pose `next` as the backend's passes see
     /// it, sized as `size` says.
-    fn local_move(&self, next: &Scene, changed: &[usize], size: &CorrectionSize) -> LocalMove {
+    fn local_move(
+        &self,
+        next: &CompiledScene,
+        changed: &[usize],
+        size: &CorrectionSize,
+    ) -> LocalMove {
         let correction = (size.r2_floor, size.widest, size.direct_samples);
-        let pose = (self.extent, &self.lights[..]);
-        local_move_request((&self.scene, next), changed, &self.params, pose, correction)
+        local_move_request((&self.compiled, next), changed, &self.params, correction)
     }
 }
 
-/// The local move of the `changed` objects from `before` to `after`, rendered with `params`
-/// in a pose of extent `extent` lit by `lights`, its correction's floor, widest disc and
-/// direct-light pairs `correction`: what every pass of it needs
+/// The local move of the `changed` objects from pose `before` to pose `after`, rendered with
+/// `params`, its correction's floor, widest disc and direct-light pairs `correction`: what
+/// every pass of it needs
 /// ([`LocalMoves::begin_local_move`](ppm_core::passes::LocalMoves::begin_local_move)).
 pub fn local_move_request(
-    (before, after): (&Scene, &Scene),
+    (before, after): (&CompiledScene, &CompiledScene),
     changed: &[usize],
     params: &RenderParams,
-    (extent, lights): (f32, &[GpuLight]),
     (r2_floor, widest, direct_samples): (f32, f32, u32),
 ) -> LocalMove {
+    let aabb = |pose: &CompiledScene, o: usize| {
+        let (lo, hi) = pose.object_box(o);
+        Aabb::new(lo, hi)
+    };
     LocalMove {
         objects: changed.iter().map(|&o| o as u32).collect(),
         groups: changed.iter().fold(0, |g, &o| g | object_group(o)),
         before: changed.iter().map(|&o| aabb(before, o)).collect(),
         after: changed.iter().map(|&o| aabb(after, o)).collect(),
-        lights: light_boxes(lights),
+        lights: light_boxes(&before.lights),
         seed: params.seed,
         paths: EyePathSettings {
             max_depth: params.max_eye_depth,
-            ray_epsilon: pass_params::ray_epsilon(params, extent),
+            ray_epsilon: pass_params::ray_epsilon(params, before.extent),
             sample_lights: false,
         },
         r2_initial: params.initial_radius * params.initial_radius,
@@ -302,12 +310,6 @@ fn light_boxes(lights: &[GpuLight]) -> Vec<Aabb> {
         return boxes;
     }
     vec![boxes.iter().skip(1).fold(boxes[0], |a, b| a.union(b))]
-}
-
-/// Object `o`'s box as posed in `scene`.
-fn aabb(scene: &Scene, o: usize) -> Aabb {
-    let (lo, hi) = scene.objects[o].bounds();
-    Aabb::new(lo, hi)
 }
 
 #[cfg(test)]
