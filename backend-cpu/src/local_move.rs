@@ -8,15 +8,12 @@ use crate::trace::SceneData;
 use glam::Vec3;
 use ppm_core::layout::{GpuCamera, HitPoint, SlotBounds, hit_flags};
 use ppm_core::local_move::{
-    LocalMove, PairInPose, View, correct_direct, moved_triangles, prepare_slot, reset_if_seen,
+    LocalMove, PairInPose, View, correct_direct, prepare_slot, reset_if_seen,
 };
 use ppm_core::passes::LocalMoveStats;
 use ppm_core::reach::Aabb;
-use ppm_core::screen_cover::covered_pixels;
+use ppm_core::screen_cover::covered_pixels_in_tree;
 use rayon::prelude::*;
-
-/// Triangles of a moved mesh whose screen cover one thread marks.
-const COVER_CHUNK: usize = 8192;
 
 /// Where a local move stands between its passes.
 pub enum Stage {
@@ -109,23 +106,16 @@ pub fn resets_main(
     }
 }
 
-/// [`ppm_core::local_move::moved_cover`], the moved triangles projected in parts, one per
-/// thread's share (a moved mesh of tens of thousands of triangles is a drag step's largest
-/// serial part otherwise), or'ed into one.
+/// [`ppm_core::local_move::moved_cover`], found over the moved objects' own subtrees
+/// ([`covered_pixels_in_tree`]): a moved mesh of tens of thousands of triangles was a drag
+/// step's largest part after the tree's refit when each triangle was projected.
 fn moved_cover(scene: &SceneData, camera: &GpuCamera, objects: &[u32]) -> Vec<bool> {
-    let triangles: Vec<[Vec3; 3]> = scene
-        .triangles
-        .par_chunks(COVER_CHUNK)
-        .flat_map_iter(|part| moved_triangles(part, objects))
+    let roots: Vec<u32> = objects
+        .iter()
+        .map(|&o| scene.spans[o as usize].root)
+        .filter(|&root| root != u32::MAX)
         .collect();
-    triangles
-        .par_chunks(COVER_CHUNK)
-        .map(|part| covered_pixels(camera, part))
-        .reduce_with(|mut a, b| {
-            a.iter_mut().zip(&b).for_each(|(x, y)| *x |= *y);
-            a
-        })
-        .unwrap_or_else(|| covered_pixels(camera, &[]))
+    covered_pixels_in_tree(camera, &scene.nodes, &scene.triangles, &roots)
 }
 
 /// The direct-light change of a local move in pose B (`after`): each kept slot flagged

@@ -16,6 +16,7 @@ const LOCAL_MOVE_WGSL: &str = include_str!("../shaders/shared/local_move.wgsl");
 const DIRECT_LIGHT_WGSL: &str = include_str!("../shaders/shared/direct_light.wgsl");
 const SCREEN_COVER_WGSL: &str = include_str!("../shaders/shared/screen_cover.wgsl");
 const CAMERA_MOVE_WGSL: &str = include_str!("../shaders/shared/camera_move.wgsl");
+const BVH_WGSL: &str = include_str!("../shaders/shared/bvh.wgsl");
 
 /// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
 /// layout.wgsl or in the assembled pass shaders.
@@ -531,6 +532,7 @@ fn shared_constants_agree() {
         ("COVER_EPSILON", f32::EPSILON),
         ("NORMAL_COS", camera_move::NORMAL_COS),
         ("GRAZING_COS", camera_move::GRAZING_COS),
+        ("BOX_SLACK", ppm_core::trace::BOX_SLACK),
     ] {
         let sources = [
             LAYOUT_WGSL,
@@ -538,6 +540,7 @@ fn shared_constants_agree() {
             LOCAL_MOVE_WGSL,
             SCREEN_COVER_WGSL,
             CAMERA_MOVE_WGSL,
+            BVH_WGSL,
         ];
         let literal = wgsl_constant(&sources, name, "f32");
         assert_eq!(literal.parse::<f32>().unwrap(), value, "{name}");

@@ -6,7 +6,7 @@
 //! pixel no such ray meets costs a needless reset; missing one would keep a pixel the object
 //! now covers, so every doubt marks.
 
-use crate::layout::GpuCamera;
+use crate::layout::{BvhNode, GpuCamera, GpuTriangle};
 use glam::{Mat3, Vec2, Vec3};
 
 /// Widens each pixel's square, in pixels, beyond the rounding of projection and eye rays.
@@ -59,6 +59,96 @@ pub fn covered_pixels(camera: &GpuCamera, triangles: &[[Vec3; 3]]) -> Vec<bool> 
         mark_triangle(&mut covered, width, height, [a, b, c]);
     }
     covered
+}
+
+/// [`covered_pixels`] of the triangles under `roots` in a flattened tree (`nodes` over
+/// `triangles`): the same flags, without projecting every triangle. A subtree whose box lies
+/// wholly in front of the eye projects inside the box of its corners' images, and so do its
+/// triangles' marks; where every pixel that box reaches is marked already, or none lies in
+/// the image, the subtree is passed over. A moved mesh of tens of thousands of triangles
+/// mostly covers itself.
+pub fn covered_pixels_in_tree(
+    camera: &GpuCamera,
+    nodes: &[BvhNode],
+    triangles: &[GpuTriangle],
+    roots: &[u32],
+) -> Vec<bool> {
+    let (width, height) = (camera.width as usize, camera.height as usize);
+    let projection = Projection::new(camera);
+    let mut covered = vec![false; width * height];
+    let mut stack = roots.to_vec();
+    while let Some(i) = stack.pop() {
+        let node = &nodes[i as usize];
+        match box_pixels(&projection, node, width, height) {
+            Reach::Outside => continue,
+            Reach::Pixels(first, last) if all_marked(&covered, width, first, last) => continue,
+            Reach::Pixels(..) | Reach::BehindTheEye => {}
+        }
+        if node.count == 0 {
+            stack.extend([node.first, node.first + 1]);
+            continue;
+        }
+        for t in &triangles[node.first as usize..(node.first + node.count) as usize] {
+            let v0 = Vec3::from(t.v0);
+            let corners = [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)];
+            let [Some(a), Some(b), Some(c)] = corners.map(|v| projection.project(v)) else {
+                covered.fill(true);
+                return covered;
+            };
+            mark_triangle(&mut covered, width, height, [a, b, c]);
+        }
+    }
+    covered
+}
+
+/// Which pixels a tree node's box may reach.
+enum Reach {
+    /// A corner lies behind the eye (or on its plane): its triangles tell.
+    BehindTheEye,
+    /// Its image misses the image.
+    Outside,
+    /// The first and last pixel (column, row) of its image's widened bounding box.
+    Pixels([usize; 2], [usize; 2]),
+}
+
+/// The pixels `node`'s box may reach, widened as [`mark_triangle`] widens a triangle's.
+fn box_pixels(projection: &Projection, node: &BvhNode, width: usize, height: usize) -> Reach {
+    let (lo, hi) = (Vec3::from(node.min), Vec3::from(node.max));
+    let mut image = [Vec2::INFINITY, Vec2::NEG_INFINITY];
+    for corner in 0..8 {
+        let pick = |axis: usize| {
+            if corner >> axis & 1 == 0 {
+                lo[axis]
+            } else {
+                hi[axis]
+            }
+        };
+        let Some(p) = projection.project(Vec3::new(pick(0), pick(1), pick(2))) else {
+            return Reach::BehindTheEye;
+        };
+        image = [image[0].min(p), image[1].max(p)];
+    }
+    let (lo, hi) = (image[0] - MARGIN, image[1] + MARGIN);
+    if hi.x < 0.0 || hi.y < 0.0 || lo.x >= width as f32 || lo.y >= height as f32 {
+        return Reach::Outside;
+    }
+    let first = lo.max(Vec2::ZERO).floor();
+    let last = hi
+        .min(Vec2::new(width as f32 - 1.0, height as f32 - 1.0))
+        .floor();
+    Reach::Pixels(
+        [first.x as usize, first.y as usize],
+        [last.x as usize, last.y as usize],
+    )
+}
+
+/// Whether every pixel from `first` to `last` (columns and rows, inclusive) is marked.
+fn all_marked(covered: &[bool], width: usize, first: [usize; 2], last: [usize; 2]) -> bool {
+    (first[1]..=last[1]).all(|y| {
+        covered[y * width + first[0]..=y * width + last[0]]
+            .iter()
+            .all(|&c| c)
+    })
 }
 
 /// Marks the pixels whose widened square the image-space triangle `p` may overlap: those
@@ -186,6 +276,74 @@ mod tests {
         );
         assert!(hit > 100, "the test triangles cover {hit} pixels");
         assert!(marked <= hit + hit / 4, "{marked} marked for {hit} met");
+    }
+
+    /// A sphere of 3,200 triangles of radius 1 at `centre`.
+    fn sphere(centre: Vec3) -> Vec<[Vec3; 3]> {
+        let (rings, segments) = (40, 40);
+        let at = |i: usize, j: usize| {
+            let (theta, phi) = (
+                std::f32::consts::PI * i as f32 / rings as f32,
+                std::f32::consts::TAU * j as f32 / segments as f32,
+            );
+            centre
+                + Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                )
+        };
+        (0..rings * segments)
+            .flat_map(|k| {
+                let (i, j) = (k / segments, k % segments);
+                [
+                    [at(i, j), at(i + 1, j), at(i + 1, j + 1)],
+                    [at(i, j), at(i + 1, j + 1), at(i, j + 1)],
+                ]
+            })
+            .collect()
+    }
+
+    /// The tree's cover marks exactly the pixels the triangles' does, for a mesh seen whole,
+    /// from close by, cut by the image's edge, from inside its box, and from inside itself
+    /// (some triangles behind the eye: every pixel).
+    #[test]
+    fn the_tree_marks_what_the_triangles_mark() {
+        use crate::compile::compile_scene;
+        use crate::local_move::moved_triangles;
+        use crate::scene::testing::{object, room};
+        let scene = room(vec![
+            object("floor", 0, sphere(Vec3::new(-3.0, 0.0, 0.0))),
+            object("ball", 0, sphere(Vec3::new(0.5, 1.0, 0.0))),
+        ]);
+        let compiled = compile_scene(&scene, 8, 8);
+        let root = compiled.spans[1].root;
+        let views = [
+            (Vec3::new(1.0, 2.0, 9.0), Vec3::new(0.0, 0.5, 0.0)),
+            (Vec3::new(0.5, 1.2, 2.5), Vec3::new(0.5, 1.0, 0.0)),
+            (Vec3::new(3.0, 1.0, 3.0), Vec3::new(-1.0, 1.0, 0.0)),
+            (Vec3::new(1.2, 1.8, 0.7), Vec3::new(0.5, 1.0, 0.0)),
+            (Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.5, 1.0, 5.0)),
+        ];
+        let mut marked = Vec::new();
+        for (eye, look_at) in views {
+            let view = Camera {
+                eye,
+                look_at,
+                up: Vec3::Y,
+                fov_deg: 50.0,
+                width: 96,
+                height: 64,
+            };
+            let cam = gpu_camera(&view, 96, 64);
+            let expected = covered_pixels(&cam, &moved_triangles(&compiled.triangles, &[1]));
+            let tree = covered_pixels_in_tree(&cam, &compiled.nodes, &compiled.triangles, &[root]);
+            assert_eq!(tree, expected, "eye {eye}");
+            marked.push(expected.iter().filter(|&&c| c).count());
+        }
+        // The views see the ball whole, close, cut, and from inside.
+        assert!(marked[0] > 100 && marked[0] < marked[1], "{marked:?}");
+        assert!(marked[2] > 0 && marked[4] == 96 * 64, "{marked:?}");
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! [`crate::local_move`]); [`FlatPose`] answers it over the compiled pose's own buffers by
 //! walking the flattened BVH ([`BvhNode`]) exactly as backend-wgpu's `bvh.wgsl` does, its
 //! twin. A backend may answer with a faster traversal of its own (backend-cpu walks obvhs's
-//! tree) as long as it finds the same surfaces; only ties between equal distances may differ.
+//! tree) as long as it finds the same surfaces: the nearest, and among equally near ones the
+//! lowest index ([`nearer`]), whatever order it visits them in.
 
 use crate::compile::CompiledScene;
 use crate::geometry::{Frame, intersect_triangle};
@@ -126,8 +127,48 @@ fn ray_box(origin: Vec3, inv_dir: Vec3, node: &BvhNode) -> f32 {
     if tmin <= tmax { tmin } else { f32::INFINITY }
 }
 
-/// The nearest triangle of `nodes`' leaves with `0 < t < tmax`, or with `any_hit` the first
-/// found: children nearer first, the nearer straight away, the farther from the stack.
+/// Whether a triangle found at `t` with index `triangle` replaces `hit` as the nearest: it
+/// is nearer, or as near with a lower index. Ties (a ray through an edge two triangles
+/// share, as a symmetric scene's rays meet them exactly) then resolve the same whatever
+/// order a walk visits the triangles in, so every backend's walk finds the same surface.
+#[inline]
+pub fn nearer(t: f32, triangle: u32, hit: &Hit) -> bool {
+    t < hit.t || t == hit.t && triangle < hit.triangle
+}
+
+/// The farthest distance at which a triangle may still replace `hit` ([`nearer`]): just
+/// past `hit.t` once something was hit, so that a tie is tested, and `tmax` (excluded)
+/// before.
+#[inline]
+pub fn tie_bound(hit: &Hit) -> f32 {
+    if hit.triangle == u32::MAX {
+        hit.t
+    } else {
+        hit.t.next_up()
+    }
+}
+
+/// Relative slack of [`box_reach`]: more than the rounding of a box's entry distance and of
+/// a triangle's distance together (a few ulps each).
+pub const BOX_SLACK: f32 = 16.0 * f32::EPSILON;
+
+/// The farthest entry distance at which a walk visits a box: a little past the nearest hit,
+/// since a box's entry is rounded apart from the distance of a triangle lying in its face
+/// (each walk rounds it its own way), and missing that triangle would break a tie
+/// differently; `tmax` (excluded) before any hit.
+#[inline]
+pub fn box_reach(hit: &Hit) -> f32 {
+    if hit.triangle == u32::MAX {
+        hit.t
+    } else {
+        hit.t * (1.0 + BOX_SLACK)
+    }
+}
+
+/// The nearest triangle of `nodes`' leaves with `0 < t < tmax` (the lowest index among
+/// equally near ones, [`nearer`]), or with `any_hit` the first found: children nearer first,
+/// the nearer straight away, the farther from the stack; a box entered within
+/// [`box_reach`] of the nearest hit is visited, as it may hold a tie.
 pub fn trace_closest(
     nodes: &[BvhNode],
     triangles: &[GpuTriangle],
@@ -150,7 +191,7 @@ pub fn trace_closest(
     let mut node = nodes[0];
     let mut enter = ray_box(origin, inv_dir, &node);
     loop {
-        if enter < hit.t {
+        if enter < box_reach(&hit) {
             if node.count == 0 {
                 let (left, right) = (nodes[node.first as usize], nodes[node.first as usize + 1]);
                 let (t_left, t_right) = (
@@ -158,7 +199,7 @@ pub fn trace_closest(
                     ray_box(origin, inv_dir, &right),
                 );
                 let left_first = t_left <= t_right;
-                if t_left.max(t_right) < hit.t && sp < STACK_SIZE {
+                if t_left.max(t_right) < box_reach(&hit) && sp < STACK_SIZE {
                     stack[sp] = if left_first {
                         node.first + 1
                     } else {
@@ -171,8 +212,9 @@ pub fn trace_closest(
                 continue;
             }
             for i in node.first..node.first + node.count {
-                let t = intersect_triangle(origin, dir, &triangles[i as usize], 0.0, hit.t);
-                if t < hit.t {
+                let bound = tie_bound(&hit);
+                let t = intersect_triangle(origin, dir, &triangles[i as usize], 0.0, bound);
+                if t < bound && nearer(t, i, &hit) {
                     hit = Hit { t, triangle: i };
                     if any_hit {
                         return Some(hit);

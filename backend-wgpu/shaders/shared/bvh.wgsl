@@ -1,7 +1,7 @@
 // BVH traversal over the flattened obvhs nodes, with a fixed-size stack. Reads the nodes (two
 // texels each) and triangles (four texels each) from the scene table (scene.wgsl imported).
-// The CPU backend traverses the same tree with obvhs itself; only ties between equal
-// distances can resolve differently. A scene without triangles is uploaded as one leaf
+// The CPU backend traverses the same tree with obvhs itself, and finds the same triangle:
+// the nearest, the lowest index among equally near ones (`nearer`). A scene without triangles is uploaded as one leaf
 // holding one degenerate triangle, which no ray hits.
 
 const STACK_SIZE: u32 = 64u;
@@ -64,9 +64,38 @@ fn ray_box(origin: vec3<f32>, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) 
     return T_MISS;
 }
 
-// Nearest triangle with 0 < t < tmax; `triangle` is 0xffffffff on a miss. Children are
-// visited nearer first: the nearer one straight away (its node already read), the farther
-// one from the stack.
+// Relative slack of box_reach (ppm_core::trace::BOX_SLACK, 16 ulps of one).
+const BOX_SLACK: f32 = 1.9073486e-6;
+
+// Whether a triangle at `t` with index `i` replaces `hit`: nearer, or as near with a lower
+// index, so that a tie (a ray through an edge two triangles share) resolves as on every
+// backend, whatever order the walk visits them in (ppm_core::trace::nearer).
+fn nearer(t: f32, i: u32, hit: Hit) -> bool {
+    return t < hit.t || (t == hit.t && i < hit.triangle);
+}
+
+// How far a triangle may lie and still replace `hit`: just past it once something was hit
+// (a tie is tested), `tmax` (excluded) before (ppm_core::trace::tie_bound).
+fn tie_bound(hit: Hit) -> f32 {
+    if hit.triangle == 0xffffffffu {
+        return hit.t;
+    }
+    return bitcast<f32>(bitcast<u32>(hit.t) + 1u);
+}
+
+// How far a box may be entered and still be visited: a little past the nearest hit, since
+// a box's entry is rounded apart from the distance of a triangle in its face
+// (ppm_core::trace::box_reach).
+fn box_reach(hit: Hit) -> f32 {
+    if hit.triangle == 0xffffffffu {
+        return hit.t;
+    }
+    return hit.t * (1.0 + BOX_SLACK);
+}
+
+// Nearest triangle with 0 < t < tmax, the lowest index among equally near ones
+// (`nearer`); `triangle` is 0xffffffff on a miss. Children are visited nearer first: the
+// nearer one straight away (its node already read), the farther one from the stack.
 fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, any_hit: bool) -> Hit {
     var hit = Hit(tmax, 0xffffffffu);
     let inv_dir = vec3<f32>(safe_inverse(dir.x), safe_inverse(dir.y), safe_inverse(dir.z));
@@ -74,14 +103,14 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, any_hit: bool) ->
     var node = bvh_node(0u);
     var enter = ray_box(origin, inv_dir, node.min, node.max);
     loop {
-        if enter < hit.t {
+        if enter < box_reach(hit) {
             if node.count == 0u {
                 let left = bvh_node(node.first);
                 let right = bvh_node(node.first + 1u);
                 let t_left = ray_box(origin, inv_dir, left.min, left.max);
                 let t_right = ray_box(origin, inv_dir, right.min, right.max);
                 let left_first = t_left <= t_right;
-                if max(t_left, t_right) < hit.t && sp < STACK_SIZE {
+                if max(t_left, t_right) < box_reach(hit) && sp < STACK_SIZE {
                     stack[sp] = select(node.first, node.first + 1u, left_first);
                     sp++;
                 }
@@ -94,8 +123,9 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, any_hit: bool) ->
                 continue;
             }
             for (var i = node.first; i < node.first + node.count; i++) {
-                let t = hit_distance(origin, dir, i, hit.t);
-                if t < hit.t {
+                let bound = tie_bound(hit);
+                let t = hit_distance(origin, dir, i, bound);
+                if t < bound && nearer(t, i, hit) {
                     hit = Hit(t, i);
                     if any_hit {
                         return hit;
