@@ -15,7 +15,8 @@ use crate::compile::{
 };
 use crate::layout::{BvhNode, GpuTriangle};
 use crate::scene::{MaterialKind, Scene};
-use crate::scene_tree::{half_areas, lay_out_top, top_nodes};
+use crate::scene_tree::{ObjectSpan, half_areas, lay_out_top, top_nodes};
+use glam::Vec3;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::{Bvh2, node::Bvh2Node};
 use rayon::prelude::*;
@@ -129,74 +130,15 @@ fn refit(
         if span.root == u32::MAX {
             continue;
         }
-        let object = &after.objects[o].triangles;
-        let Bvh2 {
-            nodes: tree,
-            primitive_indices,
-            ..
-        } = &mut bvh;
-        let corners = |slot: u32| &object[(primitive_indices[slot as usize] - first[o]) as usize];
-        // A leaf's box from its triangles' vertices, as obvhs boxes them at a build.
-        let leaf_box = |n: &Bvh2Node| {
-            (n.first_index..n.first_index + n.prim_count).fold(Aabb::empty(), |a, slot| {
-                let [p, q, r] = corners(slot).map(Into::into);
-                a.union(&Aabb::from_points(&[p, q, r]))
-            })
+        let posed = Posed {
+            corners: &after.objects[o].triangles,
+            first: first[o],
+            root: before.bvh.nodes[span.root as usize],
         };
-        let block = |r: &Range<u32>| r.start as usize..r.end as usize;
-        let (slots, below) = (block(&span.triangles), block(&span.nodes));
-        // The triangles rewritten, and the object's box around them as it is posed (a
-        // minimum and maximum: the same whatever the threads).
-        object_bounds[o] = triangles[slots.clone()]
-            .par_chunks_mut(CHUNK)
-            .zip(slots.into_par_iter().step_by(CHUNK))
-            .map(|(part, first_slot)| {
-                let mut bounds = EMPTY_BOX;
-                for (t, slot) in part.iter_mut().zip(first_slot as u32..) {
-                    *t = GpuTriangle {
-                        light: t.light,
-                        ..gpu_triangle(corners(slot), t.material, t.object)
-                    };
-                    add_to_box(&mut bounds, t);
-                }
-                bounds
-            })
-            .reduce(|| EMPTY_BOX, |[a, b], [c, d]| [a.min(c), b.max(d)]);
-        // The leaves in parallel, then the inner nodes from the last to the first; the
-        // subtree's cost summed chunk by chunk in order, the same sum whatever the threads.
-        tree[below.clone()].par_chunks_mut(CHUNK).for_each(|part| {
-            for n in part.iter_mut().filter(|n| n.is_leaf()) {
-                n.aabb = leaf_box(n);
-            }
-        });
-        for i in below.clone().rev() {
-            if tree[i].is_leaf() {
-                continue;
-            }
-            let children = tree[i].first_index as usize;
-            tree[i].aabb = tree[children].aabb.union(&tree[children + 1].aabb);
-        }
-        let costs: Vec<f64> = nodes[below.clone()]
-            .par_chunks_mut(CHUNK)
-            .zip(tree[below].par_chunks(CHUNK))
-            .map(|(flat, part)| {
-                flat.iter_mut()
-                    .zip(part)
-                    .for_each(|(f, node)| *f = flat_node(node));
-                half_areas(part)
-            })
-            .collect();
-        let refitted: f64 = costs.iter().sum();
+        let (root, bounds, refitted) = posed.write(span, &mut triangles, &mut bvh, &mut nodes);
         cost += refitted - span.cost;
         span.cost = refitted;
-        // The root as `before` holds it (the top tree of lent buffers is another pose's).
-        let mut root = before.bvh.nodes[span.root as usize];
-        root.aabb = if root.is_leaf() {
-            leaf_box(&root)
-        } else {
-            let children = root.first_index as usize;
-            tree[children].aabb.union(&tree[children + 1].aabb)
-        };
+        object_bounds[o] = bounds;
         fitted[o] = Some(root);
         written.triangles.push(span.triangles.clone());
         written.nodes.push(span.nodes.clone());
@@ -239,6 +181,92 @@ fn refit(
         pose: next_pose(),
         refit_from: Some(written),
     })
+}
+
+/// One moved object as `after` poses it.
+struct Posed<'a> {
+    /// Its triangles' corners, in scene order.
+    corners: &'a [[Vec3; 3]],
+    /// Its first triangle's index in scene order (`primitive_indices` numbers them so).
+    first: u32,
+    /// Its root as the pose before holds it (lent buffers hold another pose's top tree).
+    root: Bvh2Node,
+}
+
+impl Posed<'_> {
+    /// Writes the object's blocks (`span`): its triangles, its subtree's boxes from the
+    /// leaves up, and their flat nodes. Returns its root refitted, its box as its triangles
+    /// are posed, and its subtree's cost below the root; each is the same whatever the
+    /// threads (a minimum and maximum, and a sum chunk by chunk in order).
+    fn write(
+        &self,
+        span: &ObjectSpan,
+        triangles: &mut [GpuTriangle],
+        bvh: &mut Bvh2,
+        nodes: &mut [BvhNode],
+    ) -> (Bvh2Node, [Vec3; 2], f64) {
+        let Bvh2 {
+            nodes: tree,
+            primitive_indices,
+            ..
+        } = bvh;
+        let corners =
+            |slot: u32| &self.corners[(primitive_indices[slot as usize] - self.first) as usize];
+        // A leaf's box from its triangles' vertices, as obvhs boxes them at a build.
+        let leaf_box = |n: &Bvh2Node| {
+            (n.first_index..n.first_index + n.prim_count).fold(Aabb::empty(), |a, slot| {
+                let [p, q, r] = corners(slot).map(Into::into);
+                a.union(&Aabb::from_points(&[p, q, r]))
+            })
+        };
+        let block = |r: &Range<u32>| r.start as usize..r.end as usize;
+        let (slots, below) = (block(&span.triangles), block(&span.nodes));
+        let bounds = triangles[slots.clone()]
+            .par_chunks_mut(CHUNK)
+            .zip(slots.into_par_iter().step_by(CHUNK))
+            .map(|(part, first_slot)| {
+                let mut bounds = EMPTY_BOX;
+                for (t, slot) in part.iter_mut().zip(first_slot as u32..) {
+                    *t = GpuTriangle {
+                        light: t.light,
+                        ..gpu_triangle(corners(slot), t.material, t.object)
+                    };
+                    add_to_box(&mut bounds, t);
+                }
+                bounds
+            })
+            .reduce(|| EMPTY_BOX, |[a, b], [c, d]| [a.min(c), b.max(d)]);
+        // The leaves in parallel, then the inner nodes from the last to the first.
+        tree[below.clone()].par_chunks_mut(CHUNK).for_each(|part| {
+            for n in part.iter_mut().filter(|n| n.is_leaf()) {
+                n.aabb = leaf_box(n);
+            }
+        });
+        for i in below.clone().rev() {
+            if !tree[i].is_leaf() {
+                let children = tree[i].first_index as usize;
+                tree[i].aabb = tree[children].aabb.union(&tree[children + 1].aabb);
+            }
+        }
+        let costs: Vec<f64> = nodes[below.clone()]
+            .par_chunks_mut(CHUNK)
+            .zip(tree[below].par_chunks(CHUNK))
+            .map(|(flat, part)| {
+                flat.iter_mut()
+                    .zip(part)
+                    .for_each(|(f, node)| *f = flat_node(node));
+                half_areas(part)
+            })
+            .collect();
+        let mut root = self.root;
+        root.aabb = if root.is_leaf() {
+            leaf_box(&root)
+        } else {
+            let children = root.first_index as usize;
+            tree[children].aabb.union(&tree[children + 1].aabb)
+        };
+        (root, bounds, costs.iter().sum())
+    }
 }
 
 /// The buffers of `spare` made `before`'s, if `before` was refitted from it and nothing
