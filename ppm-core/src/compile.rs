@@ -107,8 +107,9 @@ pub struct CompiledScene {
     pub movers: Vec<GpuBounds>,
     /// Texture coordinates and images, empty for an untextured scene.
     pub textures: SurfaceTextures,
-    /// Each object's box as its triangles here are posed (`[min, max]`): a refit recomputes
-    /// the moved objects' alone, and `extent` is the box around them all.
+    /// Each object's box as its vertices here are posed (`[min, max]`, empty for an object
+    /// without triangles): its subtree's root's, so a refit has it without reading the
+    /// vertices again, and `extent` is the box around them all.
     pub object_bounds: Vec<[Vec3; 2]>,
     /// Where each object's triangles and subtree lie ([`crate::scene_tree`]).
     pub spans: Vec<ObjectSpan>,
@@ -120,21 +121,6 @@ pub struct CompiledScene {
     /// ([`recompile_moved`](crate::refit::recompile_moved)): that pose's buffers become this
     /// one's by copying these entries alone.
     pub refit_from: Option<RefitWrites>,
-}
-
-impl CompiledScene {
-    /// Object `o`'s box as posed here (`(min, max)`), exactly its vertices' (its subtree's
-    /// root holds it, so a move need not read the vertices again); `min > max` for an
-    /// object without triangles.
-    pub fn object_box(&self, o: usize) -> (Vec3, Vec3) {
-        match self.spans[o].root {
-            u32::MAX => (Vec3::INFINITY, Vec3::NEG_INFINITY),
-            root => {
-                let aabb = self.bvh.nodes[root as usize].aabb;
-                (aabb.min.into(), aabb.max.into())
-            }
-        }
-    }
 }
 
 /// The entries a refit wrote over the pose it started from.
@@ -234,7 +220,7 @@ pub fn compile_scene(scene: &Scene, width: u32, height: u32) -> CompiledScene {
     let light_power = assign_light_distribution(&mut lights, &materials);
     let nodes = flat_nodes(&bvh);
     let bvh_built_cost = tree_cost(&bvh);
-    let object_bounds = object_bounds(&triangles, scene.objects.len());
+    let object_bounds: Vec<[Vec3; 2]> = spans.iter().map(|s| s.bounds(&bvh)).collect();
     let extent = extent_of(&object_bounds);
     let glossy = materials.iter().any(crate::bsdf::chain_samples_lights);
     let anisotropic = materials.iter().any(crate::bsdf::is_anisotropic);
@@ -478,27 +464,8 @@ pub fn gpu_camera(c: &Camera, width: u32, height: u32) -> GpuCamera {
     }
 }
 
-/// The smallest and largest corner of each object's triangles, as posed in `triangles`
-/// (`objects` entries; an object without triangles keeps an empty box).
-pub(crate) fn object_bounds(triangles: &[GpuTriangle], objects: usize) -> Vec<[Vec3; 2]> {
-    let mut boxes = vec![EMPTY_BOX; objects];
-    for t in triangles {
-        add_to_box(&mut boxes[t.object as usize], t);
-    }
-    boxes
-}
-
 /// A box that contains nothing.
 pub(crate) const EMPTY_BOX: [Vec3; 2] = [Vec3::INFINITY, Vec3::NEG_INFINITY];
-
-/// Grows `b` to hold triangle `t`'s corners.
-pub(crate) fn add_to_box(b: &mut [Vec3; 2], t: &GpuTriangle) {
-    let v0 = Vec3::from(t.v0);
-    for v in [v0, v0 + Vec3::from(t.e1), v0 + Vec3::from(t.e2)] {
-        b[0] = b[0].min(v);
-        b[1] = b[1].max(v);
-    }
-}
 
 /// The length of the diagonal of the box around `boxes`.
 pub(crate) fn extent_of(boxes: &[[Vec3; 2]]) -> f32 {

@@ -10,8 +10,7 @@
 //! build's, the scene is compiled anew.
 
 use crate::compile::{
-    CompiledScene, EMPTY_BOX, RefitWrites, add_to_box, compile_scene, extent_of, flat_node,
-    gpu_triangle, next_pose,
+    CompiledScene, RefitWrites, compile_scene, extent_of, flat_node, gpu_triangle, next_pose,
 };
 use crate::layout::{BvhNode, GpuTriangle};
 use crate::scene::{MaterialKind, Scene};
@@ -135,10 +134,10 @@ fn refit(
             first: first[o],
             root: before.bvh.nodes[span.root as usize],
         };
-        let (root, bounds, refitted) = posed.write(span, &mut triangles, &mut bvh, &mut nodes);
+        let (root, refitted) = posed.write(span, &mut triangles, &mut bvh, &mut nodes);
         cost += refitted - span.cost;
         span.cost = refitted;
-        object_bounds[o] = bounds;
+        object_bounds[o] = [root.aabb.min.into(), root.aabb.max.into()];
         fitted[o] = Some(root);
         written.triangles.push(span.triangles.clone());
         written.nodes.push(span.nodes.clone());
@@ -195,16 +194,16 @@ struct Posed<'a> {
 
 impl Posed<'_> {
     /// Writes the object's blocks (`span`): its triangles, its subtree's boxes from the
-    /// leaves up, and their flat nodes. Returns its root refitted, its box as its triangles
-    /// are posed, and its subtree's cost below the root; each is the same whatever the
-    /// threads (a minimum and maximum, and a sum chunk by chunk in order).
+    /// leaves up, and their flat nodes. Returns its root refitted (its box is the object's)
+    /// and its subtree's cost below the root, summed chunk by chunk in order: the same
+    /// whatever the threads.
     fn write(
         &self,
         span: &ObjectSpan,
         triangles: &mut [GpuTriangle],
         bvh: &mut Bvh2,
         nodes: &mut [BvhNode],
-    ) -> (Bvh2Node, [Vec3; 2], f64) {
+    ) -> (Bvh2Node, f64) {
         let Bvh2 {
             nodes: tree,
             primitive_indices,
@@ -221,21 +220,17 @@ impl Posed<'_> {
         };
         let block = |r: &Range<u32>| r.start as usize..r.end as usize;
         let (slots, below) = (block(&span.triangles), block(&span.nodes));
-        let bounds = triangles[slots.clone()]
+        triangles[slots.clone()]
             .par_chunks_mut(CHUNK)
             .zip(slots.into_par_iter().step_by(CHUNK))
-            .map(|(part, first_slot)| {
-                let mut bounds = EMPTY_BOX;
+            .for_each(|(part, first_slot)| {
                 for (t, slot) in part.iter_mut().zip(first_slot as u32..) {
                     *t = GpuTriangle {
                         light: t.light,
                         ..gpu_triangle(corners(slot), t.material, t.object)
                     };
-                    add_to_box(&mut bounds, t);
                 }
-                bounds
-            })
-            .reduce(|| EMPTY_BOX, |[a, b], [c, d]| [a.min(c), b.max(d)]);
+            });
         // The leaves in parallel, then the inner nodes from the last to the first.
         tree[below.clone()].par_chunks_mut(CHUNK).for_each(|part| {
             for n in part.iter_mut().filter(|n| n.is_leaf()) {
@@ -265,7 +260,7 @@ impl Posed<'_> {
             let children = root.first_index as usize;
             tree[children].aabb.union(&tree[children + 1].aabb)
         };
-        (root, bounds, costs.iter().sum())
+        (root, costs.iter().sum())
     }
 }
 
@@ -412,7 +407,8 @@ mod tests {
             assert_eq!(flat_nodes(&refitted), *next.nodes);
             approx::assert_relative_eq!(next.bvh_cost, tree_cost(&next.bvh), max_relative = 1e-5);
             assert_eq!(next.bvh_depth, depth(&next.nodes));
-            assert_eq!(next.object_box(1), scene.objects[1].bounds());
+            let (lo, hi) = scene.objects[1].bounds();
+            assert_eq!(next.object_bounds[1], [lo, hi]);
             assert_eq!(next.extent, compile_scene(&scene, 8, 8).extent);
             assert_eq!(
                 next.bvh_built_cost, compiled.bvh_built_cost,
@@ -422,7 +418,8 @@ mod tests {
         }
         let fresh = compile_scene(&scene, 8, 8);
         for o in 0..scene.objects.len() {
-            assert_eq!(fresh.object_box(o), scene.objects[o].bounds());
+            let (lo, hi) = scene.objects[o].bounds();
+            assert_eq!(fresh.object_bounds[o], [lo, hi]);
         }
         scene.apply(&step(0, Vec3::ZERO, 45.0));
         let turned = recompile_moved(&compiled, &scene, &[0], None);

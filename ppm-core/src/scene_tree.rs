@@ -13,6 +13,8 @@
 //!
 //! [`BvhNode`]: crate::layout::BvhNode
 
+use crate::compile::EMPTY_BOX;
+use glam::Vec3;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2_from_tris;
@@ -36,6 +38,17 @@ pub struct ObjectSpan {
     /// The summed half areas of the boxes below its root: its share of the tree's cost
     /// ([`tree_cost`](crate::compile::tree_cost)), which a refit of it replaces.
     pub cost: f64,
+}
+
+impl ObjectSpan {
+    /// The object's box in `bvh` (`[min, max]`), its root's: exactly its vertices' box, as
+    /// obvhs boxes triangles; empty for an object without triangles.
+    pub fn bounds(&self, bvh: &Bvh2) -> [Vec3; 2] {
+        match bvh.nodes.get(self.root as usize) {
+            Some(root) => [root.aabb.min.into(), root.aabb.max.into()],
+            None => EMPTY_BOX,
+        }
+    }
 }
 
 /// A scene's tree and where each object lies in it.

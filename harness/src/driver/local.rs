@@ -273,7 +273,7 @@ pub fn local_move_request(
     (r2_floor, widest, direct_samples): (f32, f32, u32),
 ) -> LocalMove {
     let aabb = |pose: &CompiledScene, o: usize| {
-        let (lo, hi) = pose.object_box(o);
+        let [lo, hi] = pose.object_bounds[o];
         Aabb::new(lo, hi)
     };
     LocalMove {
