@@ -44,6 +44,7 @@ use ppm_core::passes::{
 use ppm_core::passes::{
     DynamicBackend, LocalMoveStats, LocalMoves, UpdateStats, check_gather_kind, crossed_mask_words,
 };
+use ppm_core::photon_path::KeptPass;
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 use trace::SceneData;
@@ -336,7 +337,7 @@ impl PhotonPass for CpuBackend {
             }
             None => {
                 // A pass that keeps its paths writes them into the last record's memory.
-                let spare = match PathRecord::wanted(params, source) {
+                let spare = match KeptPass::wanted(params, source) {
                     true => self
                         .paths
                         .take()

@@ -12,7 +12,7 @@ use glam::Vec3;
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{Photon, PhotonPassParams, photon_flags};
 use ppm_core::passes::PhotonStats;
-use ppm_core::photon_path::PathRecorder;
+use ppm_core::photon_path::{KeptPass, PathRecorder};
 use rayon::prelude::*;
 use std::sync::atomic::AtomicU32;
 
@@ -74,54 +74,14 @@ impl PathRecorder for BatchRecord {
     }
 }
 
-/// The random numbers and settings that decide a pass's paths and deposits, whatever its
-/// flags, gather and sign.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct PathKey {
-    seed: u32,
-    pass_index: u32,
-    photon_count: u32,
-    first_path: u32,
-    max_depth: u32,
-    first_hit: u32,
-    ray_epsilon: u32,
-}
-
-impl PathKey {
-    fn of(params: &PhotonPassParams) -> Self {
-        Self {
-            seed: params.seed,
-            pass_index: params.pass_index,
-            photon_count: params.photon_count,
-            first_path: params.first_path,
-            max_depth: params.max_depth,
-            first_hit: params.first_hit,
-            ray_epsilon: params.ray_epsilon.to_bits(),
-        }
-    }
-}
-
 /// One ordinary pass's paths in the pose it was traced in: their segments, and which segment
 /// each deposit ends (the deposits themselves stay in the photon map).
 pub struct PathRecord {
-    key: PathKey,
-    power_scale: f32,
+    pass: KeptPass,
     batches: Vec<BatchRecord>,
 }
 
 impl PathRecord {
-    /// Whether a pass of `params` from `source` keeps its paths: an ordinary pass that asks
-    /// and stores every deposit.
-    pub fn wanted(params: &PhotonPassParams, source: &PhotonSource<'_>) -> bool {
-        params.flags & photon_flags::KEEP_PATHS != 0
-            && params.flags
-                & (photon_flags::CHANGED_ONLY
-                    | photon_flags::CULL_UNCROSSED
-                    | photon_flags::ADD_TO_MAP)
-                == 0
-            && matches!(source, PhotonSource::Lights)
-    }
-
     /// The record of the pass `params` from its batches' records, in path order.
     pub fn new(params: &PhotonPassParams, mut batches: Vec<BatchRecord>) -> Self {
         let mut base = 0;
@@ -130,8 +90,7 @@ impl PathRecord {
             base += b.deposit_segments.len() as u32;
         }
         Self {
-            key: PathKey::of(params),
-            power_scale: params.power_scale,
+            pass: KeptPass::of(params),
             batches,
         }
     }
@@ -142,21 +101,9 @@ impl PathRecord {
     }
 
     /// The sign that turns the recorded deposits into those of a pass of `params` from
-    /// `source`, when that pass is a [`photon_flags::CHANGED_ONLY`] pass of the same paths
-    /// (same random numbers and settings, the power scale the same or negated) that culls
-    /// nothing; `None` when the record cannot answer it.
+    /// `source` ([`KeptPass::answers`]).
     pub fn answers(&self, params: &PhotonPassParams, source: &PhotonSource<'_>) -> Option<f32> {
-        let same_paths = matches!(source, PhotonSource::Lights) && PathKey::of(params) == self.key;
-        let changed_only = params.flags & photon_flags::CHANGED_ONLY != 0
-            && params.flags & photon_flags::CULL_UNCROSSED == 0;
-        if !(same_paths && changed_only) {
-            return None;
-        }
-        match params.power_scale {
-            s if s == self.power_scale => Some(1.0),
-            s if s == -self.power_scale => Some(-1.0),
-            _ => None,
-        }
+        self.pass.answers(params, source)
     }
 
     /// The deposits a [`photon_flags::CHANGED_ONLY`] pass of these paths stores in `scene`

@@ -6,7 +6,7 @@ use crate::trace::SceneData;
 use ppm_core::emission::PhotonSource;
 use ppm_core::layout::{Photon, PhotonPassParams, photon_flags};
 use ppm_core::passes::PhotonStats;
-use ppm_core::photon_path::{PathRecorder, trace_photon_path};
+use ppm_core::photon_path::{KeptPass, PathRecorder, trace_photon_path};
 use ppm_core::rng::StreamKey;
 use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner};
 use rayon::prelude::*;
@@ -30,7 +30,7 @@ pub struct Deposits {
     pub cancelled: Vec<u32>,
     /// Counters.
     pub stats: PhotonStats,
-    /// The paths' segments, where the pass keeps them ([`PathRecord::wanted`]).
+    /// The paths' segments, where the pass keeps them ([`KeptPass::wanted`]).
     pub paths: Option<PathRecord>,
 }
 
@@ -39,7 +39,7 @@ pub struct Deposits {
 /// source that keeps them (region passes count `M` in ordinary-photon units with them).
 /// `crossed` is the crossed-path mask that [`photon_flags::RECORD_CROSSED`] writes and
 /// [`photon_flags::CULL_UNCROSSED`] reads; it must hold the bits a recording pass writes. An
-/// ordinary pass that asks ([`PathRecord::wanted`]) also returns its paths' record, written
+/// ordinary pass that asks ([`KeptPass::wanted`]) also returns its paths' record, written
 /// into the memory of `spare` (an earlier record's batches) where there is some. A pose-B pass
 /// that pairs its deposits ([`photon_flags::PAIR_DEPOSITS`]) pairs them with `pose_a`, the
 /// pose-A pass's deposits in path order.
@@ -59,7 +59,7 @@ pub fn photon_pass_main(
     };
     let record_crossed = params.flags & photon_flags::RECORD_CROSSED != 0;
     let cull = params.flags & photon_flags::CULL_UNCROSSED != 0;
-    let keep_paths = PathRecord::wanted(params, source);
+    let keep_paths = KeptPass::wanted(params, source);
     let pairs = params.flags & photon_flags::PAIR_DEPOSITS != 0;
     let mut spare: Vec<Option<BatchRecord>> = spare.into_iter().map(Some).collect();
     spare.resize_with(chunks as usize, || None);

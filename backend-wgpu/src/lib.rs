@@ -16,6 +16,7 @@ mod buffers;
 mod camera_move;
 mod context;
 mod focus;
+mod kept_paths;
 mod kernel;
 pub mod layout;
 mod local_move;
@@ -33,10 +34,12 @@ pub mod shaders {
 
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::{GpuContext, OPTIONAL_FEATURES};
+pub use kept_paths::KEPT_SEGMENTS;
+use kept_paths::{KeptPaths, PathReplayKernel};
 use layout::UpdateParams;
 use passes::{
     CheckKernel, DirectLightKernel, EyeOutputs, EyePassKernel, GatherInputs, GatherKernel,
-    GatherStage, HitPointUpdateKernel, LandingPathsKernel, PhotonPassKernel, PhotonTargets,
+    GatherStage, HitPointUpdateKernel, LandingPathsKernel, Launch, PhotonPassKernel, PhotonTargets,
     ResolveKernel, RngVectorsKernel, Slots,
 };
 use photon_grid::{GridBuffers, PhotonGridKernels, PhotonMap, photon_bytes};
@@ -57,6 +60,7 @@ use ppm_core::passes::{
     GatherStats, LocalMoveStats, LocalMoves, PhotonPass, PhotonStats, RandomSource, ReadBack,
     Resolve, SceneUpload, UpdateStats, check_gather_kind, crossed_mask_words,
 };
+use ppm_core::photon_path::KeptPass;
 use ppm_core::update::gather::{GatherCase, SlotState, uses_pending};
 use scan::Scan;
 pub use specialise::Specialisation;
@@ -110,6 +114,8 @@ struct Kernels {
     local: Option<local_move::LocalMoveKernels>,
     /// Compiled at the first camera move.
     camera: Option<camera_move::CameraMoveKernel>,
+    /// Compiled at the first correction the kept paths answer.
+    replay: Option<PathReplayKernel>,
     scan: Scan,
 }
 
@@ -170,6 +176,15 @@ pub struct WgpuBackend {
     /// photon_pass.wgsl, [`PathDeposits`] at the path's bit of the mask), kept across scene
     /// updates like the mask.
     partners: wgpu::Buffer,
+    /// The paths a culling pass traces (`listed_paths` in photon_pass.wgsl), a word each;
+    /// grown to the largest such pass.
+    listed_paths: wgpu::Buffer,
+    /// The last photon pass's paths, where it kept them ([`kept_paths`]).
+    kept_paths: Option<KeptPaths>,
+    /// Their segments (kept_paths.wgsl), grown to the largest pass that kept them.
+    path_segments: wgpu::Buffer,
+    /// A kept pass's deposits, copied when a correction is answered from its paths.
+    kept_photons: wgpu::Buffer,
     /// Whether each submission's wall time goes to stderr (`PPM_WGPU_TIMING=1`).
     timing: bool,
     /// Each kernel's device time, where the device has timestamp queries (behind a lock
@@ -186,6 +201,8 @@ pub struct WgpuBackend {
     /// Whether a local move takes its pose-A pairs' light from the last move's pose B where
     /// that is its pose A ([`WgpuBackend::set_keep_pairs`]).
     keep_pairs: bool,
+    /// Whether ordinary passes keep their paths where asked ([`WgpuBackend::set_keep_paths`]).
+    keep_paths: bool,
     /// The camera move in progress, between its first pass and its last.
     camera_moving: Option<camera_move::CameraInProgress>,
     /// The old view's slots and boxes, copied when a camera move begins; allocated at the
@@ -216,11 +233,15 @@ impl WgpuBackend {
             landing: None,
             local: None,
             camera: None,
+            replay: None,
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
         let crossed = buffers::storage_init(&ctx, "crossed", &[u32::MAX; 4]);
         let partners = buffers::storage_init(&ctx, "partners", &[PathDeposits::default()]);
+        let listed_paths = buffers::storage_init(&ctx, "listed paths", &[0u32; 4]);
+        let path_segments = buffers::storage_init(&ctx, "path segments", &[0.0f32; 4]);
+        let kept_photons = buffers::storage_init(&ctx, "kept photons", &[Photon::default()]);
         let placeholder = buffers::storage_init(&ctx, "pending placeholder", &[0.0f32; 4]);
         let no_weights = buffers::storage_init(&ctx, "weights placeholder", &[0.0f32; 4]);
         let every_slot = focus::FocusList::every_slot(&ctx);
@@ -251,6 +272,10 @@ impl WgpuBackend {
             photon_buffer_limit: u64::MAX,
             crossed,
             partners,
+            listed_paths,
+            kept_paths: None,
+            path_segments,
+            kept_photons,
             timing: std::env::var("PPM_WGPU_TIMING").as_deref() == Ok("1"),
             timer,
             features: None,
@@ -258,6 +283,7 @@ impl WgpuBackend {
             moving: None,
             move_buffers: None,
             keep_pairs: true,
+            keep_paths: true,
             camera_moving: None,
             camera_copies: None,
         })
@@ -388,10 +414,21 @@ impl WgpuBackend {
         pass: &'static str,
         record: impl FnOnce(&mut Encoder<'_>) -> Result<(), BackendError>,
     ) -> Result<[u32; 4], BackendError> {
+        self.run_from(pass, COUNTERS_RESET, record)
+    }
+
+    /// [`WgpuBackend::run`] with the counters starting at `from` (a pass that counts on from
+    /// the submission before).
+    fn run_from(
+        &self,
+        pass: &'static str,
+        from: [u32; 4],
+        record: impl FnOnce(&mut Encoder<'_>) -> Result<(), BackendError>,
+    ) -> Result<[u32; 4], BackendError> {
         let start = std::time::Instant::now();
         self.ctx
             .queue
-            .write_buffer(&self.counters, 0, bytemuck::cast_slice(&COUNTERS_RESET));
+            .write_buffer(&self.counters, 0, bytemuck::cast_slice(&from));
         let mut timer = self.timer.as_ref().map(lock);
         if let Some(timer) = timer.as_deref_mut() {
             timer.begin(&self.ctx, pass)?;
@@ -592,6 +629,37 @@ impl WgpuBackend {
         Ok(())
     }
 
+    /// Lists the paths of a culling pass of ordinary photons that its mask says crossed a
+    /// box (photon_list_crossed_main), and returns how many; `None` for any other pass.
+    fn list_crossed(
+        &mut self,
+        params: &PhotonPassParams,
+        emission: u32,
+    ) -> Result<Option<u32>, BackendError> {
+        let culls = params.flags & photon_flags::CULL_UNCROSSED != 0;
+        if !culls || emission != emission_kind::ORDINARY {
+            return Ok(None);
+        }
+        self.fit_listed_paths(params)?;
+        let buffers = (&self.crossed, &self.listed_paths, &self.counters);
+        let counters = self.run("crossed-path list", |encoder| {
+            self.kernels
+                .photon
+                .record_list(&self.ctx, encoder, params, buffers);
+            Ok(())
+        })?;
+        Ok(Some(counters[COUNTER_ITEMS]))
+    }
+
+    /// Grows the list of paths to hold every path of a pass of `params`.
+    fn fit_listed_paths(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
+        let bytes = u64::from(params.photon_count.max(1)) * 4;
+        if self.listed_paths.size() < bytes {
+            self.listed_paths = storage_zeroed(&self.ctx, "listed paths", bytes)?;
+        }
+        Ok(())
+    }
+
     /// Grows the crossed-path mask, keeping its bits and setting the new ones, to hold those
     /// a pass that records it writes; refused, with the limit named, past the binding limit
     /// or 2^32 bits.
@@ -672,6 +740,11 @@ impl WgpuBackend {
                 | photon_flags::PAIR_DEPOSITS)
             != 0;
         let spec = self.specialisation(movers);
+        // Device times name a local correction's submissions apart from ordinary passes'.
+        let (trace_name, map_name) = match movers {
+            true => ("correction trace", "correction map"),
+            false => ("photon trace", "photon map"),
+        };
         let emitter = buffers::uniform(&self.ctx, "emitter", &emitter);
         let recorded = buffers::storage_init(&self.ctx, "recorded", source.paths());
         let mut stats = PhotonStats {
@@ -681,6 +754,25 @@ impl WgpuBackend {
         let mut map = None;
         let mut batches = 0;
         let mut start = 0;
+        // A culling pass of ordinary photons launches only the paths it traces, listed first;
+        // one split into batches culls by the mask.
+        let mut listed = match lit && batch == params.photon_count {
+            true => self.list_crossed(params, emission)?,
+            false => None,
+        };
+        // A pose-A correction of the pass whose paths were kept is answered from them; an
+        // ordinary pass that asks keeps its own where they fit.
+        let mut replay = self.answer_from_kept_paths(params, source)?;
+        let keeps = lit
+            && self.keep_paths
+            && KeptPass::wanted(params, source)
+            && batch == params.photon_count
+            && kept_paths::segment_bytes(params) <= limit;
+        if keeps && self.path_segments.size() < kept_paths::segment_bytes(params) {
+            let bytes = kept_paths::segment_bytes(params);
+            self.path_segments = storage_zeroed(&self.ctx, "path segments", bytes)?;
+        }
+        let mut kept = false;
         let (accumulated, _, r2_initial) = self.gather_state("photon")?;
         let radii = radii(&self.ctx, r2_initial, params.gather_r2_floor);
         // A pass added to the last one accumulates onto its sums; any other starts them over.
@@ -702,7 +794,18 @@ impl WgpuBackend {
                 first_path: params.first_path + start,
                 ..*params
             };
+            // The listed paths hold all the deposits the pass stores.
             let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
+            let (launch, kind) = match listed {
+                Some(count) => (
+                    PhotonPassParams {
+                        photon_count: count,
+                        ..launch
+                    },
+                    Launch::Listed,
+                ),
+                None => (launch, Launch::Range),
+            };
             let capacity = expected.min(max_deposits as f64) as u32;
             let words = if paired { 4 } else { u32::from(weighted) };
             self.deposit_buffers(capacity, words)?;
@@ -715,21 +818,36 @@ impl WgpuBackend {
             let scene = self.scene("photon")?;
             let deposits = self.deposits.as_ref().expect("allocated above");
             let weights = deposits.weights.as_ref().unwrap_or(&self.no_weights);
+            // A deposit's index must stay exact in its kept segment's f32 word.
+            let keep = keeps && deposits.capacity <= kept_paths::MOST_DEPOSITS;
+            let launch = PhotonPassParams {
+                flags: match keep {
+                    true => launch.flags,
+                    false => launch.flags & !photon_flags::KEEP_PATHS,
+                },
+                ..launch
+            };
+            // The kept segments take the place of the words an ordinary pass writes none of.
+            let words = if keep { &self.path_segments } else { weights };
             let targets = PhotonTargets {
                 ranks: &deposits.ranks,
                 photons: &deposits.photons,
                 counters: &self.counters,
                 emitter: &emitter,
                 recorded: &recorded,
-                weights,
+                weights: words,
                 crossed: &self.crossed,
                 partners: &self.partners,
+                listed_paths: &self.listed_paths,
             };
-            let traced = if lit {
-                self.run("photon trace", |encoder| {
+            let traced = if let Some(sign) = replay.filter(|_| lit) {
+                self.replay_pass(&launch, sign, spec, &targets)?
+            } else if lit {
+                self.run(trace_name, |encoder| {
+                    let launched = (emission, kind);
                     self.kernels
                         .photon
-                        .record(&self.ctx, encoder, &launch, scene, &targets, emission, spec);
+                        .record(&self.ctx, encoder, &launch, scene, &targets, launched, spec);
                     Ok(())
                 })?
             } else {
@@ -738,18 +856,22 @@ impl WgpuBackend {
             let deposited = traced[COUNTER_ITEMS];
             if deposited > deposits.capacity {
                 // The buffers were too small: grow them, or split the pass if even the
-                // binding limit cannot hold the batch; this trace is discarded.
-                self.deposits_per_path = f64::from(deposited) / f64::from(launch.photon_count);
+                // binding limit cannot hold the batch (then by the mask); this trace is
+                // discarded. The paths the batch covers, listed or not, made its deposits. (A
+                // replay stores a part of what its kept pass stored, which fitted: traced again
+                // if it did not.)
+                replay = None;
+                let paths = batch.min(params.photon_count - start);
+                self.deposits_per_path = f64::from(deposited) / f64::from(paths);
                 if u64::from(deposited) > max_deposits && launch.photon_count == 1 {
                     return Err(BackendError::Limit(format!(
                         "one photon path deposits {deposited} photons; the photon buffer holds {max_deposits}"
                     )));
                 }
                 if u64::from(deposited) > max_deposits {
-                    batch = ((u64::from(launch.photon_count) * max_deposits / u64::from(deposited))
-                        * 9
-                        / 10)
+                    batch = ((u64::from(paths) * max_deposits / u64::from(deposited)) * 9 / 10)
                         .max(1) as u32;
+                    listed = None;
                 }
                 continue;
             }
@@ -767,7 +889,7 @@ impl WgpuBackend {
                 pending,
                 radii: &radii,
             };
-            self.run("photon map", |encoder| {
+            self.run(map_name, |encoder| {
                 let built = self.kernels.grid.record(
                     &self.ctx,
                     encoder,
@@ -789,10 +911,17 @@ impl WgpuBackend {
                 map = Some(built);
                 Ok(())
             })?;
+            kept = keep;
             stats.deposited += u64::from(deposited);
             stats.rays += u64::from(traced[COUNTER_RAYS]);
             stats.culled += u64::from(traced[COUNTER_CULLED]);
-            start += launch.photon_count;
+            start += match listed {
+                Some(count) => {
+                    stats.culled += u64::from(params.photon_count - count);
+                    params.photon_count
+                }
+                None => launch.photon_count,
+            };
             batches += 1;
         }
         if params.photon_count > 0 {
@@ -804,7 +933,101 @@ impl WgpuBackend {
         self.unconsumed = same.filter(|_| !weighted);
         self.batches = batches;
         self.last_pass_paths = params.first_path + params.photon_count;
+        if kept && batches == 1 {
+            self.kept_paths = Some(KeptPaths {
+                pass: KeptPass::of(params),
+                pose: self.scene("photon")?.pose(),
+                deposits: stats.deposited as u32,
+            });
+        }
         Ok(stats)
+    }
+
+    /// Whether ordinary passes keep their paths where asked (the default), or a local move's
+    /// pose A traces its correction photons: the same slots bit for bit, which a test holds it
+    /// to.
+    pub fn set_keep_paths(&mut self, keep: bool) {
+        self.keep_paths = keep;
+    }
+
+    /// The sign of the kept deposits, where the last pass kept its paths and they answer the
+    /// pass `params` from `source` in the pose held; its deposits are then copied aside, as
+    /// the answer writes its own over them. Any pass forgets the kept paths.
+    fn answer_from_kept_paths(
+        &mut self,
+        params: &PhotonPassParams,
+        source: &PhotonSource<'_>,
+    ) -> Result<Option<f32>, BackendError> {
+        let pose = self.scene("photon")?.pose();
+        let Some(kept) = self.kept_paths.take() else {
+            return Ok(None);
+        };
+        let Some(sign) = kept.answers(params, source, pose) else {
+            return Ok(None);
+        };
+        // The paths too long to keep are listed to be traced again.
+        self.fit_listed_paths(params)?;
+        let Some(deposits) = &self.deposits else {
+            return Ok(None);
+        };
+        let bytes = photon_bytes(kept.deposits);
+        if self.kept_photons.size() < bytes {
+            self.kept_photons = storage_zeroed(&self.ctx, "kept photons", bytes)?;
+        }
+        self.run("kept deposits copy", |encoder| {
+            encoder.copy_buffer_to_buffer(&deposits.photons, 0, &self.kept_photons, 0, bytes);
+            Ok(())
+        })?;
+        if self.kernels.replay.is_none() {
+            let kernel = self
+                .ctx
+                .scoped("shader compilation", || PathReplayKernel::new(&self.ctx))?;
+            self.kernels.replay = Some(kernel);
+        }
+        Ok(Some(sign))
+    }
+
+    /// The pass `launch` answered from the kept paths, their deposits times `sign`
+    /// (path_replay.wgsl), and the paths too long to keep traced again, counting on; returns
+    /// the counters as a trace does.
+    fn replay_pass(
+        &self,
+        launch: &PhotonPassParams,
+        sign: f32,
+        spec: Specialisation,
+        targets: &PhotonTargets,
+    ) -> Result<[u32; 4], BackendError> {
+        let kernel = self
+            .kernels
+            .replay
+            .as_ref()
+            .expect("compiled with the answer");
+        let scene = self.scene("correction replay")?;
+        let replayed = PhotonPassParams {
+            power_scale: sign,
+            ..*launch
+        };
+        let counters = self.run("correction replay", |encoder| {
+            let kept = (&self.path_segments, &self.kept_photons);
+            kernel.record(&self.ctx, encoder, (&replayed, scene), kept, targets);
+            Ok(())
+        })?;
+        let longer = counters[COUNTER_LISTED];
+        if longer == 0 {
+            return Ok(counters);
+        }
+        let retrace = PhotonPassParams {
+            photon_count: longer,
+            ..*launch
+        };
+        let from = [0, counters[COUNTER_ITEMS], 0, u32::MAX];
+        self.run_from("correction trace", from, |encoder| {
+            let launched = (emission_kind::ORDINARY, Launch::Listed);
+            self.kernels
+                .photon
+                .record(&self.ctx, encoder, &retrace, scene, targets, launched, spec);
+            Ok(())
+        })
     }
 }
 

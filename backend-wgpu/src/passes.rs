@@ -9,7 +9,7 @@ use crate::shaders;
 use crate::specialise::{Specialisation, VARIANTS};
 use crate::timestamps::Encoder;
 use ppm_core::layout::{
-    DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams,
+    DirectLightParams, EyePassParams, GatherParams, PhotonPassParams, ResolveParams, emission_kind,
 };
 use std::sync::OnceLock;
 
@@ -173,10 +173,13 @@ impl DirectLightKernel {
 }
 
 /// photon_pass.wgsl: one trace appending its deposits, one pipeline per emission kind
-/// (ordinary, region, guided) and [`Specialisation`], each compiled when first needed.
+/// (ordinary, region, guided) and [`Specialisation`], each compiled when first needed; and
+/// for a culling pass of ordinary photons, the list of the paths it traces and their trace.
 pub struct PhotonPassKernel {
     module: wgpu::ShaderModule,
     trace: [[OnceLock<Kernel>; VARIANTS]; 3],
+    list: OnceLock<Kernel>,
+    listed: [OnceLock<Kernel>; VARIANTS],
 }
 
 /// The buffers a photon pass binds besides the scene.
@@ -197,6 +200,34 @@ pub struct PhotonTargets<'a> {
     pub crossed: &'a wgpu::Buffer,
     /// Pose A's first deposits per path (a local correction's pairing).
     pub partners: &'a wgpu::Buffer,
+    /// The paths a culling pass traces, a word each.
+    pub listed_paths: &'a wgpu::Buffer,
+}
+
+/// Which paths a photon trace launches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Launch {
+    /// Paths `first_path .. first_path + photon_count`, culled by the mask where the pass
+    /// says.
+    Range,
+    /// The first `photon_count` paths of the list (ordinary emission only).
+    Listed,
+}
+
+/// The bindings of photon_pass.wgsl, in order.
+const PHOTON_SLOTS: [Slot; 13] = [
+    Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite, ReadWrite,
+    Read, ReadWrite, ReadWrite,
+];
+
+/// [`PHOTON_SLOTS`] with those an entry point does not read left out (baseline WebGPU binds
+/// at most eight storage buffers per stage).
+fn photon_slots(unused: &[usize]) -> [Slot; 13] {
+    let mut slots = PHOTON_SLOTS;
+    for &i in unused {
+        slots[i] = Slot::Unused;
+    }
+    slots
 }
 
 impl PhotonPassKernel {
@@ -205,6 +236,8 @@ impl PhotonPassKernel {
         Self {
             module: shader_module(&ctx.device, "photon_pass", shaders::PHOTON_PASS),
             trace: Default::default(),
+            list: OnceLock::new(),
+            listed: Default::default(),
         }
     }
 
@@ -215,24 +248,36 @@ impl PhotonPassKernel {
 
     fn kernel(&self, ctx: &GpuContext, emission: u32, spec: Specialisation) -> &Kernel {
         self.trace[emission as usize][spec.index()].get_or_init(|| {
-            let slots = [
-                Uniform, Table, Uniform, ReadWrite, ReadWrite, ReadWrite, Uniform, Read, ReadWrite,
-                ReadWrite, Read, ReadWrite,
-            ];
             let mut constants = spec.constants();
             constants.push(("EMISSION", f64::from(emission)));
             Kernel::specialised(
                 &ctx.device,
                 &self.module,
                 "photon_trace_main",
-                &slots,
+                &photon_slots(&[12]),
                 WORKGROUP,
                 &constants,
             )
         })
     }
 
-    /// Records the trace of photons emitted as `emission` says (`ppm_core::layout::emission_kind`).
+    fn listed_kernel(&self, ctx: &GpuContext, spec: Specialisation) -> &Kernel {
+        self.listed[spec.index()].get_or_init(|| {
+            let mut constants = spec.constants();
+            constants.push(("EMISSION", f64::from(emission_kind::ORDINARY)));
+            Kernel::specialised(
+                &ctx.device,
+                &self.module,
+                "photon_trace_listed_main",
+                &photon_slots(&[7]),
+                WORKGROUP,
+                &constants,
+            )
+        })
+    }
+
+    /// Records the trace of photons emitted as `emission` says (`ppm_core::layout::emission_kind`),
+    /// of the paths `launch` says.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -241,10 +286,13 @@ impl PhotonPassKernel {
         params: &PhotonPassParams,
         scene: &SceneBuffers,
         targets: &PhotonTargets,
-        emission: u32,
+        (emission, launch): (u32, Launch),
         spec: Specialisation,
     ) {
-        let kernel = self.kernel(ctx, emission, spec);
+        let kernel = match launch {
+            Launch::Range => self.kernel(ctx, emission, spec),
+            Launch::Listed => self.listed_kernel(ctx, spec),
+        };
         let uniform_params = uniform(ctx, "photon params", params);
         let group = kernel.bind(
             &ctx.device,
@@ -261,6 +309,48 @@ impl PhotonPassKernel {
                 targets.crossed,
                 &scene.texels,
                 targets.partners,
+                targets.listed_paths,
+            ],
+        );
+        kernel.dispatch(encoder, &group, params.photon_count);
+    }
+
+    /// Records the listing of the paths of `params` whose bit is set in `crossed` into
+    /// `listed_paths`, counted in `counters`' items.
+    pub fn record_list(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut Encoder<'_>,
+        params: &PhotonPassParams,
+        (crossed, listed_paths, counters): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+    ) {
+        let kernel = self.list.get_or_init(|| {
+            Kernel::new(
+                &ctx.device,
+                &self.module,
+                "photon_list_crossed_main",
+                &photon_slots(&[1, 2, 3, 4, 6, 7, 8, 10, 11]),
+                WORKGROUP,
+            )
+        });
+        let uniform_params = uniform(ctx, "photon params", params);
+        let unused = &uniform_params;
+        let group = kernel.bind(
+            &ctx.device,
+            &[
+                &uniform_params,
+                unused,
+                unused,
+                unused,
+                unused,
+                counters,
+                unused,
+                unused,
+                unused,
+                crossed,
+                unused,
+                unused,
+                listed_paths,
             ],
         );
         kernel.dispatch(encoder, &group, params.photon_count);

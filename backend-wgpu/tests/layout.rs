@@ -17,6 +17,7 @@ const DIRECT_LIGHT_WGSL: &str = include_str!("../shaders/shared/direct_light.wgs
 const SCREEN_COVER_WGSL: &str = include_str!("../shaders/shared/screen_cover.wgsl");
 const CAMERA_MOVE_WGSL: &str = include_str!("../shaders/shared/camera_move.wgsl");
 const BVH_WGSL: &str = include_str!("../shaders/shared/bvh.wgsl");
+const KEPT_PATHS_WGSL: &str = include_str!("../shaders/shared/kept_paths.wgsl");
 
 /// Span, alignment and (member name, offset) list of the WGSL struct `name`, declared in
 /// layout.wgsl or in the assembled pass shaders.
@@ -477,6 +478,7 @@ fn shared_constants_agree() {
         ("PHOTON_CHANGED_ONLY", photon_flags::CHANGED_ONLY),
         ("PHOTON_RECORD_CROSSED", photon_flags::RECORD_CROSSED),
         ("PHOTON_CULL_UNCROSSED", photon_flags::CULL_UNCROSSED),
+        ("PHOTON_KEEP_PATHS", photon_flags::KEEP_PATHS),
         ("PHOTON_RECORD_DEPOSITS", photon_flags::RECORD_DEPOSITS),
         ("PHOTON_PAIR_DEPOSITS", photon_flags::PAIR_DEPOSITS),
         ("PAIRED_DEPOSITS", PAIRED_DEPOSITS as u32),
@@ -507,6 +509,7 @@ fn shared_constants_agree() {
         ("PAIR_LIGHT_CHOICE", direct_light::PAIR_LIGHT_CHOICE),
         ("RAYS_PER_SAMPLE", direct_light::RAYS_PER_SAMPLE),
         ("OBJECT_GROUPS", ppm_core::compile::OBJECT_GROUPS as u32),
+        ("KEPT_SEGMENTS", backend_wgpu::KEPT_SEGMENTS),
     ] {
         let sources = [
             LAYOUT_WGSL,
@@ -515,6 +518,7 @@ fn shared_constants_agree() {
             LOCAL_MOVE_WGSL,
             DIRECT_LIGHT_WGSL,
             CAMERA_MOVE_WGSL,
+            KEPT_PATHS_WGSL,
         ];
         let literal = wgsl_constant(&sources, name, "u32").trim_end_matches('u');
         let parsed = match literal.strip_prefix("0x") {

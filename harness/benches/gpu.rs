@@ -12,7 +12,7 @@
 //! `PPM_BENCH_WARMUP` iterations first (default 10: pipelines compile, buffers grow), then
 //! `PPM_BENCH_ITERATIONS` timed (default 20), of `PPM_BENCH_PHOTONS` photons each (default
 //! 1,000,000). Where the device measures its times, they are read back once an iteration,
-//! which the wall times include.
+//! which the wall times include; `PPM_BENCH_KERNELS=1` also prints them kernel by kernel.
 //! Figures only, no threshold. Without an adapter it says so and prints nothing else; a size
 //! the adapter cannot bind gets a line that says why. On lavapipe (wgpu on the CPU) it runs,
 //! slowly: shrink it, e.g. `PPM_BENCH_SIZES=64
@@ -153,6 +153,13 @@ fn device_line(now: &RenderReport, before: &RenderReport, n: f64) -> Option<Stri
         now.device_times.as_ref()?,
         before.device_times.as_ref().unwrap_or(&empty),
     );
+    if std::env::var("PPM_BENCH_KERNELS").as_deref() == Ok("1") {
+        for t in &ran {
+            let ms = 1e3 * t.seconds / n;
+            let line = format!("{} / {}: {ms:.3} ms", t.pass, t.kernel);
+            println!("    {line} ({} dispatches)", t.dispatches);
+        }
+    }
     let passes = per_pass(&ran);
     let total: f64 = passes.iter().map(|(_, s)| s).sum();
     let mut parts: Vec<String> = passes

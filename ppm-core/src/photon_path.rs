@@ -5,7 +5,7 @@
 //! [`PathRecorder`].
 
 use crate::bsdf;
-use crate::emission::{EMISSION_DIMS, Emission};
+use crate::emission::{EMISSION_DIMS, Emission, PhotonSource};
 use crate::geometry::{oct_encode, segment_meets_box};
 use crate::layout::{GpuBounds, Photon, PhotonPassParams, first_hit, photon_flags};
 use crate::rng::StreamKey;
@@ -17,6 +17,82 @@ use glam::Vec3;
 pub const DIM_BOUNCE: u32 = EMISSION_DIMS;
 /// See [`DIM_BOUNCE`].
 pub const DIMS_PER_BOUNCE: u32 = 3;
+
+/// The random numbers and settings that decide a pass's paths and deposits, whatever its
+/// flags, gather and sign.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PathKey {
+    seed: u32,
+    pass_index: u32,
+    photon_count: u32,
+    first_path: u32,
+    max_depth: u32,
+    first_hit: u32,
+    ray_epsilon: u32,
+}
+
+impl PathKey {
+    fn of(params: &PhotonPassParams) -> Self {
+        Self {
+            seed: params.seed,
+            pass_index: params.pass_index,
+            photon_count: params.photon_count,
+            first_path: params.first_path,
+            max_depth: params.max_depth,
+            first_hit: params.first_hit,
+            ray_epsilon: params.ray_epsilon.to_bits(),
+        }
+    }
+}
+
+/// An ordinary pass whose paths a backend kept ([`photon_flags::KEEP_PATHS`]), and what they
+/// answer: the rule every backend that keeps paths follows, whatever it keeps of them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeptPass {
+    key: PathKey,
+    power_scale: f32,
+}
+
+impl KeptPass {
+    /// Whether a pass of `params` from `source` keeps its paths: an ordinary pass that asks
+    /// and stores every deposit.
+    pub fn wanted(params: &PhotonPassParams, source: &PhotonSource<'_>) -> bool {
+        params.flags & photon_flags::KEEP_PATHS != 0
+            && params.flags
+                & (photon_flags::CHANGED_ONLY
+                    | photon_flags::CULL_UNCROSSED
+                    | photon_flags::ADD_TO_MAP)
+                == 0
+            && matches!(source, PhotonSource::Lights)
+    }
+
+    /// The pass `params`, whose paths were kept.
+    pub fn of(params: &PhotonPassParams) -> Self {
+        Self {
+            key: PathKey::of(params),
+            power_scale: params.power_scale,
+        }
+    }
+
+    /// The sign that turns this pass's deposits into those of a pass of `params` from
+    /// `source`, when that pass is a [`photon_flags::CHANGED_ONLY`] pass of the same paths
+    /// (same random numbers and settings, the power scale the same or negated) that culls
+    /// nothing; `None` when the kept paths cannot answer it. The caller checks that the pose
+    /// is the one they were traced in.
+    pub fn answers(&self, params: &PhotonPassParams, source: &PhotonSource<'_>) -> Option<f32> {
+        let same_paths = matches!(source, PhotonSource::Lights) && PathKey::of(params) == self.key;
+        let changed_only = params.flags & photon_flags::CHANGED_ONLY != 0
+            && params.flags & photon_flags::CULL_UNCROSSED == 0;
+        if !(same_paths && changed_only) {
+            return None;
+        }
+        match params.power_scale {
+            s if s == self.power_scale => Some(1.0),
+            s if s == -self.power_scale => Some(-1.0),
+            _ => None,
+        }
+    }
+}
 
 /// Follows what a path did, for a backend that keeps a pass's paths.
 pub trait PathRecorder {

@@ -105,10 +105,11 @@ fn wgpu_renders_the_same_buffers_within_baseline_limits() {
 }
 
 /// Along a drag, a wgpu local move takes its pose-A pairs' light from the last move's pose
-/// B, which is its pose A, rather than evaluating it again: the same slots bit for bit, on a
-/// scene whose direct light the drag blocks (cornell-box) and one whose paths bounce off
-/// mirrors (wedding-band).
-fn a_wgpu_drag_keeps_its_pairs_and_changes_nothing() {
+/// B, which is its pose A, rather than evaluating it again, and answers its pose-A correction
+/// photons from the paths the ordinary pass before it kept, rather than tracing them: the same
+/// slots bit for bit either way, on a scene whose direct light the drag blocks (cornell-box)
+/// and one whose paths bounce off mirrors (wedding-band).
+fn a_wgpu_drag_keeps_its_pairs_and_paths_and_changes_nothing() {
     for name in ["cornell-box", "wedding-band"] {
         let scene = scenes::builtin(name).unwrap().load().unwrap();
         let declared = scene.moves[0];
@@ -119,9 +120,10 @@ fn a_wgpu_drag_keeps_its_pairs_and_changes_nothing() {
         };
         let mut params = RenderParams::for_scene(&scene);
         (params.width, params.height, params.photons_per_pass) = (40, 32, 10_000);
-        let drag = |keep_pairs: bool| {
+        let drag = |keep_pairs: bool, keep_paths: bool| {
             let mut backend = backend_wgpu::WgpuBackend::new().unwrap();
             backend.set_keep_pairs(keep_pairs);
+            backend.set_keep_paths(keep_paths);
             let moves = MoveParams::default();
             let mut render = Renderer::start(&mut backend, scene.clone(), &params, &moves).unwrap();
             for _ in 0..4 {
@@ -139,13 +141,15 @@ fn a_wgpu_drag_keeps_its_pairs_and_changes_nothing() {
                 corrected,
             )
         };
-        let (kept, corrected) = drag(true);
-        let (evaluated, _) = drag(false);
+        let (kept, corrected) = drag(true, true);
+        let (evaluated, _) = drag(false, true);
+        let (traced, _) = drag(true, false);
         assert!(
             corrected > 0,
             "{name}: the drag corrected no slot's direct light"
         );
         assert!(kept == evaluated, "{name}: kept pairs changed the slots");
+        assert!(kept == traced, "{name}: kept paths changed the slots");
     }
 }
 
@@ -166,8 +170,8 @@ fn main() -> ExitCode {
         )
         .test_needing(
             &[tests::wgpu()],
-            "a_wgpu_drag_keeps_its_pairs_and_changes_nothing",
-            a_wgpu_drag_keeps_its_pairs_and_changes_nothing,
+            "a_wgpu_drag_keeps_its_pairs_and_paths_and_changes_nothing",
+            a_wgpu_drag_keeps_its_pairs_and_paths_and_changes_nothing,
         )
         .run()
 }

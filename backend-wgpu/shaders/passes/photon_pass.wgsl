@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures update
+// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures update crossed_mask kept_paths
 // Photon pass (docs/algorithm.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -16,6 +16,14 @@
 // deposits into `partners` at the path's bit, and pose B (PHOTON_PAIR_DEPOSITS) writes each
 // deposit's partner there (position and luminance, four words where region passes write a
 // weight; update.wgsl's pairing_partner).
+//
+// An ordinary pass that keeps its paths (PHOTON_KEEP_PATHS, kept_paths.wgsl) writes their
+// segments into `words`, for path_replay.wgsl to answer the next correction's pose A.
+//
+// Pose B does not launch its culled paths at all where it can: photon_list_crossed_main lists
+// the paths whose bit is set, and photon_trace_listed_main traces those alone. Culling inside
+// photon_trace_main saves little on a device that runs invocations in lockstep, as a group of
+// them waits for its one crossed path; the list keeps every invocation busy.
 
 @group(0) @binding(0) var<uniform> params: PhotonPassParams;
 @group(0) @binding(1) var scene_table: texture_storage_2d<rgba32uint, read>;
@@ -25,10 +33,14 @@
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(6) var<uniform> emitter: Emitter;
 @group(0) @binding(7) var<storage, read> recorded: array<RecordedPath>;
-@group(0) @binding(8) var<storage, read_write> weights: array<f32>;
+// Words a pass writes beside its deposits: a path weight per deposit (region passes), four
+// per deposit, its pose-A partner (a pairing pose B), or the kept paths' segments.
+@group(0) @binding(8) var<storage, read_write> words: array<f32>;
 @group(0) @binding(9) var<storage, read_write> crossed: array<atomic<u32>>;
 @group(0) @binding(10) var<storage, read> scene_texels: array<vec2<u32>>;
 @group(0) @binding(11) var<storage, read_write> partners: array<PathDeposits>;
+// The paths a culling pass traces, listed by photon_list_crossed_main.
+@group(0) @binding(12) var<storage, read_write> listed_paths: array<u32>;
 
 // The emission this pipeline traces (EMISSION_*): one pipeline per kind, so ordinary passes
 // carry no region or guided code.
@@ -82,32 +94,22 @@ struct Traced {
     stored: PathDeposits,
 }
 
-// Bit `bit` of the crossed-path mask; set past its end (and wherever no pass recorded it),
-// so a missing bit never culls.
-fn mask_bit(bit: u32) -> bool {
-    let word = bit / 32u;
-    return word >= arrayLength(&crossed) || (atomicLoad(&crossed[word]) & (1u << (bit % 32u))) != 0u;
+// Whether this pass writes its paths' segments (kept_paths.wgsl): an ordinary pass that asks
+// (the host clears the flag where it keeps nothing).
+fn keeps_paths() -> bool {
+    return EMISSION == EMISSION_ORDINARY && (params.flags & PHOTON_KEEP_PATHS) != 0u;
 }
 
-// Sets or clears bit `bit` of the crossed-path mask (the host sized it for the pass).
-fn set_mask_bit(bit: u32, value: bool) {
-    let word = bit / 32u;
-    let m = 1u << (bit % 32u);
-    if word >= arrayLength(&crossed) {
-        return;
-    }
-    if value {
-        atomicOr(&crossed[word], m);
-    } else {
-        atomicAnd(&crossed[word], ~m);
+// Writes word `at` of the kept segments, where the buffer holds it.
+fn keep_word(at: u32, value: f32) {
+    if at < arrayLength(&words) {
+        words[at] = value;
     }
 }
 
-// Traces path `path`, appending its deposits.
-fn trace_photon(path: u32) -> Traced {
-    let key = StreamKey(params.seed, pass_kind(), params.pass_index, path);
+// Traces path `path`, of random numbers `key`, from `emission`, appending its deposits.
+fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
     var stored: PathDeposits;
-    let emission = emit(key);
     if emission.weight <= 0.0 {
         return Traced(0u, false, stored);
     }
@@ -131,11 +133,19 @@ fn trace_photon(path: u32) -> Traced {
     let tests_movers = MOVERS && (params.flags & (PHOTON_CHANGED_ONLY | PHOTON_RECORD_CROSSED)) != 0u;
     var crossed_box = !tests_movers;
     let stores_all = (params.flags & PHOTON_CHANGED_ONLY) == 0u;
+    let keeps = keeps_paths();
     for (var bounce = 0u; bounce < params.max_depth; bounce++) {
         rays++;
         let hit = closest_hit(origin, dir, T_MISS);
         if MOVERS {
             crossed_box = crossed_box || near_mover(origin, dir, hit.t);
+        }
+        let kept = kept_segment(path - params.first_path, bounce);
+        if keeps && bounce < KEPT_SEGMENTS {
+            let segment = array<f32, 8>(origin.x, origin.y, origin.z, hit.t, dir.x, dir.y, dir.z, 0.0);
+            for (var w = 0u; w < 8u; w++) {
+                keep_word(kept + w, segment[w]);
+            }
         }
         if hit.triangle == 0xffffffffu {
             break;
@@ -153,16 +163,19 @@ fn trace_photon(path: u32) -> Traced {
             let deposit = power * bsdf_arrival(material, -dot(dir, facing));
             let normal_oct = oct_encode(facing);
             let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
+            if keeps && bounce < KEPT_SEGMENTS {
+                keep_word(kept + 7u, f32(slot + 1u));
+            }
             if slot < arrayLength(&photons) {
                 photons[slot] = Photon(position, path, deposit, normal_oct);
                 ranks[slot] = rank_base + bounce;
                 if EMISSION == EMISSION_REGION {
-                    weights[slot] = emission.weight;
+                    words[slot] = emission.weight;
                 }
                 if pairs {
                     let partner = pairing_partner(pose_a, nth, normal_oct);
                     for (var w = 0u; w < 4u; w++) {
-                        weights[4u * slot + w] = partner[w];
+                        words[4u * slot + w] = partner[w];
                     }
                 }
             }
@@ -199,6 +212,23 @@ fn trace_photon(path: u32) -> Traced {
     return Traced(rays, crossed_box, stored);
 }
 
+// What every traced path leaves besides its deposits: whether it crossed a mover's box where
+// the pass records it, pose A's first stored deposits where the pass records them, how many
+// segments it traced where it keeps them, and its rays.
+fn finish_path(path: u32, traced: Traced) {
+    let at = params.mask_offset + path;
+    if (params.flags & PHOTON_RECORD_CROSSED) != 0u {
+        set_mask_bit(at, traced.crossed);
+    }
+    if MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u && at < arrayLength(&partners) {
+        partners[at] = traced.stored;
+    }
+    if keeps_paths() {
+        keep_word(kept_length(path - params.first_path), f32(traced.rays));
+    }
+    atomicAdd(&counters[COUNTER_RAYS], traced.rays);
+}
+
 @compute @workgroup_size(64)
 fn photon_trace_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let local = item_index(gid, groups);
@@ -210,13 +240,34 @@ fn photon_trace_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
         atomicAdd(&counters[COUNTER_CULLED], 1u);
         return;
     }
-    let traced = trace_photon(path);
-    if (params.flags & PHOTON_RECORD_CROSSED) != 0u {
-        set_mask_bit(params.mask_offset + path, traced.crossed);
+    let key = StreamKey(params.seed, pass_kind(), params.pass_index, path);
+    finish_path(path, trace_photon(path, key, emit(key)));
+}
+
+// A culling pass's paths whose bit is set, appended to `listed_paths` (in no fixed order: the
+// grid orders deposits by rank, which follows the path), counted in COUNTER_ITEMS.
+@compute @workgroup_size(64)
+fn photon_list_crossed_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let local = item_index(gid, groups);
+    if local >= params.photon_count {
+        return;
     }
-    let at = params.mask_offset + path;
-    if MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u && at < arrayLength(&partners) {
-        partners[at] = traced.stored;
+    let path = params.first_path + local;
+    if mask_bit(params.mask_offset + path) {
+        listed_paths[atomicAdd(&counters[COUNTER_ITEMS], 1u)] = path;
     }
-    atomicAdd(&counters[COUNTER_RAYS], traced.rays);
+}
+
+// The first `photon_count` listed paths of an ordinary pass (a culling pose B's, or the paths
+// too long to keep that a pose A answered from kept paths traces again), as
+// photon_trace_main traces them. Ordinary emission only, so the guided paths stay unbound.
+@compute @workgroup_size(64)
+fn photon_trace_listed_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let local = item_index(gid, groups);
+    if local >= params.photon_count {
+        return;
+    }
+    let path = listed_paths[local];
+    let key = StreamKey(params.seed, PASS_PHOTON, params.pass_index, path);
+    finish_path(path, trace_photon(path, key, ordinary_emission(key)));
 }

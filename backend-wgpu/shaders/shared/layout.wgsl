@@ -180,6 +180,7 @@ struct PhotonPassParams {
 const PHOTON_CHANGED_ONLY: u32 = 1u;
 const PHOTON_RECORD_CROSSED: u32 = 2u;
 const PHOTON_CULL_UNCROSSED: u32 = 4u;
+const PHOTON_KEEP_PATHS: u32 = 8u;
 const PHOTON_RECORD_DEPOSITS: u32 = 32u;
 const PHOTON_PAIR_DEPOSITS: u32 = 64u;
 
