@@ -740,10 +740,13 @@ impl WgpuBackend {
                 | photon_flags::PAIR_DEPOSITS)
             != 0;
         let spec = self.specialisation(movers);
-        // Device times name a local correction's submissions apart from ordinary passes'.
-        let (trace_name, map_name) = match movers {
-            true => ("correction trace", "correction map"),
-            false => ("photon trace", "photon map"),
+        // Device times name a local correction's submissions apart from ordinary passes', and
+        // its pose B (added to pose A's photons) apart from its pose A.
+        let adds = params.flags & photon_flags::ADD_TO_MAP != 0;
+        let (trace_name, map_name) = match (movers, adds) {
+            (false, _) => ("photon trace", "photon map"),
+            (true, false) => ("correction trace, pose A", "correction map, pose A"),
+            (true, true) => ("correction trace, pose B", "correction map, pose B"),
         };
         let emitter = buffers::uniform(&self.ctx, "emitter", &emitter);
         let recorded = buffers::storage_init(&self.ctx, "recorded", source.paths());
@@ -807,8 +810,8 @@ impl WgpuBackend {
                 None => (launch, Launch::Range),
             };
             let capacity = expected.min(max_deposits as f64) as u32;
-            let words = if paired { 4 } else { u32::from(weighted) };
-            self.deposit_buffers(capacity, words)?;
+            let words_each = if paired { 4 } else { u32::from(weighted) };
+            self.deposit_buffers(capacity, words_each)?;
             self.grid_buffers = Some(GridBuffers::fit(
                 &self.ctx,
                 self.grid_buffers.take(),
@@ -828,14 +831,14 @@ impl WgpuBackend {
                 ..launch
             };
             // The kept segments take the place of the words an ordinary pass writes none of.
-            let words = if keep { &self.path_segments } else { weights };
+            let written = if keep { &self.path_segments } else { weights };
             let targets = PhotonTargets {
                 ranks: &deposits.ranks,
                 photons: &deposits.photons,
                 counters: &self.counters,
                 emitter: &emitter,
                 recorded: &recorded,
-                weights: words,
+                weights: written,
                 crossed: &self.crossed,
                 partners: &self.partners,
                 listed_paths: &self.listed_paths,
@@ -897,7 +900,7 @@ impl WgpuBackend {
                     grid_buffers,
                     (
                         deposits.photons.clone(),
-                        weights.clone(),
+                        (weights.clone(), words_each),
                         &deposits.ranks,
                         deposited,
                     ),
@@ -1002,12 +1005,12 @@ impl WgpuBackend {
             .replay
             .as_ref()
             .expect("compiled with the answer");
-        let scene = self.scene("correction replay")?;
+        let scene = self.scene("correction replay, pose A")?;
         let replayed = PhotonPassParams {
             power_scale: sign,
             ..*launch
         };
-        let counters = self.run("correction replay", |encoder| {
+        let counters = self.run("correction replay, pose A", |encoder| {
             let kept = (&self.path_segments, &self.kept_photons);
             kernel.record(&self.ctx, encoder, (&replayed, scene), kept, targets);
             Ok(())
@@ -1021,7 +1024,7 @@ impl WgpuBackend {
             ..*launch
         };
         let from = [0, counters[COUNTER_ITEMS], 0, u32::MAX];
-        self.run_from("correction trace", from, |encoder| {
+        self.run_from("correction trace, pose A", from, |encoder| {
             let launched = (emission_kind::ORDINARY, Launch::Listed);
             self.kernels
                 .photon

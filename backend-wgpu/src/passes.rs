@@ -13,7 +13,7 @@ use ppm_core::layout::{
 };
 use std::sync::OnceLock;
 
-use Slot::{Read, ReadWrite, Table, Uniform, WordTable};
+use Slot::{Read, ReadWrite, Table, Uniform, Unused, WordTable};
 
 /// The hit-point buffer and the pass counters that per-slot passes bind.
 pub struct Slots<'a> {
@@ -399,8 +399,9 @@ impl GatherKernel {
     /// Compiles the shader.
     pub fn new(ctx: &GpuContext) -> Self {
         let module = shader_module(&ctx.device, "gather_pass", shaders::GATHER_PASS);
+        // Binding 5 is free: the gather reads each deposit's words in bucket order.
         let slots = [
-            Uniform, Table, Table, Read, WordTable, Read, ReadWrite, ReadWrite, ReadWrite, Read,
+            Uniform, Table, Table, Read, WordTable, Unused, ReadWrite, ReadWrite, ReadWrite, Table,
             ReadWrite, Uniform,
         ];
         Self {
@@ -446,11 +447,11 @@ impl GatherKernel {
                 &map.sorted_table,
                 &map.grid,
                 &map.bucket_table,
-                &map.order,
+                &params,
                 slots.hit_points,
                 inputs.accumulated,
                 slots.counters,
-                &map.weights,
+                &map.words_table,
                 inputs.pending,
                 inputs.radii,
             ],

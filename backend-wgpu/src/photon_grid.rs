@@ -33,8 +33,10 @@ pub struct PhotonMap {
     pub bucket_table: Table,
     /// Each deposit's rank in path order.
     pub ranks: wgpu::Buffer,
-    /// Path weight of each deposit.
-    pub weights: wgpu::Buffer,
+    /// The words beside each deposit (a path weight, or a pose-A partner's four) in bucket
+    /// order, as `sorted_table` holds the photons; what it holds where the pass wrote none
+    /// is never read.
+    pub words_table: Table,
 }
 
 /// Texels of one [`GridPhoton`] in a table.
@@ -51,6 +53,8 @@ pub struct PhotonGridKernels {
     scatter: Kernel,
     sort: Kernel,
     copy: Kernel,
+    /// The copy of the deposits' words, one word (path weights) or four (partners) each.
+    copy_words: [Kernel; 2],
 }
 
 impl PhotonGridKernels {
@@ -59,19 +63,33 @@ impl PhotonGridKernels {
         use Slot::{Read, ReadWrite, Uniform};
         let module = shader_module(&ctx.device, "photon_grid", shaders::PHOTON_GRID);
         // The shader's bindings: params, photons, hit_points, histogram, grid, bucket_counts,
-        // bucket_cursor, order, keys, sorted, ranks. Each step binds those it reads (eleven
-        // at once would pass baseline WebGPU's eight storage buffers per stage).
+        // bucket_cursor, order, keys, sorted, ranks, words, sorted_words. Each step binds
+        // those it reads (all at once would pass baseline WebGPU's eight storage buffers per
+        // stage).
         let slots = [
             Uniform, Read, Read, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
-            ReadWrite, Read,
+            ReadWrite, Read, Read, ReadWrite,
         ];
-        let kernel = |entry, workgroup, used: &[usize]| {
+        let layout = |used: &[usize]| {
             let mut own = slots.map(|_| Slot::Unused);
             for &i in used {
                 own[i] = slots[i];
             }
-            Kernel::new(&ctx.device, &module, entry, &own, workgroup)
+            own
         };
+        let kernel = |entry, workgroup, used: &[usize]| {
+            Kernel::new(&ctx.device, &module, entry, &layout(used), workgroup)
+        };
+        let copy_words = [1, 4].map(|words: u32| {
+            Kernel::specialised(
+                &ctx.device,
+                &module,
+                "grid_copy_words_main",
+                &layout(&[0, 7, 11, 12]),
+                WORKGROUP,
+                &[("WORDS", f64::from(words))],
+            )
+        });
         Self {
             histogram: kernel("grid_histogram_main", WORKGROUP, &[0, 2, 3]),
             params: kernel("grid_params_main", 1, &[0, 3, 4]),
@@ -79,12 +97,14 @@ impl PhotonGridKernels {
             scatter: kernel("grid_scatter_main", WORKGROUP, &[0, 6, 7, 8]),
             sort: kernel("grid_sort_main", WORKGROUP, &[0, 5, 7, 8, 10]),
             copy: kernel("grid_copy_main", WORKGROUP, &[0, 1, 7, 8, 9]),
+            copy_words,
         }
     }
 
     /// Records the grid build over `photons` (`count` deposits, ranked in path order by
-    /// `ranks`) into `buffers`, its cells sized to the gather radii of the hit points' visible
-    /// points (at least `sqrt(r2_floor)`); returns the map whose buffers the commands fill.
+    /// `ranks`, with `words` beside each in `weights`: 0, 1 or 4) into `buffers`, its cells
+    /// sized to the gather radii of the hit points' visible points (at least
+    /// `sqrt(r2_floor)`); returns the map whose buffers the commands fill.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -92,7 +112,12 @@ impl PhotonGridKernels {
         encoder: &mut Encoder<'_>,
         scan: &Scan,
         buffers: &GridBuffers,
-        (photons, weights, ranks, count): (wgpu::Buffer, wgpu::Buffer, &wgpu::Buffer, u32),
+        (photons, (weights, words), ranks, count): (
+            wgpu::Buffer,
+            (wgpu::Buffer, u32),
+            &wgpu::Buffer,
+            u32,
+        ),
         (hit_points, slots): (&wgpu::Buffer, u32),
         r2_floor: f32,
     ) -> Result<PhotonMap, BackendError> {
@@ -110,7 +135,7 @@ impl PhotonGridKernels {
                 r2_floor,
             },
         );
-        let bindings: [&dyn Bindable; 11] = [
+        let bindings: [&dyn Bindable; 13] = [
             &params,
             &photons,
             hit_points,
@@ -122,6 +147,8 @@ impl PhotonGridKernels {
             &buffers.keys,
             &buffers.sorted,
             ranks,
+            &weights,
+            &buffers.sorted_words,
         ];
         let step = |kernel: &Kernel, encoder: &mut Encoder<'_>, items: u32| {
             kernel.dispatch(encoder, &kernel.bind(&ctx.device, &bindings), items);
@@ -141,6 +168,13 @@ impl PhotonGridKernels {
         step(&self.scatter, encoder, count);
         step(&self.sort, encoder, count);
         step(&self.copy, encoder, count);
+        if words == 1 || words == 4 {
+            step(&self.copy_words[usize::from(words == 4)], encoder, count);
+            let texels = (count * words).div_ceil(4);
+            buffers
+                .words_table
+                .record_copy(encoder, &buffers.sorted_words, texels);
+        }
         buffers
             .sorted_table
             .record_copy(encoder, &buffers.sorted, count * PHOTON_TEXELS);
@@ -149,7 +183,7 @@ impl PhotonGridKernels {
             .record_copy(encoder, &buffers.bucket_start, bucket_count + 1);
         Ok(PhotonMap {
             photons,
-            weights,
+            words_table: buffers.words_table.clone(),
             count,
             grid: buffers.grid.clone(),
             bucket_start: buffers.bucket_start.clone(),
@@ -172,6 +206,9 @@ pub struct GridBuffers {
     order: wgpu::Buffer,
     keys: wgpu::Buffer,
     sorted: wgpu::Buffer,
+    /// The deposits' words in bucket order, four a photon at most, and as a table.
+    sorted_words: wgpu::Buffer,
+    words_table: Table,
     sorted_table: Table,
     bucket_table: Table,
     /// Photons they hold at most.
@@ -202,6 +239,8 @@ impl GridBuffers {
                 "sorted photons",
                 per_photon * size_of::<GridPhoton>() as u64,
             )?,
+            sorted_words: storage_zeroed(ctx, "sorted words", per_photon * 16)?,
+            words_table: Table::new(ctx, "sorted words table", Texel::Words4, count.max(1))?,
             sorted_table: Table::new(
                 ctx,
                 "sorted photon table",

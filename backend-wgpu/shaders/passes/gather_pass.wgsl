@@ -13,14 +13,14 @@
 @group(0) @binding(2) var sorted_table: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(3) var<storage, read> grid: GridParams;
 @group(0) @binding(4) var bucket_table: texture_storage_2d<r32uint, read>;
-@group(0) @binding(5) var<storage, read> order: array<u32>;
 @group(0) @binding(6) var<storage, read_write> hit_points: array<HitPoint>;
 // Per hit point, two rows: (power, count) and (weight sum, squared power luminance, 0, 0).
 @group(0) @binding(7) var<storage, read_write> accumulated: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
-// Per deposit: its path weight (region passes), or four words, its pose-A partner's position
-// and luminance (a pairing pose B; zero for none).
-@group(0) @binding(9) var<storage, read> weights: array<f32>;
+// The words beside the deposits in bucket order (photon_grid.wgsl's sorted_words), as a table
+// of four-word texels: a path weight each (region passes), or a texel each, the pose-A
+// partner's position and luminance (a pairing pose B; zero for none).
+@group(0) @binding(9) var words_table: texture_storage_2d<rgba32uint, read>;
 // Per hit point: deferred region flux (times BRDF and scale) and signed count.
 @group(0) @binding(10) var<storage, read_write> pending: array<vec4<f32>>;
 // x: the initial squared radius; y: the photon pass's gather_r2_floor (accumulate only).
@@ -58,7 +58,7 @@ fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: 
     if dot(d, d) < r2 && oct_faces(p.normal_oct, hp.normal) {
         (*found).m++;
         if WEIGHTED {
-            (*found).weight += weights[order[k]];
+            (*found).weight += bitcast<vec4<f32>>(textureLoad(words_table, table_texel(k / 4u)))[k % 4u];
         }
         (*found).flux += p.power;
         let own = luminance(p.power);
@@ -66,10 +66,10 @@ fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: 
         var cancels = false;
         var partner = 0.0;
         if PAIRED {
-            let i = 4u * order[k];
-            let at = vec3<f32>(weights[i], weights[i + 1u], weights[i + 2u]);
+            let words = bitcast<vec4<f32>>(textureLoad(words_table, table_texel(k)));
+            let at = words.xyz;
             let a = at - hp.position;
-            partner = weights[i + 3u];
+            partner = words.w;
             both = dot(a, a) < r2;
             cancels = all(at == p.position) && partner == -own;
         }

@@ -3,7 +3,7 @@
 // histogram of the visible points' squared radii), same buckets, and the photons copied into
 // bucket order with ascending rank (the CPU's path order) within each bucket, so gathers sum
 // in the CPU's order. Steps, one dispatch each: histogram, params, count, (scan), scatter,
-// sort, copy.
+// sort, copy (and the deposits' words, where the pass wrote some).
 
 struct GridBuildParams {
     photon_count: u32,
@@ -24,6 +24,13 @@ struct GridBuildParams {
 @group(0) @binding(9) var<storage, read_write> sorted: array<GridPhoton>;
 // Each deposit's rank in path order (photon_pass.wgsl).
 @group(0) @binding(10) var<storage, read> ranks: array<u32>;
+// The words a pass wrote beside each deposit (a path weight, or a pose-A partner's four), and
+// the same in bucket order, so that a gather reads them where it reads the photons.
+@group(0) @binding(11) var<storage, read> words: array<f32>;
+@group(0) @binding(12) var<storage, read_write> sorted_words: array<f32>;
+
+// Words per deposit of grid_copy_words_main.
+override WORDS: u32 = 1u;
 
 // Radii cluster in a few bins: each workgroup counts a strided share of the hit points in
 // workgroup memory, then adds its non-zero bins to the global histogram, so few atomics
@@ -138,4 +145,16 @@ fn grid_copy_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     let i = order[k];
     let p = photons[i];
     sorted[k] = GridPhoton(p.position, keys[i], p.power, p.normal_oct);
+}
+
+@compute @workgroup_size(64)
+fn grid_copy_words_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = item_index(gid, groups);
+    if k >= params.photon_count {
+        return;
+    }
+    let i = order[k];
+    for (var w = 0u; w < WORDS; w++) {
+        sorted_words[WORDS * k + w] = words[WORDS * i + w];
+    }
 }
