@@ -18,7 +18,7 @@ pub struct ScanParams {
     pub _pad2: u32,
 }
 
-/// photon_grid.wgsl's parameters. 16 bytes.
+/// photon_grid.wgsl's parameters. 32 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GridBuildParams {
@@ -30,6 +30,16 @@ pub struct GridBuildParams {
     pub hit_point_count: u32,
     /// The pass's `gather_r2_floor`: the radii the cells are sized to are at least this.
     pub r2_floor: f32,
+    /// Deposits of an earlier pass that this one joins (a local correction's pose A, held
+    /// for its pose B), first in the buffer: in each bucket they come before the pass's own,
+    /// as in the CPU's map, whatever their ranks.
+    pub held: u32,
+    /// Padding.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
 
 /// hit_point_update.wgsl's parameters. 16 bytes.

@@ -22,6 +22,7 @@ pub mod layout;
 mod local_move;
 mod passes;
 mod photon_grid;
+mod photon_pass;
 mod scan;
 mod specialise;
 pub mod table;
@@ -54,7 +55,7 @@ use ppm_core::layout::{
     ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, PathDeposits, Photon,
     PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags, photon_flags,
 };
-use ppm_core::local_move::LocalMove;
+use ppm_core::local_move::{CorrectionPhotons, LocalMove, Pose};
 use ppm_core::passes::{
     Backend, BackendError, DirectLight, DirectStats, DynamicBackend, EyePass, EyeStats, GatherPass,
     GatherStats, LocalMoveStats, LocalMoves, PhotonPass, PhotonStats, RandomSource, ReadBack,
@@ -179,6 +180,10 @@ pub struct WgpuBackend {
     /// The paths a culling pass traces (`listed_paths` in photon_pass.wgsl), a word each;
     /// grown to the largest such pass.
     listed_paths: wgpu::Buffer,
+    /// A correction's pose-A deposits, held for its pose B's to join in one map.
+    held: Option<photon_pass::HeldDeposits>,
+    /// Whether the next photon pass is a correction's pose A, which holds its deposits.
+    hold_next: bool,
     /// The last photon pass's paths, where it kept them ([`kept_paths`]).
     kept_paths: Option<KeptPaths>,
     /// Their segments (kept_paths.wgsl), grown to the largest pass that kept them.
@@ -273,6 +278,8 @@ impl WgpuBackend {
             crossed,
             partners,
             listed_paths,
+            held: None,
+            hold_next: false,
             kept_paths: None,
             path_segments,
             kept_photons,
@@ -609,441 +616,6 @@ impl DirectLight for WgpuBackend {
     }
 }
 
-impl WgpuBackend {
-    /// Deposit buffers holding at least `capacity` records (reused when large enough), and
-    /// `words` per deposit beside them (a path weight, or a pose-A partner's four).
-    fn deposit_buffers(&mut self, capacity: u32, words: u32) -> Result<(), BackendError> {
-        if self.deposits.as_ref().is_none_or(|d| d.capacity < capacity) {
-            self.deposits = Some(DepositBuffers {
-                photons: storage_zeroed(&self.ctx, "photons", photon_bytes(capacity))?,
-                ranks: storage_zeroed(&self.ctx, "ranks", u64::from(capacity.max(1)) * 4)?,
-                weights: None,
-                capacity,
-            });
-        }
-        let deposits = self.deposits.as_mut().expect("allocated above");
-        let bytes = u64::from(deposits.capacity.max(1)) * u64::from(words) * 4;
-        if bytes > deposits.weights.as_ref().map_or(0, wgpu::Buffer::size) {
-            deposits.weights = Some(storage_zeroed(&self.ctx, "weights", bytes)?);
-        }
-        Ok(())
-    }
-
-    /// Lists the paths of a culling pass of ordinary photons that its mask says crossed a
-    /// box (photon_list_crossed_main), and returns how many; `None` for any other pass.
-    fn list_crossed(
-        &mut self,
-        params: &PhotonPassParams,
-        emission: u32,
-    ) -> Result<Option<u32>, BackendError> {
-        let culls = params.flags & photon_flags::CULL_UNCROSSED != 0;
-        if !culls || emission != emission_kind::ORDINARY {
-            return Ok(None);
-        }
-        self.fit_listed_paths(params)?;
-        let buffers = (&self.crossed, &self.listed_paths, &self.counters);
-        let counters = self.run("crossed-path list", |encoder| {
-            self.kernels
-                .photon
-                .record_list(&self.ctx, encoder, params, buffers);
-            Ok(())
-        })?;
-        Ok(Some(counters[COUNTER_ITEMS]))
-    }
-
-    /// Grows the list of paths to hold every path of a pass of `params`.
-    fn fit_listed_paths(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
-        let bytes = u64::from(params.photon_count.max(1)) * 4;
-        if self.listed_paths.size() < bytes {
-            self.listed_paths = storage_zeroed(&self.ctx, "listed paths", bytes)?;
-        }
-        Ok(())
-    }
-
-    /// Grows the crossed-path mask, keeping its bits and setting the new ones, to hold those
-    /// a pass that records it writes; refused, with the limit named, past the binding limit
-    /// or 2^32 bits.
-    fn fit_crossed_mask(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
-        if params.flags & photon_flags::RECORD_CROSSED == 0 {
-            return Ok(());
-        }
-        let bytes = crossed_mask_words(params)? * 4;
-        if self.crossed.size() >= bytes {
-            return Ok(());
-        }
-        let grown = storage_zeroed(&self.ctx, "crossed", bytes)?;
-        // Bits no pass recorded are set: a pass that culls without its record traces all.
-        let fresh = vec![0xff_u8; (grown.size() - self.crossed.size()) as usize];
-        self.ctx
-            .queue
-            .write_buffer(&grown, self.crossed.size(), &fresh);
-        let old = &self.crossed;
-        self.run("crossed-path mask growth", |encoder| {
-            encoder.copy_buffer_to_buffer(old, 0, &grown, 0, old.size());
-            Ok(())
-        })?;
-        self.crossed = grown;
-        Ok(())
-    }
-
-    /// Grows the record of pose A's deposits to hold those of the paths a pairing pass
-    /// records ([`photon_flags::RECORD_DEPOSITS`]), zeroed (a zero record pairs nothing).
-    fn fit_partners(&mut self, params: &PhotonPassParams) -> Result<(), BackendError> {
-        if params.flags & photon_flags::RECORD_DEPOSITS == 0 {
-            return Ok(());
-        }
-        let bytes = crossed_mask_words(params)? * 32 * size_of::<PathDeposits>() as u64;
-        if bytes > self.ctx.binding_limit() {
-            return Err(BackendError::Limit(format!(
-                "pose A's paired deposits: {bytes} bytes exceed the device's binding limit of {}",
-                self.ctx.binding_limit()
-            )));
-        }
-        if self.partners.size() < bytes {
-            self.partners = storage_zeroed(&self.ctx, "partners", bytes)?;
-        }
-        Ok(())
-    }
-
-    /// Traces a pass whose photons start as `source` says, in as few batches as the device's
-    /// binding limit allows (one, unless the deposits would not fit one buffer), and
-    /// accumulates each batch into the accumulators of the slots that gather the kind the
-    /// pass names, so the gather that follows makes one update for the whole pass.
-    fn trace_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        source: &PhotonSource<'_>,
-    ) -> Result<PhotonStats, BackendError> {
-        self.fit_crossed_mask(params)?;
-        self.fit_partners(params)?;
-        let limit = self.ctx.binding_limit().min(self.photon_buffer_limit);
-        let max_deposits = (limit / size_of::<Photon>() as u64).clamp(1, u64::from(u32::MAX));
-        // A deposit's rank, (path - first_path) * max_depth + bounce, must fit 32 bits.
-        let rank_paths = u32::MAX / params.max_depth.max(1);
-        let mut batch = params.photon_count.clamp(1, rank_paths);
-        // No light, no photon: the pass emits its count and its map stays empty.
-        let lit = self.scene("photon")?.light_count > 0;
-        let accumulate = GatherParams {
-            kind: params.gather_kind,
-            ..GatherParams::default()
-        };
-        let emitter = source.emitter();
-        let emission = emitter.kind;
-        let weighted = source.keeps_weights();
-        // A pairing pose B writes each deposit's partner, four words, where weights would go.
-        let paired = params.flags & photon_flags::PAIR_DEPOSITS != 0;
-        // Only local mode's correction passes test the movers' boxes (and pair deposits).
-        let movers = params.flags
-            & (photon_flags::CHANGED_ONLY
-                | photon_flags::RECORD_CROSSED
-                | photon_flags::RECORD_DEPOSITS
-                | photon_flags::PAIR_DEPOSITS)
-            != 0;
-        let spec = self.specialisation(movers);
-        // Device times name a local correction's submissions apart from ordinary passes', and
-        // its pose B (added to pose A's photons) apart from its pose A.
-        let adds = params.flags & photon_flags::ADD_TO_MAP != 0;
-        let (trace_name, map_name) = match (movers, adds) {
-            (false, _) => ("photon trace", "photon map"),
-            (true, false) => ("correction trace, pose A", "correction map, pose A"),
-            (true, true) => ("correction trace, pose B", "correction map, pose B"),
-        };
-        let emitter = buffers::uniform(&self.ctx, "emitter", &emitter);
-        let recorded = buffers::storage_init(&self.ctx, "recorded", source.paths());
-        let mut stats = PhotonStats {
-            emitted: u64::from(params.photon_count),
-            ..Default::default()
-        };
-        let mut map = None;
-        let mut batches = 0;
-        let mut start = 0;
-        // A culling pass of ordinary photons launches only the paths it traces, listed first;
-        // one split into batches culls by the mask.
-        let mut listed = match lit && batch == params.photon_count {
-            true => self.list_crossed(params, emission)?,
-            false => None,
-        };
-        // A pose-A correction of the pass whose paths were kept is answered from them; an
-        // ordinary pass that asks keeps its own where they fit.
-        let mut replay = self.answer_from_kept_paths(params, source)?;
-        let keeps = lit
-            && self.keep_paths
-            && KeptPass::wanted(params, source)
-            && batch == params.photon_count
-            && kept_paths::segment_bytes(params) <= limit;
-        if keeps && self.path_segments.size() < kept_paths::segment_bytes(params) {
-            let bytes = kept_paths::segment_bytes(params);
-            self.path_segments = storage_zeroed(&self.ctx, "path segments", bytes)?;
-        }
-        let mut kept = false;
-        let (accumulated, _, r2_initial) = self.gather_state("photon")?;
-        let radii = radii(&self.ctx, r2_initial, params.gather_r2_floor);
-        // A pass added to the last one accumulates onto its sums; any other starts them over.
-        let same = Some((params.gather_kind, params.gather_r2_floor.to_bits()));
-        if params.flags & photon_flags::ADD_TO_MAP == 0 {
-            self.run("photon accumulator reset", |encoder| {
-                encoder.clear_buffer(accumulated, 0, None);
-                Ok(())
-            })?;
-        } else if self.unconsumed != same || weighted {
-            return Err(BackendError::OutOfOrder {
-                pass: "photon (added to the map)",
-                needs: "an unconsumed photon pass of the same gather kind and floor, without path weights",
-            });
-        }
-        while start < params.photon_count {
-            let launch = PhotonPassParams {
-                photon_count: batch.min(params.photon_count - start),
-                first_path: params.first_path + start,
-                ..*params
-            };
-            // The listed paths hold all the deposits the pass stores.
-            let expected = f64::from(launch.photon_count) * self.deposits_per_path * 1.25 + 256.0;
-            let (launch, kind) = match listed {
-                Some(count) => (
-                    PhotonPassParams {
-                        photon_count: count,
-                        ..launch
-                    },
-                    Launch::Listed,
-                ),
-                None => (launch, Launch::Range),
-            };
-            let capacity = expected.min(max_deposits as f64) as u32;
-            let words_each = if paired { 4 } else { u32::from(weighted) };
-            self.deposit_buffers(capacity, words_each)?;
-            self.grid_buffers = Some(GridBuffers::fit(
-                &self.ctx,
-                self.grid_buffers.take(),
-                capacity,
-            )?);
-            let grid_buffers = self.grid_buffers.as_ref().expect("fitted above");
-            let scene = self.scene("photon")?;
-            let deposits = self.deposits.as_ref().expect("allocated above");
-            let weights = deposits.weights.as_ref().unwrap_or(&self.no_weights);
-            // A deposit's index must stay exact in its kept segment's f32 word.
-            let keep = keeps && deposits.capacity <= kept_paths::MOST_DEPOSITS;
-            let launch = PhotonPassParams {
-                flags: match keep {
-                    true => launch.flags,
-                    false => launch.flags & !photon_flags::KEEP_PATHS,
-                },
-                ..launch
-            };
-            // The kept segments take the place of the words an ordinary pass writes none of.
-            let written = if keep { &self.path_segments } else { weights };
-            let targets = PhotonTargets {
-                ranks: &deposits.ranks,
-                photons: &deposits.photons,
-                counters: &self.counters,
-                emitter: &emitter,
-                recorded: &recorded,
-                weights: written,
-                crossed: &self.crossed,
-                partners: &self.partners,
-                listed_paths: &self.listed_paths,
-            };
-            let traced = if let Some(sign) = replay.filter(|_| lit) {
-                self.replay_pass(&launch, sign, spec, &targets)?
-            } else if lit {
-                self.run(trace_name, |encoder| {
-                    let launched = (emission, kind);
-                    self.kernels
-                        .photon
-                        .record(&self.ctx, encoder, &launch, scene, &targets, launched, spec);
-                    Ok(())
-                })?
-            } else {
-                [0; 4]
-            };
-            let deposited = traced[COUNTER_ITEMS];
-            if deposited > deposits.capacity {
-                // The buffers were too small: grow them, or split the pass if even the
-                // binding limit cannot hold the batch (then by the mask); this trace is
-                // discarded. The paths the batch covers, listed or not, made its deposits. (A
-                // replay stores a part of what its kept pass stored, which fitted: traced again
-                // if it did not.)
-                replay = None;
-                let paths = batch.min(params.photon_count - start);
-                self.deposits_per_path = f64::from(deposited) / f64::from(paths);
-                if u64::from(deposited) > max_deposits && launch.photon_count == 1 {
-                    return Err(BackendError::Limit(format!(
-                        "one photon path deposits {deposited} photons; the photon buffer holds {max_deposits}"
-                    )));
-                }
-                if u64::from(deposited) > max_deposits {
-                    batch = ((u64::from(paths) * max_deposits / u64::from(deposited)) * 9 / 10)
-                        .max(1) as u32;
-                    listed = None;
-                }
-                continue;
-            }
-            let (hit_points, slots) = self.hit_points("photon")?;
-            let (accumulated, pending, _) = self.gather_state("photon")?;
-            let slots = Slots {
-                hit_points,
-                counters: &self.counters,
-                count: *slots,
-            };
-            let gather = GatherInputs {
-                params: &accumulate,
-                table: &scene.table,
-                accumulated,
-                pending,
-                radii: &radii,
-            };
-            self.run(map_name, |encoder| {
-                let built = self.kernels.grid.record(
-                    &self.ctx,
-                    encoder,
-                    &self.kernels.scan,
-                    grid_buffers,
-                    (
-                        deposits.photons.clone(),
-                        (weights.clone(), words_each),
-                        &deposits.ranks,
-                        deposited,
-                    ),
-                    (hit_points, slots.count),
-                    params.gather_r2_floor,
-                )?;
-                let stage = GatherStage::Accumulate { weighted, paired };
-                self.kernels
-                    .gather
-                    .record(&self.ctx, encoder, &gather, &built, &slots, stage);
-                map = Some(built);
-                Ok(())
-            })?;
-            kept = keep;
-            stats.deposited += u64::from(deposited);
-            stats.rays += u64::from(traced[COUNTER_RAYS]);
-            stats.culled += u64::from(traced[COUNTER_CULLED]);
-            start += match listed {
-                Some(count) => {
-                    stats.culled += u64::from(params.photon_count - count);
-                    params.photon_count
-                }
-                None => launch.photon_count,
-            };
-            batches += 1;
-        }
-        if params.photon_count > 0 {
-            self.deposits_per_path =
-                (stats.deposited as f64 / f64::from(params.photon_count)).max(0.1);
-        }
-        self.map = map;
-        self.map_kind = params.gather_kind;
-        self.unconsumed = same.filter(|_| !weighted);
-        self.batches = batches;
-        self.last_pass_paths = params.first_path + params.photon_count;
-        if kept && batches == 1 {
-            self.kept_paths = Some(KeptPaths {
-                pass: KeptPass::of(params),
-                pose: self.scene("photon")?.pose(),
-                deposits: stats.deposited as u32,
-            });
-        }
-        Ok(stats)
-    }
-
-    /// Whether ordinary passes keep their paths where asked (the default), or a local move's
-    /// pose A traces its correction photons: the same slots bit for bit, which a test holds it
-    /// to.
-    pub fn set_keep_paths(&mut self, keep: bool) {
-        self.keep_paths = keep;
-    }
-
-    /// The sign of the kept deposits, where the last pass kept its paths and they answer the
-    /// pass `params` from `source` in the pose held; its deposits are then copied aside, as
-    /// the answer writes its own over them. Any pass forgets the kept paths.
-    fn answer_from_kept_paths(
-        &mut self,
-        params: &PhotonPassParams,
-        source: &PhotonSource<'_>,
-    ) -> Result<Option<f32>, BackendError> {
-        let pose = self.scene("photon")?.pose();
-        let Some(kept) = self.kept_paths.take() else {
-            return Ok(None);
-        };
-        let Some(sign) = kept.answers(params, source, pose) else {
-            return Ok(None);
-        };
-        // The paths too long to keep are listed to be traced again.
-        self.fit_listed_paths(params)?;
-        let Some(deposits) = &self.deposits else {
-            return Ok(None);
-        };
-        let bytes = photon_bytes(kept.deposits);
-        if self.kept_photons.size() < bytes {
-            self.kept_photons = storage_zeroed(&self.ctx, "kept photons", bytes)?;
-        }
-        self.run("kept deposits copy", |encoder| {
-            encoder.copy_buffer_to_buffer(&deposits.photons, 0, &self.kept_photons, 0, bytes);
-            Ok(())
-        })?;
-        if self.kernels.replay.is_none() {
-            let kernel = self
-                .ctx
-                .scoped("shader compilation", || PathReplayKernel::new(&self.ctx))?;
-            self.kernels.replay = Some(kernel);
-        }
-        Ok(Some(sign))
-    }
-
-    /// The pass `launch` answered from the kept paths, their deposits times `sign`
-    /// (path_replay.wgsl), and the paths too long to keep traced again, counting on; returns
-    /// the counters as a trace does.
-    fn replay_pass(
-        &self,
-        launch: &PhotonPassParams,
-        sign: f32,
-        spec: Specialisation,
-        targets: &PhotonTargets,
-    ) -> Result<[u32; 4], BackendError> {
-        let kernel = self
-            .kernels
-            .replay
-            .as_ref()
-            .expect("compiled with the answer");
-        let scene = self.scene("correction replay, pose A")?;
-        let replayed = PhotonPassParams {
-            power_scale: sign,
-            ..*launch
-        };
-        let counters = self.run("correction replay, pose A", |encoder| {
-            let kept = (&self.path_segments, &self.kept_photons);
-            kernel.record(&self.ctx, encoder, (&replayed, scene), kept, targets);
-            Ok(())
-        })?;
-        let longer = counters[COUNTER_LISTED];
-        if longer == 0 {
-            return Ok(counters);
-        }
-        let retrace = PhotonPassParams {
-            photon_count: longer,
-            ..*launch
-        };
-        let from = [0, counters[COUNTER_ITEMS], 0, u32::MAX];
-        self.run_from("correction trace, pose A", from, |encoder| {
-            let launched = (emission_kind::ORDINARY, Launch::Listed);
-            self.kernels
-                .photon
-                .record(&self.ctx, encoder, &retrace, scene, targets, launched, spec);
-            Ok(())
-        })
-    }
-}
-
-impl PhotonPass for WgpuBackend {
-    fn photon_pass(
-        &mut self,
-        params: &PhotonPassParams,
-        source: &PhotonSource<'_>,
-    ) -> Result<PhotonStats, BackendError> {
-        self.trace_pass(params, source)
-    }
-}
-
 impl LocalMoves for WgpuBackend {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         if let Some(moving) = self.moving.as_mut() {
@@ -1062,6 +634,19 @@ impl LocalMoves for WgpuBackend {
         })??;
         self.scene = Some(buffers);
         Ok(())
+    }
+
+    /// A correction's photons as the photon pass traces them ([`CorrectionPhotons::flagged_pass`]),
+    /// but pose A's are held unfiled for pose B's to join: one grid and one search of the
+    /// kept slots fold both, as on the CPU, instead of one each.
+    fn correction_photons(
+        &mut self,
+        request: &CorrectionPhotons,
+    ) -> Result<PhotonStats, BackendError> {
+        self.hold_next = request.pose == Pose::A;
+        let stats = self.trace_pass(&request.flagged_pass(), &PhotonSource::Lights);
+        self.hold_next = false;
+        stats
     }
 
     fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
@@ -1174,6 +759,7 @@ impl DynamicBackend for WgpuBackend {
     }
 
     fn landing_paths(&mut self) -> Result<Vec<u32>, BackendError> {
+        self.fold_held()?;
         if self.batches > 1 {
             return Err(BackendError::Limit(format!(
                 "the last photon pass was split into {} batches; its landing paths were never in one map",
@@ -1213,6 +799,7 @@ impl DynamicBackend for WgpuBackend {
 
 impl GatherPass for WgpuBackend {
     fn gather_pass(&mut self, params: &GatherParams) -> Result<GatherStats, BackendError> {
+        self.fold_held()?;
         // Only deferred gathers and their apply touch the pending sums.
         if uses_pending(params.kind) {
             self.allocate_pending("gather")?;
@@ -1300,6 +887,7 @@ impl ReadBack for WgpuBackend {
     /// The last photon pass's deposits; refused when that pass had to be split into batches,
     /// since its deposits never sat in one buffer.
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError> {
+        self.fold_held()?;
         if self.batches > 1 {
             return Err(BackendError::Limit(format!(
                 "the last photon pass was split into {} batches to fit the binding limit; its deposits were never held together",

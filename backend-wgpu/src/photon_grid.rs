@@ -102,9 +102,9 @@ impl PhotonGridKernels {
     }
 
     /// Records the grid build over `photons` (`count` deposits, ranked in path order by
-    /// `ranks`, with `words` beside each in `weights`: 0, 1 or 4) into `buffers`, its cells
-    /// sized to the gather radii of the hit points' visible points (at least
-    /// `sqrt(r2_floor)`); returns the map whose buffers the commands fill.
+    /// `ranks`, the first `held` an earlier pass's, with `words` beside each in `weights`: 0,
+    /// 1 or 4) into `buffers`, its cells sized to the gather radii of the hit points' visible
+    /// points (at least `sqrt(r2_floor)`); returns the map whose buffers the commands fill.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -119,7 +119,7 @@ impl PhotonGridKernels {
             u32,
         ),
         (hit_points, slots): (&wgpu::Buffer, u32),
-        r2_floor: f32,
+        (r2_floor, held): (f32, u32),
     ) -> Result<PhotonMap, BackendError> {
         let bucket_count = bucket_count(count);
         let bucket_bytes = (u64::from(bucket_count) + 1) * 4;
@@ -133,6 +133,8 @@ impl PhotonGridKernels {
                 bucket_count,
                 hit_point_count: slots,
                 r2_floor,
+                held,
+                ..GridBuildParams::default()
             },
         );
         let bindings: [&dyn Bindable; 13] = [

@@ -364,7 +364,11 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
         photon_count,
         bucket_count,
         hit_point_count,
-        r2_floor
+        r2_floor,
+        held,
+        _pad0,
+        _pad1,
+        _pad2
     });
 }
 

@@ -6,8 +6,9 @@
 //! the object its `[[moves]]` name by a thirtieth of that move, `PPM_BENCH_MOVES` times
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
 //! last ten, and the mean of those between the moves, which keep their photon paths for the
-//! next move and serve the reset slots first) and per move (mean and largest), the move's
-//! ratio to a warm-up iteration, and the slots the moves reset and corrected on average,
+//! next move and serve the reset slots first) and per move (mean, median and largest: on
+//! wgpu the first move compiles the move's pipelines), the mean and median move's ratio to a
+//! warm-up iteration, and the slots the moves reset and corrected on average,
 //! then where a move's time goes (each part's median: the host's refit and request, the
 //! backend's passes).
 //! The `crowd` row drags cornell-bunny's short block past 14 more small bunnies (1.05
@@ -48,14 +49,16 @@ fn main() {
          thirtieth of the scene's move, one iteration after each"
     );
     println!(
-        "{:<14} {:<5} {:>12} {:>11} {:>9} {:>9} {:>10} {:>9} {:>9}",
+        "{:<14} {:<5} {:>12} {:>11} {:>9} {:>9} {:>9} {:>10} {:>10} {:>9} {:>9}",
         "scene",
         "back",
         "ms/iteration",
         "in the drag",
         "ms/move",
+        "median",
         "largest",
         "move/iter",
+        "median/it",
         "reset",
         "corrected"
     );
@@ -81,12 +84,14 @@ fn main() {
             let per_iteration = warm_up(&mut r, warmup);
             let d = drag(&mut r, step, moves);
             println!(
-                "{name:<14} {:<5} {per_iteration:>12.1} {:>11.1} {:>9.1} {:>9.1} {:>10.2} {:>9} {:>9}",
+                "{name:<14} {:<5} {per_iteration:>12.1} {:>11.1} {:>9.1} {:>9.1} {:>9.1} {:>10.2} {:>10.2} {:>9} {:>9}",
                 r.backend().name(),
                 d.iteration_ms,
                 d.move_ms,
+                d.median_ms,
                 d.largest_ms,
                 d.move_ms / per_iteration,
+                d.median_ms / per_iteration,
                 d.reset,
                 d.corrected
             );

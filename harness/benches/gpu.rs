@@ -113,10 +113,13 @@ fn main() {
          iteration after each"
     );
     println!(
-        "  a move costs {:.2} iterations: {:.2} ms/move (largest {:.2}), {:.2} ms/iteration \
-         before the drag, {:.2} in it; {} slots reset, {} corrected per move",
+        "  a move costs {:.2} iterations ({:.2} the median move): {:.2} ms/move (median {:.2}, \
+         largest {:.2}), {:.2} ms/iteration before the drag, {:.2} in it; {} slots reset, {} \
+         corrected per move",
         d.move_ms / per_iteration,
+        d.median_ms / per_iteration,
         d.move_ms,
+        d.median_ms,
         d.largest_ms,
         per_iteration,
         d.iteration_ms,

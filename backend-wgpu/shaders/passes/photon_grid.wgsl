@@ -1,15 +1,20 @@
 // #import layout rng qmc sampling update grid
 // The per-pass photon map: the twin of backend-cpu's photon_grid.rs. Same cells (sized from a
 // histogram of the visible points' squared radii), same buckets, and the photons copied into
-// bucket order with ascending rank (the CPU's path order) within each bucket, so gathers sum
-// in the CPU's order. Steps, one dispatch each: histogram, params, count, (scan), scatter,
-// sort, copy (and the deposits' words, where the pass wrote some).
+// bucket order with ascending rank (the CPU's path order) within each bucket, held deposits
+// of an earlier pass first, so gathers sum in the CPU's order. Steps, one dispatch each:
+// histogram, params, count, (scan), scatter, sort, copy (and the deposits' words, where the
+// pass wrote some).
 
 struct GridBuildParams {
     photon_count: u32,
     bucket_count: u32,
     hit_point_count: u32,
     r2_floor: f32,
+    held: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: GridBuildParams;
@@ -126,14 +131,24 @@ fn grid_sort_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     let end = atomicLoad(&bucket_counts[b + 1u]);
     for (var i = start + 1u; i < end; i++) {
         let v = order[i];
-        let rank = ranks[v];
+        let key = sort_key(v);
         var j = i;
-        while j > start && ranks[order[j - 1u]] > rank {
+        while j > start && after(sort_key(order[j - 1u]), key) {
             order[j] = order[j - 1u];
             j--;
         }
         order[j] = v;
     }
+}
+
+// Deposit `i`'s place in its bucket: the held deposits of an earlier pass first, then by rank.
+fn sort_key(i: u32) -> vec2<u32> {
+    return vec2<u32>(u32(i >= params.held), ranks[i]);
+}
+
+// Whether key `a` sorts after key `b`.
+fn after(a: vec2<u32>, b: vec2<u32>) -> bool {
+    return a.x > b.x || (a.x == b.x && a.y > b.y);
 }
 
 @compute @workgroup_size(64)

@@ -34,8 +34,11 @@ pub struct Drag {
     /// Milliseconds per iteration between the moves (they keep their photon paths for the
     /// next move and serve the reset slots first).
     pub iteration_ms: f64,
-    /// Milliseconds per move: mean and largest.
+    /// Milliseconds per move: mean, median and largest. The first move of a render on wgpu
+    /// compiles the move's pipelines, which weighs on the mean of a short drag; the median
+    /// is a step of the drag as it goes on.
     pub move_ms: f64,
+    pub median_ms: f64,
     pub largest_ms: f64,
     /// Slots reset and direct-light corrections per move.
     pub reset: u64,
@@ -82,6 +85,7 @@ pub fn drag(r: &mut Renderer, step: Move, moves: u32) -> Drag {
         iteration_ms: mean(&iteration_ms),
         move_ms: mean(&move_ms),
         largest_ms: move_ms.iter().copied().fold(0.0, f64::max),
+        median_ms: median(move_ms),
         reset: reset / n,
         corrected: corrected / n,
         parts: parts.into_iter().map(|(p, ms)| (p, median(ms))).collect(),
