@@ -201,31 +201,28 @@ impl WgpuBackend {
         // A pose-A correction of the pass whose paths were kept is answered from them; an
         // ordinary pass that asks keeps its own where they fit.
         let mut replay = self.answer_from_kept_paths(params, source)?;
+        let segment_bytes = kept_paths::segment_bytes(params);
         let keeps = lit
             && self.keep_paths
             && KeptPass::wanted(params, source)
             && batch == params.photon_count
-            && kept_paths::segment_bytes(params) <= limit;
-        if keeps && self.path_segments.size() < kept_paths::segment_bytes(params) {
-            let bytes = kept_paths::segment_bytes(params);
-            self.path_segments = storage_zeroed(&self.ctx, "path segments", bytes)?;
+            && segment_bytes <= limit;
+        if keeps && self.path_segments.size() < segment_bytes {
+            self.path_segments = storage_zeroed(&self.ctx, "path segments", segment_bytes)?;
         }
         let mut kept = false;
         // Pose A of a correction holds its deposits for pose B's, which join them in one map;
         // any other pass lets them go (an ordinary pass starts the sums over).
         let mut hold =
             std::mem::take(&mut self.hold_next) && !weighted && batch == params.photon_count;
-        let mut base = match self.held.take() {
-            Some(held) if params.flags & photon_flags::ADD_TO_MAP != 0 => {
-                self.held = Some(held);
-                held.count
-            }
-            _ => 0,
-        };
+        if !adds {
+            self.held = None;
+        }
+        let mut base = self.held.map_or(0, |held| held.count);
         let (accumulated, _, _) = self.gather_state("photon")?;
         // A pass added to the last one accumulates onto its sums; any other starts them over.
         let same = Some((params.gather_kind, params.gather_r2_floor.to_bits()));
-        if params.flags & photon_flags::ADD_TO_MAP == 0 {
+        if !adds {
             self.run("photon accumulator reset", |encoder| {
                 encoder.clear_buffer(accumulated, 0, None);
                 Ok(())

@@ -1,4 +1,4 @@
-// #import layout sampling tables scene geometry movers update crossed_mask kept_paths
+// #import layout sampling tables scene geometry movers update crossed_mask kept_paths deposits
 // A local move's pose-A correction answered from the paths the ordinary pass just traced in
 // this pose kept (kept_paths.wgsl): the twin of backend-cpu's PathRecord::replay. A correction
 // pass of the same random numbers meets the same surfaces, so it stores the deposits that pass
@@ -38,7 +38,6 @@ fn path_replay_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         listed_paths[atomicAdd(&counters[COUNTER_LISTED], 1u)] = path;
         return;
     }
-    let records = (params.flags & PHOTON_RECORD_DEPOSITS) != 0u;
     var stored: PathDeposits;
     var nth = 0u;
     var crossed_box = false;
@@ -54,22 +53,9 @@ fn path_replay_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         }
         var photon = kept[deposit - 1u];
         photon.power *= params.power_scale;
-        let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
-        if slot < arrayLength(&photons) {
-            photons[slot] = photon;
-            ranks[slot] = rank_base + bounce;
-        }
-        if records && nth < PAIRED_DEPOSITS {
-            stored.deposits[nth] = vec4<f32>(photon.position, luminance(photon.power));
-            stored.normal_oct[nth] = photon.normal_oct;
-        }
+        append_deposit(photon, rank_base + bounce);
+        note_stored(&stored, nth, photon);
         nth++;
     }
-    let at = params.mask_offset + path;
-    if (params.flags & PHOTON_RECORD_CROSSED) != 0u {
-        set_mask_bit(at, crossed_box);
-    }
-    if records && at < arrayLength(&partners) {
-        partners[at] = stored;
-    }
+    record_path(params.mask_offset + path, crossed_box, stored);
 }

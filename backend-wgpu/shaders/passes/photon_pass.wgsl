@@ -1,4 +1,4 @@
-// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures update crossed_mask kept_paths
+// #import layout rng sampling geometry bsdf bvh lights emission movers tables scene materials textures update crossed_mask kept_paths deposits
 // Photon pass (docs/algorithm.md 1.3, 2.2, 2.5, 2.6): the twin of backend-cpu's photon_pass.rs.
 //
 // Each path is traced once and appends its deposits where an atomic counter says, with the
@@ -162,13 +162,12 @@ fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
             // What reaches the base of a coated surface (ppm_core::bsdf::arrival).
             let deposit = power * bsdf_arrival(material, -dot(dir, facing));
             let normal_oct = oct_encode(facing);
-            let slot = atomicAdd(&counters[COUNTER_ITEMS], 1u);
+            let photon = Photon(position, path, deposit, normal_oct);
+            let slot = append_deposit(photon, rank_base + bounce);
             if keeps && bounce < KEPT_SEGMENTS {
                 keep_word(kept + 7u, f32(slot + 1u));
             }
             if slot < arrayLength(&photons) {
-                photons[slot] = Photon(position, path, deposit, normal_oct);
-                ranks[slot] = rank_base + bounce;
                 if EMISSION == EMISSION_REGION {
                     words[slot] = emission.weight;
                 }
@@ -179,9 +178,8 @@ fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
                     }
                 }
             }
-            if records && nth < PAIRED_DEPOSITS {
-                stored.deposits[nth] = vec4<f32>(position, luminance(deposit));
-                stored.normal_oct[nth] = normal_oct;
+            if records {
+                note_stored(&stored, nth, photon);
             }
             nth++;
         }
@@ -216,12 +214,9 @@ fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
 // the pass records it, pose A's first stored deposits where the pass records them, how many
 // segments it traced where it keeps them, and its rays.
 fn finish_path(path: u32, traced: Traced) {
-    let at = params.mask_offset + path;
-    if (params.flags & PHOTON_RECORD_CROSSED) != 0u {
-        set_mask_bit(at, traced.crossed);
-    }
-    if MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u && at < arrayLength(&partners) {
-        partners[at] = traced.stored;
+    // Only correction passes, which test the movers' boxes, record.
+    if MOVERS {
+        record_path(params.mask_offset + path, traced.crossed, traced.stored);
     }
     if keeps_paths() {
         keep_word(kept_length(path - params.first_path), f32(traced.rays));
