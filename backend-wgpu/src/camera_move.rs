@@ -17,7 +17,8 @@ use ppm_core::passes::BackendError;
 
 use Slot::{Read, ReadWrite, Table, Uniform};
 
-/// camera_move.wgsl's pipeline, compiled at a backend's first camera move.
+/// camera_move.wgsl's pipeline, compiled at a backend's first camera move or ahead of it
+/// ([`crate::move_kernels`]).
 pub struct CameraMoveKernel(Kernel);
 
 impl CameraMoveKernel {
@@ -98,12 +99,12 @@ impl WgpuBackend {
                 needs: "an eye pass",
             });
         }
-        if self.kernels.camera.is_none() {
-            let kernel = self
-                .ctx
-                .scoped("shader compilation", || CameraMoveKernel::new(&self.ctx))?;
-            self.kernels.camera = Some(kernel);
+        if let Some(preparing) = self.preparing.take() {
+            preparing.finish()?;
         }
+        self.ctx.scoped("shader compilation", || {
+            self.kernels.moves.camera(&self.ctx);
+        })?;
         let hit_point_bytes = u64::from(slots) * size_of::<HitPoint>() as u64;
         let bounds_bytes = u64::from(slots) * size_of::<SlotBounds>() as u64;
         if self.camera_copies.as_ref().is_none_or(|c| c.slots != slots) {
@@ -162,11 +163,7 @@ impl WgpuBackend {
             pass: PASS,
             needs: "an eye pass",
         })?;
-        let kernel = self
-            .kernels
-            .camera
-            .as_ref()
-            .expect("compiled at the move's start");
+        let kernel = self.kernels.moves.camera(&self.ctx);
         let copies = self
             .camera_copies
             .as_ref()
@@ -248,7 +245,7 @@ impl WgpuBackend {
     /// copies of the slots until the first.
     pub(crate) fn camera_moves_not_created(&self) -> Vec<String> {
         let mut out = Vec::new();
-        if self.kernels.camera.is_none() {
+        if !self.kernels.moves.camera_compiled() {
             out.push("camera-move pipeline: not compiled (no camera move)".to_owned());
         }
         if let (None, Some((_, slots))) = (&self.camera_copies, &self.hit_points) {

@@ -20,6 +20,7 @@ mod kept_paths;
 mod kernel;
 pub mod layout;
 mod local_move;
+mod move_kernels;
 mod passes;
 mod photon_grid;
 mod photon_pass;
@@ -36,8 +37,9 @@ pub mod shaders {
 use buffers::{SceneBuffers, read_back, storage_zeroed};
 pub use context::{GpuContext, OPTIONAL_FEATURES};
 pub use kept_paths::KEPT_SEGMENTS;
-use kept_paths::{KeptPaths, PathReplayKernel};
+use kept_paths::KeptPaths;
 use layout::UpdateParams;
+use move_kernels::{MoveKernels, Preparing};
 use passes::{
     CheckKernel, DirectLightKernel, EyeOutputs, EyePassKernel, GatherInputs, GatherKernel,
     GatherStage, HitPointUpdateKernel, LandingPathsKernel, Launch, PhotonPassKernel, PhotonTargets,
@@ -65,7 +67,7 @@ use ppm_core::photon_path::KeptPass;
 use ppm_core::update::gather::{GatherCase, SlotState, uses_pending};
 use scan::Scan;
 pub use specialise::Specialisation;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use timestamps::{Encoder, Timer};
 
 /// The buffers a photon pass appends its deposits to: records, their ranks in path order,
@@ -101,7 +103,8 @@ struct Kernels {
     /// A focus eye pass's rest test, compiled at the first.
     focus: focus::FocusKernel,
     direct: DirectLightKernel,
-    photon: PhotonPassKernel,
+    /// Shared with the compilation ahead of moves, which compiles a correction's traces.
+    photon: Arc<PhotonPassKernel>,
     grid: PhotonGridKernels,
     gather: GatherKernel,
     resolve: ResolveKernel,
@@ -111,12 +114,8 @@ struct Kernels {
     update: Option<HitPointUpdateKernel>,
     /// Compiled when a move first needs it.
     landing: Option<LandingPathsKernel>,
-    /// Parsed at the first local move, each pipeline compiled when a move first runs it.
-    local: Option<local_move::LocalMoveKernels>,
-    /// Compiled at the first camera move.
-    camera: Option<camera_move::CameraMoveKernel>,
-    /// Compiled at the first correction the kept paths answer.
-    replay: Option<PathReplayKernel>,
+    /// Compiled when a move first needs them, or ahead ([`LocalMoves::prepare_moves`]).
+    moves: Arc<MoveKernels>,
     scan: Scan,
 }
 
@@ -213,6 +212,9 @@ pub struct WgpuBackend {
     /// The old view's slots and boxes, copied when a camera move begins; allocated at the
     /// first and kept.
     camera_copies: Option<camera_move::Copies>,
+    /// The move pipelines compiling ahead ([`LocalMoves::prepare_moves`]), until a move
+    /// waits for them.
+    preparing: Option<Preparing>,
 }
 
 impl WgpuBackend {
@@ -228,7 +230,7 @@ impl WgpuBackend {
             eye: EyePassKernel::new(&ctx),
             focus: focus::FocusKernel::new(&ctx),
             direct: DirectLightKernel::new(&ctx),
-            photon: PhotonPassKernel::new(&ctx),
+            photon: Arc::new(PhotonPassKernel::new(&ctx)),
             grid: PhotonGridKernels::new(&ctx),
             gather: GatherKernel::new(&ctx),
             resolve: ResolveKernel::new(&ctx),
@@ -236,9 +238,7 @@ impl WgpuBackend {
             rng: RngVectorsKernel::new(&ctx),
             update: None,
             landing: None,
-            local: None,
-            camera: None,
-            replay: None,
+            moves: Arc::default(),
             scan: Scan::new(&ctx),
         })?;
         let counters = buffers::storage_init(&ctx, "counters", &COUNTERS_RESET);
@@ -293,6 +293,7 @@ impl WgpuBackend {
             keep_paths: true,
             camera_moving: None,
             camera_copies: None,
+            preparing: None,
         })
     }
 
@@ -647,6 +648,24 @@ impl LocalMoves for WgpuBackend {
         let stats = self.trace_pass(&request.flagged_pass(), &PhotonSource::Lights);
         self.hold_next = false;
         stats
+    }
+
+    /// Compiles the pipelines of the moves in the scene held on a thread of their own
+    /// ([`move_kernels`]): the render goes on meanwhile, and a move waits only for what is
+    /// still compiling.
+    fn prepare_moves(&mut self) -> Result<(), BackendError> {
+        if self.scene.is_none() {
+            return Err(BackendError::OutOfOrder {
+                pass: "move preparation",
+                needs: "a scene",
+            });
+        }
+        if self.preparing.is_none() {
+            let spec = self.specialisation(false);
+            let k = &self.kernels;
+            self.preparing = Some(Preparing::start(&self.ctx, &k.moves, &k.photon, spec)?);
+        }
+        Ok(())
     }
 
     fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {

@@ -19,8 +19,8 @@
 
 mod kernels;
 
-pub use kernels::LocalMoveKernels;
-use kernels::{MoveBindings, MoveStage};
+use kernels::MoveBindings;
+pub use kernels::{LocalMoveKernels, MoveStage};
 
 use crate::WgpuBackend;
 use crate::buffers::{self, read_back, storage_zeroed};
@@ -204,12 +204,12 @@ impl WgpuBackend {
                 request.after.len()
             )));
         }
-        if self.kernels.local.is_none() {
-            let kernels = self
-                .ctx
-                .scoped("shader compilation", || LocalMoveKernels::new(&self.ctx))?;
-            self.kernels.local = Some(kernels);
+        if let Some(preparing) = self.preparing.take() {
+            preparing.finish()?;
         }
+        self.ctx.scoped("shader compilation", || {
+            self.kernels.moves.local(&self.ctx);
+        })?;
         let fits = self
             .move_buffers
             .as_ref()
@@ -377,11 +377,7 @@ impl WgpuBackend {
         stages: &[(MoveStage, u32)],
         recording: Recording,
     ) -> Result<[u32; MOVE_COUNTERS], BackendError> {
-        let kernels = self
-            .kernels
-            .local
-            .as_ref()
-            .expect("compiled at the move's start");
+        let kernels = self.kernels.moves.local(&self.ctx);
         let held = self
             .move_buffers
             .as_ref()
@@ -470,7 +466,7 @@ impl WgpuBackend {
     /// What [`crate::Backend::not_created`] says of local moves: their pipelines until the
     /// first, then those no move has needed yet.
     pub(crate) fn local_moves_not_created(&self) -> Vec<String> {
-        match &self.kernels.local {
+        match self.kernels.moves.local_parsed() {
             None => vec!["local-move pipelines: not compiled (no local move)".into()],
             Some(kernels) => kernels
                 .not_compiled()

@@ -276,6 +276,27 @@ impl PhotonPassKernel {
         })
     }
 
+    fn list_kernel(&self, ctx: &GpuContext) -> &Kernel {
+        self.list.get_or_init(|| {
+            Kernel::new(
+                &ctx.device,
+                &self.module,
+                "photon_list_crossed_main",
+                &photon_slots(&[1, 2, 3, 4, 6, 7, 8, 10, 11]),
+                WORKGROUP,
+            )
+        })
+    }
+
+    /// Compiles now, unless they are already, the pipelines a local move's correction
+    /// traces with in a scene of `spec` (its mover-box tests included): the trace of a range,
+    /// the list of the paths pose B traces, and their trace.
+    pub fn compile_correction(&self, ctx: &GpuContext, spec: Specialisation) {
+        self.kernel(ctx, emission_kind::ORDINARY, spec);
+        self.list_kernel(ctx);
+        self.listed_kernel(ctx, spec);
+    }
+
     /// Records the trace of photons emitted as `emission` says (`ppm_core::layout::emission_kind`),
     /// of the paths `launch` says.
     #[allow(clippy::too_many_arguments)]
@@ -324,15 +345,7 @@ impl PhotonPassKernel {
         params: &PhotonPassParams,
         (crossed, listed_paths, counters): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) {
-        let kernel = self.list.get_or_init(|| {
-            Kernel::new(
-                &ctx.device,
-                &self.module,
-                "photon_list_crossed_main",
-                &photon_slots(&[1, 2, 3, 4, 6, 7, 8, 10, 11]),
-                WORKGROUP,
-            )
-        });
+        let kernel = self.list_kernel(ctx);
         let uniform_params = uniform(ctx, "photon params", params);
         let unused = &uniform_params;
         let group = kernel.bind(

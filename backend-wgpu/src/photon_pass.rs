@@ -498,12 +498,9 @@ impl WgpuBackend {
             encoder.copy_buffer_to_buffer(&deposits.photons, 0, &self.kept_photons, 0, bytes);
             Ok(())
         })?;
-        if self.kernels.replay.is_none() {
-            let kernel = self
-                .ctx
-                .scoped("shader compilation", || PathReplayKernel::new(&self.ctx))?;
-            self.kernels.replay = Some(kernel);
-        }
+        self.ctx.scoped("shader compilation", || {
+            self.kernels.moves.replay(&self.ctx);
+        })?;
         Ok(Some(sign))
     }
 
@@ -517,11 +514,7 @@ impl WgpuBackend {
         spec: Specialisation,
         targets: &PhotonTargets,
     ) -> Result<[u32; 4], BackendError> {
-        let kernel = self
-            .kernels
-            .replay
-            .as_ref()
-            .expect("compiled with the answer");
+        let kernel = self.kernels.moves.replay(&self.ctx);
         let scene = self.scene("correction replay, pose A")?;
         let replayed = PhotonPassParams {
             power_scale: sign,

@@ -89,6 +89,7 @@ fn orbit(
 ) -> Steps {
     let mut r = Renderer::start(backend, scene.clone(), p, &MoveParams::default())
         .expect("the scene loads");
+    r.expect_local_moves().expect("the moves are prepared");
     let mut warm = Vec::new();
     for _ in 0..warmup {
         let t = Instant::now();

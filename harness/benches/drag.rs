@@ -2,13 +2,14 @@
 //! iteration, against the iterations between them, side by side in one run.
 //!
 //! `cargo bench -p harness --bench drag` warms each canonical scene up for
-//! `PPM_BENCH_WARMUP` iterations (default 30) at `PPM_BENCH_SIZE` (default 256), then moves
+//! `PPM_BENCH_WARMUP` iterations (default 30) at `PPM_BENCH_SIZE` (default 256), saying
+//! that local moves will follow (as `ppm view` does: the moves' pipelines compile and
+//! ordinary passes keep their paths meanwhile), then moves
 //! the object its `[[moves]]` name by a thirtieth of that move, `PPM_BENCH_MOVES` times
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
 //! last ten, and the mean of those between the moves, which keep their photon paths for the
-//! next move and serve the reset slots first) and per move (mean, median and largest: on
-//! wgpu the first move compiles the move's pipelines), the mean and median move's ratio to a
-//! warm-up iteration, and the slots the moves reset and corrected on average,
+//! next move and serve the reset slots first) and per move (mean, median and largest), the
+//! mean and median move's ratio to a warm-up iteration, and the slots the moves reset and corrected on average,
 //! then where a move's time goes (each part's median: the host's refit and request, the
 //! backend's passes).
 //! The `crowd` row drags cornell-bunny's short block past 14 more small bunnies (1.05
@@ -81,6 +82,8 @@ fn main() {
         let row = |backend: &mut dyn Backend| {
             let mut r =
                 Renderer::start(backend, scene.clone(), &p, &move_params).expect("the scene loads");
+            // As `ppm view` does: the moves' pipelines compile during the warm-up.
+            r.expect_local_moves().expect("the moves are prepared");
             let per_iteration = warm_up(&mut r, warmup);
             let d = drag(&mut r, step, moves);
             println!(

@@ -104,6 +104,7 @@ fn main() {
     let step = step_of(*scene.moves.first().expect("cornell-box declares a move"));
     let mut r =
         Renderer::start(&mut gpu, scene.clone(), &params, &moving).expect("cornell-box loads");
+    r.expect_local_moves().expect("the moves are prepared");
     warm_up(&mut r, warmup);
     let per_iteration = 1e3 * timed(&mut r, iterations) / f64::from(iterations.max(1));
     let before = r.report().clone();

@@ -347,6 +347,14 @@ pub trait LocalMoves: Backend {
     /// for one that adds to them ([`crate::layout::photon_flags::ADD_TO_MAP`]).
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError>;
 
+    /// Says that moves (local or of the camera) will follow in the scene held: the backend
+    /// may compile or allocate now what they need, so that the first move costs what the
+    /// later ones do (the wgpu backend compiles their pipelines on a thread of their own,
+    /// while the render goes on). Changes no result. By default nothing.
+    fn prepare_moves(&mut self) -> Result<(), BackendError> {
+        Ok(())
+    }
+
     /// Starts a local move of `request`'s objects (docs/algorithm.md 3b), in the pose held:
     /// pose A, with the movers' boxes. Each slot gets the disc it gathers the correction
     /// within and, where its direct light may change, `DIRECT_MAY_CHANGE`

@@ -103,6 +103,9 @@ impl LocalMoves for Counted {
     fn update_scene(&mut self, scene: &CompiledScene) -> Result<(), BackendError> {
         self.local().update_scene(scene)
     }
+    fn prepare_moves(&mut self) -> Result<(), BackendError> {
+        self.local().prepare_moves()
+    }
     fn begin_local_move(&mut self, request: &LocalMove) -> Result<(), BackendError> {
         self.local().begin_local_move(request)
     }

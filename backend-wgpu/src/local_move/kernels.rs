@@ -30,7 +30,7 @@ pub enum MoveStage {
 }
 
 impl MoveStage {
-    const ALL: [MoveStage; STAGES] = [
+    pub(crate) const ALL: [MoveStage; STAGES] = [
         MoveStage::Begin,
         MoveStage::PairsBefore,
         MoveStage::Cover,
@@ -136,8 +136,9 @@ pub struct MoveBindings<'a> {
 }
 
 /// local_move.wgsl: its module parsed at a backend's first local move, each entry point's
-/// pipeline compiled when first recorded, with or without the refraction code (`GLASS` in
-/// bsdf.wgsl, as the eye pipelines are specialised: [`crate::Specialisation`]).
+/// pipeline compiled when first recorded (or ahead: [`crate::move_kernels`]), with or
+/// without the refraction code (`GLASS` in bsdf.wgsl, as the eye pipelines are specialised:
+/// [`crate::Specialisation`]).
 pub struct LocalMoveKernels {
     module: wgpu::ShaderModule,
     stages: [[OnceLock<Kernel>; STAGES]; 2],
@@ -160,6 +161,21 @@ impl LocalMoveKernels {
             .collect()
     }
 
+    /// The pipeline of `stage`, with the refraction code where `glass`, compiled now unless
+    /// it is already.
+    pub fn compile(&self, ctx: &GpuContext, stage: MoveStage, glass: bool) -> &Kernel {
+        self.stages[usize::from(glass)][stage as usize].get_or_init(|| {
+            Kernel::specialised(
+                &ctx.device,
+                &self.module,
+                stage.entry(),
+                &stage.slots(),
+                WORKGROUP,
+                &[("GLASS", f64::from(u8::from(glass)))],
+            )
+        })
+    }
+
     /// Records `stage` over `items` work items (slots, listed slots or triangles), its
     /// pipeline with the refraction code where `glass`; none records nothing, and compiles
     /// nothing.
@@ -174,16 +190,7 @@ impl LocalMoveKernels {
         if items == 0 {
             return;
         }
-        let kernel = self.stages[usize::from(glass)][stage as usize].get_or_init(|| {
-            Kernel::specialised(
-                &ctx.device,
-                &self.module,
-                stage.entry(),
-                &stage.slots(),
-                WORKGROUP,
-                &[("GLASS", f64::from(u8::from(glass)))],
-            )
-        });
+        let kernel = self.compile(ctx, stage, glass);
         let group = kernel.bind(
             &ctx.device,
             &[

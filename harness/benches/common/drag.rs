@@ -34,9 +34,8 @@ pub struct Drag {
     /// Milliseconds per iteration between the moves (they keep their photon paths for the
     /// next move and serve the reset slots first).
     pub iteration_ms: f64,
-    /// Milliseconds per move: mean, median and largest. The first move of a render on wgpu
-    /// compiles the move's pipelines, which weighs on the mean of a short drag; the median
-    /// is a step of the drag as it goes on.
+    /// Milliseconds per move: mean, median and largest (the first move's, where it waits for
+    /// pipelines still compiling).
     pub move_ms: f64,
     pub median_ms: f64,
     pub largest_ms: f64,

@@ -95,6 +95,22 @@ struct CorrectionSize {
 }
 
 impl Renderer<'_> {
+    /// Says that this render will move in local mode (`ppm view`, a schedule with local
+    /// moves): ordinary passes keep their paths from now on, so that even the first move's
+    /// pose A is answered from them, and the backend prepares what moves need
+    /// ([`LocalMoves::prepare_moves`]), so that the first move costs what the later ones do.
+    /// Nothing on a backend without local moves, whose moves restart.
+    ///
+    /// [`LocalMoves::prepare_moves`]: ppm_core::passes::LocalMoves::prepare_moves
+    pub fn expect_local_moves(&mut self) -> Result<(), BackendError> {
+        let Some(moves) = self.backend.local_moves() else {
+            return Ok(());
+        };
+        moves.prepare_moves()?;
+        self.keep_paths = true;
+        Ok(())
+    }
+
     /// Why local mode cannot keep anything for a move of `changed` objects, if it cannot.
     pub(super) fn local_plan(&self, changed: &[usize]) -> Result<(), String> {
         if self.params.estimator != Estimator::Sppm {

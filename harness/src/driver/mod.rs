@@ -91,7 +91,8 @@ pub struct Renderer<'a> {
     /// move traced them, and the iteration after it does not trace them again.
     traced: bool,
     /// Ordinary passes ask the backend to keep their paths
-    /// ([`photon_flags::KEEP_PATHS`]): set by the first local move, so that a render that
+    /// ([`photon_flags::KEEP_PATHS`]): set by the first local move, or before it where the
+    /// render says it will move ([`Renderer::expect_local_moves`]), so that a render that
     /// never moves records nothing, and the next moves' pose-A corrections are answered from
     /// them.
     keep_paths: bool,

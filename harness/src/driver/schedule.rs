@@ -79,6 +79,18 @@ pub enum Step {
     },
 }
 
+impl Step {
+    /// How the render follows the step, if it moves.
+    fn mode(&self) -> Option<MoveMode> {
+        match self {
+            Step::Render(_) => None,
+            Step::Move { mode, .. }
+            | Step::MoveObjects { mode, .. }
+            | Step::MoveCamera { mode, .. } => Some(*mode),
+        }
+    }
+}
+
 /// A render described as data: the starting pose and the steps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Schedule {
@@ -312,6 +324,13 @@ pub fn run_from(
         }
         None => 0.0,
     };
+    if schedule
+        .steps
+        .iter()
+        .any(|s| s.mode() == Some(MoveMode::Local))
+    {
+        renderer.expect_local_moves()?;
+    }
     let mut clock = Stopwatch::start();
     let mut at = Progress {
         step: 0,

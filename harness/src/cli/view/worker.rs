@@ -183,6 +183,9 @@ struct Pane<'a> {
     error: Option<String>,
     /// Whether a move ran (the report's `left_out` then keeps the compensation passes).
     moved: bool,
+    /// Whether the renderer was told that local moves will follow
+    /// ([`Renderer::expect_local_moves`]): once the pane shows its first image in local mode.
+    expecting: bool,
     previous_times: crate::report::PassTimes,
     previous_device_times: Vec<ppm_core::device_time::DeviceTime>,
 }
@@ -222,6 +225,7 @@ pub fn run(
             renderer,
             mode,
             moved: false,
+            expecting: false,
             target,
             spent: 0.0,
             iterations_since_event: 0,
@@ -350,6 +354,14 @@ pub fn run(
             Err(e) => fail(&mut panes[i], shared, i, &e),
         }
         wake(UiEvent::Frame);
+        // The pane shows an image: what a first move needs is prepared now, not at the drag.
+        let pane = &mut panes[i];
+        if pane.mode == MoveMode::Local && !pane.expecting && pane.error.is_none() {
+            pane.expecting = true;
+            if let Err(e) = pane.renderer.expect_local_moves() {
+                fail(pane, shared, i, &e);
+            }
+        }
     }
     wake(UiEvent::Finished);
     Ok(())
