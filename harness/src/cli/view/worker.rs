@@ -184,7 +184,8 @@ struct Pane<'a> {
     /// Whether a move ran (the report's `left_out` then keeps the compensation passes).
     moved: bool,
     /// Whether the renderer was told that local moves will follow
-    /// ([`Renderer::expect_local_moves`]): once the pane shows its first image in local mode.
+    /// ([`Renderer::expect_local_moves`]): once the pane has shown its first images in local
+    /// mode.
     expecting: bool,
     previous_times: crate::report::PassTimes,
     previous_device_times: Vec<ppm_core::device_time::DeviceTime>,
@@ -354,9 +355,11 @@ pub fn run(
             Err(e) => fail(&mut panes[i], shared, i, &e),
         }
         wake(UiEvent::Frame);
-        // The pane shows an image: what a first move needs is prepared now, not at the drag.
+        // What a first move needs is prepared once the pane has shown an image and rendered
+        // the next (the window draws the first meanwhile), not at the first drag.
         let pane = &mut panes[i];
-        if pane.mode == MoveMode::Local && !pane.expecting && pane.error.is_none() {
+        let shown = pane.renderer.report().passes >= 2;
+        if pane.mode == MoveMode::Local && shown && !pane.expecting && pane.error.is_none() {
             pane.expecting = true;
             if let Err(e) = pane.renderer.expect_local_moves() {
                 fail(pane, shared, i, &e);
