@@ -651,7 +651,7 @@ impl LocalMoves for WgpuBackend {
     }
 
     /// Compiles the pipelines of the moves in the scene held on a thread of their own
-    /// ([`move_kernels`]): the render goes on meanwhile, and a move waits only for what is
+    /// (`move_kernels.rs`): the render goes on meanwhile, and a move waits only for what is
     /// still compiling.
     fn prepare_moves(&mut self) -> Result<(), BackendError> {
         if self.scene.is_none() {
