@@ -99,12 +99,24 @@ impl GpuContext {
     /// Runs `work` inside validation and out-of-memory error scopes and waits for the GPU;
     /// any error the device reports becomes `Err` naming `pass`.
     pub fn scoped<T>(&self, pass: &str, work: impl FnOnce() -> T) -> Result<T, BackendError> {
+        let out = self.captured(pass, work);
+        self.wait()?;
+        let out = out?;
+        self.health(pass)?;
+        Ok(out)
+    }
+
+    /// Runs `work` inside validation and out-of-memory error scopes, which catch what this
+    /// thread's calls report (wgpu keeps scopes per thread); an error becomes `Err` naming
+    /// `pass`. It neither waits for the GPU nor takes an error other threads' passes left
+    /// uncaught, which the passes report themselves: a thread that only compiles pipelines
+    /// ahead uses it alone.
+    pub fn captured<T>(&self, pass: &str, work: impl FnOnce() -> T) -> Result<T, BackendError> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let out = work();
         let validation = pollster::block_on(validation.pop());
         let oom = pollster::block_on(oom.pop());
-        self.wait()?;
         if let Some(e) = oom {
             return Err(BackendError::Limit(format!(
                 "{pass} pass: out of device memory: {e}"
@@ -113,7 +125,6 @@ impl GpuContext {
         if let Some(e) = validation {
             return Err(BackendError::Device(format!("{pass} pass: {e}")));
         }
-        self.health(pass)?;
         Ok(out)
     }
 

@@ -661,7 +661,8 @@ impl LocalMoves for WgpuBackend {
             });
         }
         if self.preparing.is_none() {
-            let spec = self.specialisation(false);
+            // The correction traces with the mover-box tests (`trace_pass`).
+            let spec = self.specialisation(true);
             let k = &self.kernels;
             self.preparing = Some(Preparing::start(&self.ctx, &k.moves, &k.photon, spec)?);
         }

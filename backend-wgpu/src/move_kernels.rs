@@ -57,9 +57,10 @@ impl MoveKernels {
 pub struct Preparing(JoinHandle<Result<(), BackendError>>);
 
 impl Preparing {
-    /// Starts compiling every pipeline a local or a camera move uses in a scene of `spec`:
-    /// local_move.wgsl's stages, the correction's traces (with the mover-box tests), the
-    /// replay of kept paths and the camera move's inheritance.
+    /// Starts compiling every pipeline a local or a camera move uses in a scene whose
+    /// correction traces `spec` specialises (with the mover-box tests): local_move.wgsl's
+    /// stages, the correction's traces, the replay of kept paths and the camera move's
+    /// inheritance.
     pub fn start(
         ctx: &GpuContext,
         moves: &Arc<MoveKernels>,
@@ -68,16 +69,12 @@ impl Preparing {
     ) -> Result<Self, BackendError> {
         let (ctx, moves, photon) = (ctx.clone(), moves.clone(), photon.clone());
         let compile = move || {
-            ctx.scoped("move pipelines compiled ahead", || {
+            ctx.captured("move pipelines compiled ahead", || {
                 let local = moves.local(&ctx);
                 for stage in MoveStage::ALL {
                     local.compile(&ctx, stage, spec.glass);
                 }
-                let movers = Specialisation {
-                    movers: true,
-                    ..spec
-                };
-                photon.compile_correction(&ctx, movers);
+                photon.compile_correction(&ctx, spec);
                 moves.replay(&ctx);
                 moves.camera(&ctx);
             })

@@ -289,8 +289,8 @@ impl PhotonPassKernel {
     }
 
     /// Compiles now, unless they are already, the pipelines a local move's correction
-    /// traces with in a scene of `spec` (its mover-box tests included): the trace of a range,
-    /// the list of the paths pose B traces, and their trace.
+    /// traces with as `spec` specialises them: the trace of a range, the list of the paths
+    /// pose B traces, and their trace.
     pub fn compile_correction(&self, ctx: &GpuContext, spec: Specialisation) {
         self.kernel(ctx, emission_kind::ORDINARY, spec);
         self.list_kernel(ctx);

@@ -9,8 +9,8 @@
 //! (default 30), an iteration after each. It prints milliseconds per iteration (the warm-up's
 //! last ten, and the mean of those between the moves, which keep their photon paths for the
 //! next move and serve the reset slots first) and per move (mean, median and largest), the
-//! mean and median move's ratio to a warm-up iteration, and the slots the moves reset and corrected on average,
-//! then where a move's time goes (each part's median: the host's refit and request, the
+//! mean and median move's ratio to a warm-up iteration, and the slots the moves reset and
+//! corrected on average, then where a move's time goes (each part's median: the host's refit and request, the
 //! backend's passes).
 //! The `crowd` row drags cornell-bunny's short block past 14 more small bunnies (1.05
 //! million triangles): a move must cost what the moved object touches, not the scene.
