@@ -13,9 +13,11 @@
 //! pose B skips it. The slots are counted first and only those get a record: a move that may
 //! change nobody's direct light allocates nothing. Pose B's lights are kept in a second store
 //! for the next move, whose pose A that pose is, as backend-cpu keeps them: along a drag, pose
-//! A copies what the last move evaluated instead of evaluating it again. Two stores of 12
-//! bytes a pair: with every slot of a 768x768 image listed, 28 MB each for a drag step's 4
-//! pairs, 113 MB for [`ppm_core::local_move::MOST_SAMPLES`].
+//! A copies what the last move evaluated instead of evaluating it again. The pairs each pose
+//! traces are listed first and traced by a kernel of their own, so that the few a drag step's
+//! pose A traces do not hold up workgroups of slots that trace nothing. Two stores of 12
+//! bytes a pair and a list of 4: with every slot of a 768x768 image listed, 66 MB for a drag
+//! step's 4 pairs, 264 MB for [`ppm_core::local_move::MOST_SAMPLES`].
 
 mod kernels;
 
@@ -37,6 +39,7 @@ const MOVE_CORRECTED: usize = 1;
 const MOVE_PROBED: usize = 2;
 const MOVE_LISTED: usize = 3;
 const MOVE_RAYS: usize = 4;
+const MOVE_PAIRS: usize = 5;
 /// Words of the move counters.
 const MOVE_COUNTERS: usize = 8;
 
@@ -114,6 +117,8 @@ pub struct MoveBuffers {
     known_keys: Option<PairKeys>,
     /// A word per slot: the slots the probe decides (`probes`).
     probes: wgpu::Buffer,
+    /// A word per pair of the listed slots: the pairs traced (`pair_list`).
+    pair_list: wgpu::Buffer,
 }
 
 impl MoveBuffers {
@@ -128,6 +133,7 @@ impl MoveBuffers {
             known: storage_zeroed(ctx, "known pairs", u64::from(slots) * 4)?,
             known_keys: None,
             probes: storage_zeroed(ctx, "probed slots", u64::from(slots) * 4)?,
+            pair_list: storage_zeroed(ctx, "listed pairs", 16)?,
         })
     }
 }
@@ -167,6 +173,11 @@ impl Default for Recording<'_> {
 /// Bytes of the records of `listed` slots' pairs keyed as `keys`: three words a pair.
 fn store_bytes(listed: u32, keys: &PairKeys) -> u64 {
     u64::from(listed) * u64::from(keys.direct_samples) * 12
+}
+
+/// Bytes of the list of `listed` slots' pairs keyed as `keys`: a word a pair.
+fn pair_list_bytes(listed: u32, keys: &PairKeys) -> u64 {
+    store_bytes(listed, keys) / 3
 }
 
 /// Bytes of the covered mask of `pixels` pixels: a bit each, and the word that says all.
@@ -235,6 +246,8 @@ impl WgpuBackend {
             let held = self.move_buffers.as_mut().expect("allocated above");
             if held.store.size() < bytes {
                 held.store = storage_zeroed(&self.ctx, "pair store", bytes)?;
+                let bytes = pair_list_bytes(moving.listed, &keys);
+                held.pair_list = storage_zeroed(&self.ctx, "listed pairs", bytes)?;
             }
             let list = ListParams {
                 count: moving.listed,
@@ -242,9 +255,17 @@ impl WgpuBackend {
                 ..ListParams::default()
             };
             moving.list = buffers::uniform(&self.ctx, "list", &list);
-            let stages = [(MoveStage::PairsBefore, moving.listed)];
-            let counters =
-                self.record_move("local move, pose A's pairs", &moving, &stages, false)?;
+            let stages = [(MoveStage::PairsCopy, moving.listed)];
+            const PAIRS: &str = "local move, pose A's pairs";
+            let mut counters = self.record_move(PAIRS, &moving, &stages, false)?;
+            let pairs = counters[MOVE_PAIRS];
+            if pairs > 0 {
+                // Traced from their own list, as many as there are: lavapipe zeroes a
+                // tracing kernel's stack at each invocation, which cost a drag step more
+                // than its few pairs traced (bvh.wgsl).
+                let stage = (MoveStage::PairsBefore, pairs);
+                counters = self.record_listed(PAIRS, &moving, stage, false)?;
+            }
             moving.rays_before = u64::from(counters[MOVE_RAYS]);
         } else {
             moving.listed = 0;
@@ -282,20 +303,8 @@ impl WgpuBackend {
         let mut counters = self.record_move_with(PASS, &moving, &stages, recording)?;
         let probed = counters[MOVE_PROBED];
         if probed > 0 {
-            // The slots the view test could not decide, probed in a kernel of their own,
-            // counting on from the resets.
-            let list = ListParams {
-                count: probed,
-                ..ListParams::default()
-            };
-            let list = buffers::uniform(&self.ctx, "list", &list);
-            let recording = Recording {
-                clear: false,
-                list: Some(&list),
-                ..Recording::default()
-            };
-            let stages = [(MoveStage::Probes, probed)];
-            counters = self.record_move_with(PASS, &moving, &stages, recording)?;
+            // The slots the view test could not decide, probed in a kernel of their own.
+            counters = self.record_listed(PASS, &moving, (MoveStage::Probes, probed), true)?;
         }
         let reset = u64::from(counters[MOVE_RESET]);
         self.moving = Some(MoveInProgress {
@@ -367,6 +376,29 @@ impl WgpuBackend {
         self.record_move_with(pass, moving, stages, recording)
     }
 
+    /// Records `stage` over the `count` items a stage before it listed, counting on from
+    /// that stage's counters, and checks every slot's finiteness after where `check`.
+    fn record_listed(
+        &self,
+        pass: &'static str,
+        moving: &MoveInProgress,
+        (stage, count): (MoveStage, u32),
+        check: bool,
+    ) -> Result<[u32; MOVE_COUNTERS], BackendError> {
+        let list = ListParams {
+            count,
+            ..ListParams::default()
+        };
+        let list = buffers::uniform(&self.ctx, "list", &list);
+        let recording = Recording {
+            clear: false,
+            check,
+            list: Some(&list),
+            ..Recording::default()
+        };
+        self.record_move_with(pass, moving, &[(stage, count)], recording)
+    }
+
     /// Records `stages` (each with its work items) of `moving` in one submission, as
     /// `recording` says (the index of the known pairs cleared before pose B's), and returns
     /// the move counters.
@@ -404,6 +436,7 @@ impl WgpuBackend {
             probes: &held.probes,
             known: &held.known,
             known_store: &held.known_store,
+            pair_list: &held.pair_list,
         };
         let slots = Slots {
             hit_points,

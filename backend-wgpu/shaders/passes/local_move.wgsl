@@ -3,9 +3,10 @@
 // over ppm_core::local_move's per-slot functions (their twins in the shared local_move.wgsl).
 // No slot leaves the device; what the host reads back are the counters in `move_counters`.
 //   pose A: `local_begin_main` per slot (prepare_slot; lists the slots whose direct light
-//           may change and that hold a direct sum), then `local_pairs_before_main` per listed
-//           slot (pose A's half of its pairs, their light taken from the last move's pose B
-//           where that is this pose and it evaluated them);
+//           may change and that hold a direct sum), `local_pairs_copy_main` per listed slot
+//           (its pairs' light taken from the last move's pose B where that is this pose and
+//           it evaluated them, the other pairs listed), then `local_pairs_before_main` per
+//           listed pair (pose A's half);
 //   pose B: `local_cover_main` per triangle (pose B's outline of the moved objects, a bit per
 //           pixel), `local_resets_main` per slot (reset_if_seen, listing the slots only a
 //           probe can tell about), `local_probes_main` per such slot (the probe), then
@@ -46,6 +47,9 @@
 // The last move's records in its pose B, as `pair_store` holds this move's in pose A (pose B
 // writes this move's here, once pose A has read them).
 @group(0) @binding(17) var<storage, read_write> known_store: array<f32>;
+// Pose A's pairs to trace, `i * direct_samples + j` for pair `j` of listed slot `i`
+// (`MOVE_PAIRS` of them): those the last move did not evaluate in this pose.
+@group(0) @binding(18) var<storage, read_write> pair_list: array<u32>;
 
 // A pair's first word in `pair_store` where it cannot change: its eye path goes straight to
 // its visible point (or out of the scene) past every moved box, and no ray from there to a
@@ -58,6 +62,7 @@ const MOVE_CORRECTED: u32 = 1u;
 const MOVE_PROBED: u32 = 2u;
 const MOVE_LISTED: u32 = 3u;
 const MOVE_RAYS: u32 = 4u;
+const MOVE_PAIRS: u32 = 5u;
 
 // Rays this invocation traced, added to MOVE_RAYS once at its end (count_rays).
 var<private> rays: u32;
@@ -188,47 +193,74 @@ fn known_light(at: u32) -> vec3<f32> {
     return vec3<f32>(known_store[at], known_store[at + 1u], known_store[at + 2u]);
 }
 
-// Pose A, per listed slot: its pairs' paths, and the light of those that may change in pose
-// B (NO_CHANGE for the others). A pair the last move evaluated in its pose B, this pose, with
-// the same keys is the same pair here (ppm_core::local_move::Pair: every move draws a slot's
-// pairs from the same numbers): its light is copied, and its path not traced again. It then
-// counts as one that may change, which costs nothing where it cannot: there its path and
-// light are the same in both poses, bit for bit, so its difference is exactly zero. Along a
-// drag the boxes barely move from step to step, so the pairs that changed last step are those
-// that may change in this one.
+// Appends pair `j` of listed slot `i` to `pair_list`, for a kernel that traces those pairs
+// only (see local_pairs_copy_main).
+fn list_pair(i: u32, j: u32) {
+    pair_list[atomicAdd(&move_counters[MOVE_PAIRS], 1u)] = i * params.direct_samples + j;
+}
+
+// The listed slot and pair of the `p`-th entry of `pair_list`.
+fn listed_pair(p: u32) -> vec2<u32> {
+    let e = pair_list[p];
+    return vec2<u32>(e / params.direct_samples, e % params.direct_samples);
+}
+
+// Pose A, per listed slot: the pairs the last move evaluated in its pose B, this pose, with the
+// same keys are the same pairs here (ppm_core::local_move::Pair: every move draws a slot's
+// pairs from the same numbers): their light is copied. The others are listed for
+// local_pairs_before_main. A copied pair counts as one that may change, which costs nothing
+// where it cannot: there its path and light are the same in both poses, bit for bit, so its
+// difference is exactly zero. Along a drag the boxes barely move from step to step, so the
+// pairs that changed last step are those that may change in this one.
 @compute @workgroup_size(64)
-fn local_pairs_before_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn local_pairs_copy_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = item_index(gid, groups);
     if i >= list.count {
         return;
     }
-    let slot = listed[i];
-    let pixel = hit_points[slot].pixel;
-    let record = pair_record(i);
     var was = 0u;
     if list.known != 0u {
-        was = known[slot];
+        was = known[listed[i]];
     }
-    for (var k = 0u; k < params.direct_samples; k++) {
-        let at = record + 3u * k;
-        var light = vec3<f32>(NO_CHANGE, 0.0, 0.0);
+    let record = pair_record(i);
+    for (var j = 0u; j < params.direct_samples; j++) {
         var copied = false;
         if was != 0u {
-            let kept = pair_record(was - 1u) + 3u * k;
+            let kept = pair_record(was - 1u) + 3u * j;
             copied = known_store[kept] != NO_CHANGE;
-            light = known_light(kept);
-        }
-        if !copied {
-            light = vec3<f32>(NO_CHANGE, 0.0, 0.0);
-            let path = pair_path(slot, pixel, k);
-            if pair_may_change(path, slot, pixel, k) {
-                light = pair_light(path, slot, pixel, k);
+            if copied {
+                let at = record + 3u * j;
+                pair_store[at] = known_store[kept];
+                pair_store[at + 1u] = known_store[kept + 1u];
+                pair_store[at + 2u] = known_store[kept + 2u];
             }
         }
-        pair_store[at] = light.x;
-        pair_store[at + 1u] = light.y;
-        pair_store[at + 2u] = light.z;
+        if !copied {
+            list_pair(i, j);
+        }
     }
+}
+
+// Pose A, per pair local_pairs_copy_main listed (`list.count` of them): its path, and its
+// light where it may change in pose B (NO_CHANGE where it cannot).
+@compute @workgroup_size(64)
+fn local_pairs_before_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let p = item_index(gid, groups);
+    if p >= list.count {
+        return;
+    }
+    let pair = listed_pair(p);
+    let slot = listed[pair.x];
+    let pixel = hit_points[slot].pixel;
+    var light = vec3<f32>(NO_CHANGE, 0.0, 0.0);
+    let path = pair_path(slot, pixel, pair.y);
+    if pair_may_change(path, slot, pixel, pair.y) {
+        light = pair_light(path, slot, pixel, pair.y);
+    }
+    let at = pair_record(pair.x) + 3u * pair.y;
+    pair_store[at] = light.x;
+    pair_store[at + 1u] = light.y;
+    pair_store[at + 2u] = light.z;
     count_rays();
 }
 

@@ -15,8 +15,10 @@ use Slot::{Read, ReadWrite, Table, Uniform, Unused};
 pub enum MoveStage {
     /// Pose A, per slot: `prepare_slot`, and the slots whose pairs the move corrects listed.
     Begin,
-    /// Pose A, per listed slot: pose A's half of its pairs (their light copied where the
-    /// last move evaluated it in this pose).
+    /// Pose A, per listed slot: its pairs' light copied where the last move evaluated it in
+    /// this pose, the other pairs listed.
+    PairsCopy,
+    /// Pose A, per listed pair: pose A's half.
     PairsBefore,
     /// Pose B, per triangle: pose B's outline of the moved objects.
     Cover,
@@ -32,6 +34,7 @@ pub enum MoveStage {
 impl MoveStage {
     pub(crate) const ALL: [MoveStage; STAGES] = [
         MoveStage::Begin,
+        MoveStage::PairsCopy,
         MoveStage::PairsBefore,
         MoveStage::Cover,
         MoveStage::Resets,
@@ -43,6 +46,7 @@ impl MoveStage {
     pub fn name(self) -> &'static str {
         match self {
             MoveStage::Begin => "preparation",
+            MoveStage::PairsCopy => "pose-A pairs kept",
             MoveStage::PairsBefore => "pose-A pairs",
             MoveStage::Cover => "outline",
             MoveStage::Resets => "resets",
@@ -55,6 +59,7 @@ impl MoveStage {
     fn entry(self) -> &'static str {
         match self {
             MoveStage::Begin => "local_begin_main",
+            MoveStage::PairsCopy => "local_pairs_copy_main",
             MoveStage::PairsBefore => "local_pairs_before_main",
             MoveStage::Cover => "local_cover_main",
             MoveStage::Resets => "local_resets_main",
@@ -65,41 +70,48 @@ impl MoveStage {
 
     /// The bindings (named as [`MoveBindings`] names them) the entry point reads, the others
     /// [`Slot::Unused`]: each stays within baseline WebGPU's per-stage limits.
-    fn slots(self) -> [Slot; 18] {
+    fn slots(self) -> [Slot; 19] {
         // params, camera, scene table, scene index, texels, boxes, objects, hit points,
         // slot bounds, covered, listed, pair store, move counters, cover, list, probes,
-        // known, known store.
+        // known, known store, pair list.
         match self {
             MoveStage::Begin => [
                 Uniform, Unused, Unused, Unused, Unused, Read, Unused, ReadWrite, Read, Unused,
-                ReadWrite, Unused, ReadWrite, Unused, Unused, Unused, Unused, Unused,
+                ReadWrite, Unused, ReadWrite, Unused, Unused, Unused, Unused, Unused, Unused,
+            ],
+            MoveStage::PairsCopy => [
+                Uniform, Unused, Unused, Unused, Unused, Unused, Unused, Unused, Unused, Unused,
+                ReadWrite, ReadWrite, ReadWrite, Unused, Uniform, Unused, ReadWrite, ReadWrite,
+                ReadWrite,
             ],
             MoveStage::PairsBefore => [
                 Uniform, Uniform, Table, Uniform, Read, Read, Unused, ReadWrite, Unused, Unused,
-                ReadWrite, ReadWrite, ReadWrite, Unused, Uniform, Unused, ReadWrite, ReadWrite,
+                ReadWrite, ReadWrite, ReadWrite, Unused, Uniform, Unused, Unused, Unused,
+                ReadWrite,
             ],
             MoveStage::PairsAfter => [
                 Uniform, Uniform, Table, Uniform, Read, Unused, Unused, ReadWrite, Unused, Unused,
                 ReadWrite, ReadWrite, ReadWrite, Unused, Uniform, Unused, ReadWrite, ReadWrite,
+                Unused,
             ],
             MoveStage::Cover => [
                 Unused, Unused, Table, Uniform, Unused, Unused, Read, Unused, Unused, ReadWrite,
-                Unused, Unused, Unused, Uniform, Unused, Unused, Unused, Unused,
+                Unused, Unused, Unused, Uniform, Unused, Unused, Unused, Unused, Unused,
             ],
             MoveStage::Resets => [
                 Uniform, Uniform, Unused, Unused, Unused, Read, Unused, ReadWrite, Read, ReadWrite,
-                Unused, Unused, ReadWrite, Unused, Unused, ReadWrite, Unused, Unused,
+                Unused, Unused, ReadWrite, Unused, Unused, ReadWrite, Unused, Unused, Unused,
             ],
             MoveStage::Probes => [
                 Uniform, Uniform, Table, Uniform, Read, Unused, Unused, ReadWrite, Unused, Unused,
-                Unused, Unused, ReadWrite, Unused, Uniform, ReadWrite, Unused, Unused,
+                Unused, Unused, ReadWrite, Unused, Uniform, ReadWrite, Unused, Unused, Unused,
             ],
         }
     }
 }
 
 /// Entry points of local_move.wgsl.
-const STAGES: usize = 6;
+const STAGES: usize = 7;
 
 /// What a local move's kernels bind, named as local_move.wgsl binds it.
 pub struct MoveBindings<'a> {
@@ -133,6 +145,8 @@ pub struct MoveBindings<'a> {
     pub known: &'a wgpu::Buffer,
     /// `known_store`.
     pub known_store: &'a wgpu::Buffer,
+    /// `pair_list`.
+    pub pair_list: &'a wgpu::Buffer,
 }
 
 /// local_move.wgsl: its module parsed at a backend's first local move, each entry point's
@@ -176,9 +190,9 @@ impl LocalMoveKernels {
         })
     }
 
-    /// Records `stage` over `items` work items (slots, listed slots or triangles), its
-    /// pipeline with the refraction code where `glass`; none records nothing, and compiles
-    /// nothing.
+    /// Records `stage` over `items` work items (slots, listed slots, listed pairs or
+    /// triangles), its pipeline with the refraction code where `glass`; none records nothing,
+    /// and compiles nothing.
     pub fn record(
         &self,
         ctx: &GpuContext,
@@ -212,6 +226,7 @@ impl LocalMoveKernels {
                 b.probes,
                 b.known,
                 b.known_store,
+                b.pair_list,
             ],
         );
         kernel.dispatch(encoder, &group, items);
