@@ -2,11 +2,12 @@
 //! reports: photons per second, iteration times at three sizes, and a drag step in
 //! iterations.
 //!
-//! `cargo bench -p harness --bench gpu` prints the adapter, then per size of cornell-box
+//! `cargo bench -p harness --bench gpu` prints the adapter, then, for a built-in scene
+//! (`PPM_BENCH_SCENE`, default `cornell-box`; it must declare a move), per size
 //! (`PPM_BENCH_SIZES`, default `256,768,1920x1080`; `N` is `NxN`) photons per second over
 //! the whole iteration and milliseconds per iteration and per pass kind on the wall clock,
 //! then, where the adapter has timestamp queries, each pass's milliseconds on the device.
-//! Then a drag at `PPM_BENCH_DRAG_SIZE` (default 768): cornell-box's move in thirtieths,
+//! Then a drag at `PPM_BENCH_DRAG_SIZE` (default 768): the scene's first move in thirtieths,
 //! `PPM_BENCH_MOVES` times (default 30), an iteration after each, local mode; its cost is a
 //! move's milliseconds over an iteration's before the drag. Each render runs
 //! `PPM_BENCH_WARMUP` iterations first (default 10: pipelines compile, buffers grow), then
@@ -49,9 +50,15 @@ fn main() {
             None => s.trim().parse().ok().map(|n| (n, n)),
         })
         .collect();
-    let scene = scenes::builtin("cornell-box")
-        .and_then(|s| s.load().ok())
-        .expect("cornell-box loads");
+    let name = std::env::var("PPM_BENCH_SCENE").unwrap_or_else(|_| "cornell-box".into());
+    let Some(scene) = scenes::builtin(&name).and_then(|s| s.load().ok()) else {
+        println!("PPM_BENCH_SCENE={name}: no built-in scene of that name loads");
+        return;
+    };
+    let Some(&declared) = scene.moves.first() else {
+        println!("PPM_BENCH_SCENE={name}: the scene declares no move to drag");
+        return;
+    };
     println!("adapter: {}", gpu.adapter_name());
     println!(
         "device times: {}",
@@ -61,9 +68,7 @@ fn main() {
             "not measured (the adapter offers no timestamp queries)"
         }
     );
-    println!(
-        "cornell-box, sppm, {iterations} iterations x {photons} photons after {warmup} of warm-up"
-    );
+    println!("{name}, sppm, {iterations} iterations x {photons} photons after {warmup} of warm-up");
     println!(
         "{:<10} {:>12} {:>8} {:>7} {:>7} {:>7} {:>7}",
         "size", "photons/s", "iter ms", "eye", "direct", "photon", "gather"
@@ -72,7 +77,7 @@ fn main() {
     for (width, height) in sizes {
         let params = render_params(&scene, width, height, photons);
         let mut r =
-            Renderer::start(&mut gpu, scene.clone(), &params, &moving).expect("cornell-box loads");
+            Renderer::start(&mut gpu, scene.clone(), &params, &moving).expect("the scene loads");
         // An image too large for the adapter's binding limit is refused at its first
         // iteration (lavapipe binds 128 MiB: 1920x1080's slots are 232 MB).
         if let Err(e) = r.iteration() {
@@ -101,16 +106,16 @@ fn main() {
     }
 
     let params = render_params(&scene, drag_size, drag_size, photons);
-    let step = step_of(*scene.moves.first().expect("cornell-box declares a move"));
+    let step = step_of(declared);
     let mut r =
-        Renderer::start(&mut gpu, scene.clone(), &params, &moving).expect("cornell-box loads");
+        Renderer::start(&mut gpu, scene.clone(), &params, &moving).expect("the scene loads");
     r.expect_local_moves().expect("the moves are prepared");
     warm_up(&mut r, warmup);
     let per_iteration = 1e3 * timed(&mut r, iterations) / f64::from(iterations.max(1));
     let before = r.report().clone();
     let d = drag(&mut r, step, moves);
     println!(
-        "drag at {drag_size}x{drag_size}: {moves} moves of a thirtieth of cornell-box's, an \
+        "drag at {drag_size}x{drag_size}: {moves} moves of a thirtieth of {name}'s, an \
          iteration after each"
     );
     println!(
@@ -142,7 +147,7 @@ fn timed(r: &mut Renderer, iterations: u32) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-/// cornell-box's settings at `width` x `height`, `photons` per iteration.
+/// The scene's settings at `width` x `height`, `photons` per iteration.
 fn render_params(scene: &Scene, width: u32, height: u32, photons: u32) -> RenderParams {
     let mut p = RenderParams::for_scene(scene);
     (p.width, p.height, p.photons_per_pass) = (width, height, photons);
