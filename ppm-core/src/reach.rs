@@ -67,10 +67,28 @@ impl Aabb {
 /// interval of `s` (both bounds of `B(s)` are linear in `s`); the test asks whether the
 /// three intervals share an `s` in `[0, 1]`, each widened a little for rounding: never a
 /// wrong no, and a few divisions whatever the boxes (a local move asks it of every slot).
+/// A target well apart from the box around `from` and `to` is answered no before any
+/// division ([`near_both`]): most of a move's slots.
 pub fn segments_may_meet(from: &Aabb, to: &Aabb, target: &Aabb) -> bool {
     if from.is_empty() || to.is_empty() || target.is_empty() {
         return false;
     }
+    near_both(from, to, target) && swept_boxes_meet(from, to, target)
+}
+
+/// Whether `target` comes near the box around `from` and `to`, which holds every segment
+/// between them: within a margin far wider than the rounding of [`swept_boxes_meet`], so that
+/// a no here is a no there.
+fn near_both(from: &Aabb, to: &Aabb, target: &Aabb) -> bool {
+    let around = from.union(to);
+    let scale = around.lo.abs().max(around.hi.abs());
+    let margin = scale.max(target.lo.abs()).max(target.hi.abs()) * (16.0 * WIDEN);
+    !((around.lo - margin).cmpgt(target.hi).any() || (around.hi + margin).cmplt(target.lo).any())
+}
+
+/// The sweep of [`segments_may_meet`]: whether the intervals of `s` where `B(s)` overlaps
+/// `target` on each axis share a point of `[0, 1]`.
+fn swept_boxes_meet(from: &Aabb, to: &Aabb, target: &Aabb) -> bool {
     let (mut first, mut last) = (0.0_f32, 1.0_f32);
     for k in 0..3 {
         // B(s).lo <= target.hi, and B(s).hi >= target.lo.
@@ -197,6 +215,36 @@ mod tests {
             }
         }
         assert!(no > 2_500, "only {no} targets away from the sweep");
+    }
+
+    /// The quick no changes no answer: over random boxes, and targets set just beyond the
+    /// box around the two (by a few ulps to a few thousandths of their size, on every side),
+    /// the sweep alone answers no wherever the quick test does.
+    #[test]
+    fn the_quick_no_is_the_sweeps_no() {
+        let mut quick = 0;
+        for path in 0..20_000 {
+            let (k, [from, to, target]) = random_boxes(13, path);
+            let around = from.union(&to);
+            let axis = (path % 3) as usize;
+            let gap = [1e-7, 1e-6, 1e-5, 1e-4, 1e-3][(path / 3 % 5) as usize] * k.uniform(24);
+            let mut near = target;
+            let size = near.hi[axis] - near.lo[axis];
+            if path % 2 == 0 {
+                near.lo[axis] = around.hi[axis] * (1.0 + gap) + gap;
+                near.hi[axis] = near.lo[axis] + size;
+            } else {
+                near.hi[axis] = around.lo[axis] * (1.0 - gap) - gap;
+                near.lo[axis] = near.hi[axis] - size;
+            }
+            for t in [target, near] {
+                if !near_both(&from, &to, &t) {
+                    quick += 1;
+                    assert!(!swept_boxes_meet(&from, &to, &t), "{from:?} {to:?} {t:?}");
+                }
+            }
+        }
+        assert!(quick > 5_000, "only {quick} quick answers");
     }
 
     #[test]

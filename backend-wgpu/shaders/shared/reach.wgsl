@@ -54,11 +54,25 @@ fn reach_at_most(at0: f32, at1: f32, bound_in: f32) -> vec2<f32> {
     return select(vec2<f32>(s, 1.0), vec2<f32>(0.0, s), slope > 0.0);
 }
 
+// Whether `obstacle` comes near the box around `start` and `end`, within a margin far wider
+// than the sweep's rounding (ppm_core::reach::near_both).
+fn reach_near_both(start: Aabb, end: Aabb, obstacle: Aabb) -> bool {
+    let lo = min(start.lo, end.lo);
+    let hi = max(start.hi, end.hi);
+    let scale = max(max(abs(lo), abs(hi)), max(abs(obstacle.lo), abs(obstacle.hi)));
+    let margin = scale * (16.0 * REACH_WIDEN);
+    return !(any(lo - margin > obstacle.hi) || any(hi + margin < obstacle.lo));
+}
+
 // Whether some segment from a point of `start` to a point of `end` may meet `obstacle`
 // (ppm_core::reach::segments_may_meet: the box swept from one to the other overlaps the
-// obstacle on a shared interval of s per axis).
+// obstacle on a shared interval of s per axis; an obstacle well apart from the box around
+// both is answered no first).
 fn segments_may_meet(start: Aabb, end: Aabb, obstacle: Aabb) -> bool {
     if aabb_is_empty(start) || aabb_is_empty(end) || aabb_is_empty(obstacle) {
+        return false;
+    }
+    if !reach_near_both(start, end, obstacle) {
         return false;
     }
     var first = 0.0;
