@@ -68,7 +68,7 @@ impl Aabb {
 /// three intervals share an `s` in `[0, 1]`, each widened a little for rounding: never a
 /// wrong no, and a few divisions whatever the boxes (a local move asks it of every slot).
 /// A target well apart from the box around `from` and `to` is answered no before any
-/// division ([`near_both`]): most of a move's slots.
+/// division (`near_both`): most of a move's slots.
 pub fn segments_may_meet(from: &Aabb, to: &Aabb, target: &Aabb) -> bool {
     if from.is_empty() || to.is_empty() || target.is_empty() {
         return false;
