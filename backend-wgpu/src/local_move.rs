@@ -13,11 +13,12 @@
 //! pose B skips it. The slots are counted first and only those get a record: a move that may
 //! change nobody's direct light allocates nothing. Pose B's lights are kept in a second store
 //! for the next move, whose pose A that pose is, as backend-cpu keeps them: along a drag, pose
-//! A copies what the last move evaluated instead of evaluating it again. The pairs each pose
-//! traces are listed first and traced by a kernel of their own, so that the few a drag step's
-//! pose A traces do not hold up workgroups of slots that trace nothing. Two stores of 12
-//! bytes a pair and a list of 4: with every slot of a 768x768 image listed, 66 MB for a drag
-//! step's 4 pairs, 264 MB for [`ppm_core::local_move::MOST_SAMPLES`].
+//! A copies what the last move evaluated instead of evaluating it again. The pairs pose A
+//! cannot copy are listed first and traced by a kernel of their own, so that the few a drag
+//! step traces do not hold up workgroups of slots that trace nothing; pose B, whose pairs
+//! mostly trace, walks the listed slots. Two stores of 12 bytes a pair and a list of 4: with
+//! every slot of a 768x768 image listed, 66 MB for a drag step's 4 pairs, 264 MB for
+//! [`ppm_core::local_move::MOST_SAMPLES`].
 
 mod kernels;
 
@@ -246,7 +247,9 @@ impl WgpuBackend {
             let held = self.move_buffers.as_mut().expect("allocated above");
             if held.store.size() < bytes {
                 held.store = storage_zeroed(&self.ctx, "pair store", bytes)?;
-                let bytes = pair_list_bytes(moving.listed, &keys);
+            }
+            let bytes = pair_list_bytes(moving.listed, &keys);
+            if held.pair_list.size() < bytes {
                 held.pair_list = storage_zeroed(&self.ctx, "listed pairs", bytes)?;
             }
             let list = ListParams {

@@ -10,8 +10,8 @@
 //! last ten, and the mean of those between the moves, which keep their photon paths for the
 //! next move and serve the reset slots first) and per move (mean, median and largest), the
 //! mean and median move's ratio to a warm-up iteration, and the slots the moves reset and
-//! corrected on average, then where a move's time goes (each part's median: the host's refit and request, the
-//! backend's passes).
+//! corrected on average, then where a move's time goes (each part's median: the host's refit
+//! and request, the backend's passes).
 //! The `crowd` row drags cornell-bunny's short block past 14 more small bunnies (1.05
 //! million triangles): a move must cost what the moved object touches, not the scene.
 //! Figures only, no threshold: machines are noisy, compare rows of one
