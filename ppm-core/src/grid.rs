@@ -81,8 +81,17 @@ pub fn bucket_count(photon_count: u32) -> u32 {
 /// Integer cell coordinates of a point: `floor(p / cell)`, clamped into i32.
 #[inline]
 pub fn cell_of(p: Vec3, cell: f32) -> [i32; 3] {
-    let c = p / cell;
-    [floor_i32(c.x), floor_i32(c.y), floor_i32(c.z)]
+    [
+        cell_coord(p.x, cell),
+        cell_coord(p.y, cell),
+        cell_coord(p.z, cell),
+    ]
+}
+
+/// One coordinate of [`cell_of`]: `floor(v / cell)`, clamped into i32.
+#[inline]
+pub fn cell_coord(v: f32, cell: f32) -> i32 {
+    floor_i32(v / cell)
 }
 
 /// The largest f32 below 2^31.

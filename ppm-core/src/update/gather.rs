@@ -55,6 +55,16 @@ impl SlotState {
         (hp.n, hp.r2, hp.tau) = (self.n, self.r2, self.tau);
         (hp.emitted, hp.discounted) = (self.emitted, self.discounted);
     }
+
+    /// Whether the statistics [`check_hit_points`](crate::check::check_hit_points) names that
+    /// a gather writes (flux, count, radius, emitted) are finite, without a branch: a gather
+    /// screens what it stores, since every other field was screened by the pass that wrote it.
+    pub fn is_finite(&self) -> bool {
+        let [x, y, z] = self.tau;
+        [x, y, z, self.n, self.r2, self.emitted]
+            .iter()
+            .fold(true, |ok, v| ok & v.is_finite())
+    }
 }
 
 /// The squared radius of the disc slot `hp` searches a map within: its own, or in a pass
