@@ -54,8 +54,9 @@ use ppm_core::device_time::DeviceTime;
 use ppm_core::emission::PhotonSource;
 use ppm_core::image::Image;
 use ppm_core::layout::{
-    ChainLight, DirectLightParams, EyePassParams, GatherParams, HitPoint, PathDeposits, Photon,
-    PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags, photon_flags,
+    ChainLight, DirectLightParams, EyePassParams, GatherParams, GridParams, GridPhoton, HitPoint,
+    PathDeposits, Photon, PhotonPassParams, ResolveParams, SlotBounds, emission_kind, eye_flags,
+    photon_flags,
 };
 use ppm_core::local_move::{CorrectionPhotons, LocalMove, Pose};
 use ppm_core::passes::{
@@ -329,6 +330,28 @@ impl WgpuBackend {
     /// Batches the last photon pass was split into.
     pub fn last_pass_batches(&self) -> u32 {
         self.batches
+    }
+
+    /// The last photon map's deposits in the order a gather reads them, each as its bucket
+    /// and its rank in path order, with the photon itself: a test of the grid's sort holds
+    /// them to the CPU's order (buckets ascending, ranks ascending within one) and to the
+    /// deposits the pass made.
+    pub fn map_order(&mut self) -> Result<Vec<(u32, u32, GridPhoton)>, BackendError> {
+        self.fold_held()?;
+        let Some(map) = &self.map else {
+            return Ok(Vec::new());
+        };
+        let count = map.count as usize;
+        let grid: Vec<GridParams> = read_back(&self.ctx, &map.grid, 1)?;
+        let sorted: Vec<GridPhoton> = read_back(&self.ctx, &map.sorted, count)?;
+        let order: Vec<u32> = read_back(&self.ctx, &map.order, count)?;
+        let ranks: Vec<u32> = read_back(&self.ctx, &map.ranks, count)?;
+        let mask = grid[0].bucket_count - 1;
+        Ok(sorted
+            .into_iter()
+            .zip(order)
+            .map(|(p, i)| (p.cell & mask, ranks[i as usize], p))
+            .collect())
     }
 
     /// Whether [`Backend::device_times`] measures anything: the device has timestamp queries.

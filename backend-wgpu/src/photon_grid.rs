@@ -95,7 +95,7 @@ impl PhotonGridKernels {
             params: kernel("grid_params_main", 1, &[0, 3, 4]),
             count: kernel("grid_count_main", WORKGROUP, &[0, 1, 4, 5, 8]),
             scatter: kernel("grid_scatter_main", WORKGROUP, &[0, 6, 7, 8]),
-            sort: kernel("grid_sort_main", WORKGROUP, &[0, 5, 7, 8, 10]),
+            sort: kernel("grid_sort_main", WORKGROUP, &[0, 5, 6, 7, 8, 10]),
             copy: kernel("grid_copy_main", WORKGROUP, &[0, 1, 7, 8, 9]),
             copy_words,
         }
@@ -169,6 +169,14 @@ impl PhotonGridKernels {
         );
         step(&self.scatter, encoder, count);
         step(&self.sort, encoder, count);
+        // The sort wrote the bucket order into the cursors (photon_grid.wgsl).
+        encoder.copy_buffer_to_buffer(
+            &buffers.bucket_cursor,
+            0,
+            &buffers.order,
+            0,
+            u64::from(count) * 4,
+        );
         step(&self.copy, encoder, count);
         if words == 1 || words == 4 {
             step(&self.copy_words[usize::from(words == 4)], encoder, count);

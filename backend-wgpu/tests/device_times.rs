@@ -5,40 +5,25 @@
 use backend_wgpu::{GpuContext, WgpuBackend};
 use ppm_core::compile::compile_scene;
 use ppm_core::device_time::{DeviceTime, per_pass};
-use ppm_core::emission::PhotonSource;
-use ppm_core::layout::{DirectLightParams, EyePassParams, GatherParams, PhotonPassParams};
-use ppm_core::passes::{Backend, DirectLight, EyePass, GatherPass, PhotonPass, SceneUpload};
+use ppm_core::layout::{DirectLightParams, GatherParams};
+use ppm_core::passes::{Backend, DirectLight, GatherPass, SceneUpload};
 use std::process::ExitCode;
 use test_support::{Need, Suite, figure};
+
+mod common;
 
 /// One iteration on cornell-box at 16x16: eye pass, direct light, a photon pass and its gather.
 fn iteration(backend: &mut WgpuBackend) {
     let scene = scenes::builtin("cornell-box").unwrap().load().unwrap();
     backend.load_scene(&compile_scene(&scene, 16, 16)).unwrap();
-    let eye = EyePassParams {
-        spp: 1,
-        max_depth: 4,
-        r2_initial: 1.0,
-        ray_epsilon: 1e-3,
-        ..Default::default()
-    };
-    backend.eye_pass(&eye).unwrap();
+    common::eye_pass(backend, 1.0);
     let direct = DirectLightParams {
         samples: 1,
         ray_epsilon: 1e-3,
         ..Default::default()
     };
     backend.direct_light(&direct).unwrap();
-    let photons = PhotonPassParams {
-        photon_count: 20_000,
-        max_depth: 8,
-        ray_epsilon: 1e-3,
-        power_scale: 1.0,
-        ..Default::default()
-    };
-    backend
-        .photon_pass(&photons, &PhotonSource::Lights)
-        .unwrap();
+    common::photon_pass(backend);
     let gather = GatherParams {
         alpha: 0.7,
         emitted_increment: 20_000.0,

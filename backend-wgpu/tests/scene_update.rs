@@ -4,33 +4,17 @@
 
 use backend_wgpu::{GpuContext, WgpuBackend};
 use ppm_core::compile::{CompiledScene, compile_scene, gpu_camera, mover_boxes};
-use ppm_core::emission::PhotonSource;
-use ppm_core::layout::{EyePassParams, PhotonPassParams};
-use ppm_core::passes::{EyePass, LocalMoves, PhotonPass, ReadBack, SceneUpload};
+use ppm_core::passes::{LocalMoves, ReadBack, SceneUpload};
 use ppm_core::refit::recompile_moved;
 use std::process::ExitCode;
 use test_support::{Need, Suite};
 
+mod common;
+
 /// The slots and the photons of one eye pass and one photon pass, as bytes.
 fn traced(backend: &mut WgpuBackend) -> (Vec<u8>, Vec<u8>) {
-    let eye = EyePassParams {
-        spp: 1,
-        max_depth: 4,
-        r2_initial: 1.0,
-        ray_epsilon: 1e-3,
-        ..Default::default()
-    };
-    backend.eye_pass(&eye).unwrap();
-    let photons = PhotonPassParams {
-        photon_count: 20_000,
-        max_depth: 8,
-        ray_epsilon: 1e-3,
-        power_scale: 1.0,
-        ..Default::default()
-    };
-    backend
-        .photon_pass(&photons, &PhotonSource::Lights)
-        .unwrap();
+    common::eye_pass(backend, 1.0);
+    common::photon_pass(backend);
     (
         bytemuck::cast_slice(&backend.read_hit_points().unwrap()).to_vec(),
         bytemuck::cast_slice(&backend.read_photons().unwrap()).to_vec(),
