@@ -6,6 +6,7 @@
 
 use crate::trace::SceneData;
 use glam::Vec3;
+use ppm_core::check::slot_is_finite;
 use ppm_core::layout::{GpuCamera, HitPoint, SlotBounds, hit_flags};
 use ppm_core::local_move::{
     LocalMove, PairInPose, View, correct_direct, prepare_slot, reset_if_seen,
@@ -72,16 +73,18 @@ pub fn begin_main(hit_points: &mut [HitPoint], bounds: &[SlotBounds], request: &
 }
 
 /// The resets of a local move in pose B (`scene`, `camera`): each slot whose view the move
-/// may change starts over ([`reset_if_seen`]).
+/// may change starts over ([`reset_if_seen`]). Returns the counters, and whether every slot
+/// it started over is finite ([`slot_is_finite`], screened as each is written: the others
+/// keep what earlier passes screened, and a sweep of every slot cost a fiftieth of a step).
 pub fn resets_main(
     hit_points: &mut [HitPoint],
     bounds: &[SlotBounds],
     (scene, camera): (&SceneData, &GpuCamera),
     request: &LocalMove,
-) -> LocalMoveStats {
+) -> (LocalMoveStats, bool) {
     let covered = moved_cover(scene, camera, &request.objects);
     let nearest = request.nearest_after(camera.eye.into());
-    let (reset, corrected, probed) = hit_points
+    let (reset, corrected, probed, finite) = hit_points
         .par_iter_mut()
         .enumerate()
         .with_min_len(256)
@@ -94,16 +97,21 @@ pub fn resets_main(
                 u64::from(reset),
                 u64::from(corrected),
                 u64::from(view == View::Probe),
+                !reset || slot_is_finite(hp),
             )
         })
-        .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
-    LocalMoveStats {
+        .reduce(
+            || (0, 0, 0, true),
+            |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2, a.3 & b.3),
+        );
+    let stats = LocalMoveStats {
         reset,
         kept: hit_points.len() as u64 - reset,
         direct_corrected: corrected,
         probed,
         rays: 0,
-    }
+    };
+    (stats, finite)
 }
 
 /// [`ppm_core::local_move::moved_cover`], found over the moved objects' own subtrees
@@ -121,13 +129,14 @@ fn moved_cover(scene: &SceneData, camera: &GpuCamera, objects: &[u32]) -> Vec<bo
 /// The direct-light change of a local move in pose B (`after`): each kept slot flagged
 /// `DIRECT_MAY_CHANGE` with a direct sum is corrected by its pairs ([`correct_direct`]),
 /// pose A traced only where they may differ, and not at all where `known` holds them.
-/// Returns the counters and the pairs in pose B, for the next move.
+/// Returns the counters, the pairs in pose B (for the next move), and whether every
+/// corrected direct sum is finite (the only field the change writes).
 pub fn direct_change_main(
     hit_points: &mut [HitPoint],
     (before, after, camera): (&SceneData, &SceneData, &GpuCamera),
     request: &LocalMove,
     known: Option<&KnownPairs>,
-) -> (LocalMoveStats, KnownPairs) {
+) -> (LocalMoveStats, KnownPairs, bool) {
     let known = known.filter(|k| k.valid_for(before.pose, request));
     let moved = request.moved();
     let pairs: Vec<Option<Box<[PairInPose]>>> = hit_points
@@ -139,6 +148,11 @@ pub fn direct_change_main(
             correct_direct(hp, slot as u32, poses, (request, &moved), known)
         })
         .collect();
+    let finite = hit_points
+        .iter()
+        .zip(&pairs)
+        .filter(|(_, p)| p.is_some())
+        .all(|(hp, _)| hp.direct.iter().all(|v| v.is_finite()));
     let stats = LocalMoveStats {
         direct_corrected: pairs.iter().filter(|p| p.is_some()).count() as u64,
         ..LocalMoveStats::default()
@@ -148,7 +162,7 @@ pub fn direct_change_main(
         request: request.clone(),
         slots: pairs.into_iter().map(Option::unwrap_or_default).collect(),
     };
-    (stats, pairs)
+    (stats, pairs, finite)
 }
 
 #[cfg(test)]
@@ -245,8 +259,32 @@ mod tests {
         let mut slots = slots();
         let (before, after) = (SceneData::new(a), SceneData::new(b));
         let poses = (&before, &after, &b.camera);
-        let (_, pairs) = direct_change_main(&mut slots, poses, request, known);
+        let (_, pairs, finite) = direct_change_main(&mut slots, poses, request, known);
+        assert!(finite, "the corrected direct sums are finite");
         (slots.iter().map(|hp| hp.direct).collect(), pairs)
+    }
+
+    /// The change screens what it writes: a corrected sum that comes out not finite is
+    /// reported, so the backend names it (the pass sweeps every slot only then).
+    #[test]
+    fn a_corrected_sum_left_not_finite_is_reported() {
+        let (_, scene, m) = moved_scenes().swap_remove(0);
+        let mut next = scene.clone();
+        next.apply(&m);
+        let (a, b) = (
+            compile_scene(&scene, SIZE, SIZE),
+            compile_scene(&next, SIZE, SIZE),
+        );
+        let request = request(&a, (&scene, &next), m.object);
+        let (before, after) = (SceneData::new(&a), SceneData::new(&b));
+        let poses = (&before, &after, &b.camera);
+        let mut fine = slots();
+        let (stats, _, finite) = direct_change_main(&mut fine, poses, &request, None);
+        assert!(finite && stats.direct_corrected > 0, "{stats:?}");
+        let mut broken = slots();
+        broken[SIZE as usize * 20 + 17].direct[1] = f32::INFINITY;
+        let (_, _, finite) = direct_change_main(&mut broken, poses, &request, None);
+        assert!(!finite);
     }
 
     /// Pose A is traced only where pose B's pair may differ from it, and that changes no
