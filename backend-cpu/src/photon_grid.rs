@@ -144,10 +144,11 @@ pub fn build_photon_grid(
     }
 }
 
-/// Visible points the cell size is read from: every `k`-th slot, at least this many of them
-/// valid where the slots hold as many. The quantile of a few tens of thousands of radii lands
-/// in the same bin as the quantile of all of them, bar rounding at a bin's edge, and reading
-/// every slot cost a tenth of the gather at 768x768 (62 MB of slots for a few bytes each).
+/// Slots the cell size is read from, at least: every `k`-th slot, `k` as large as still reads
+/// this many (every slot where a quarter of them are not valid). The quantile of a few tens
+/// of thousands of radii lands in the bin of the quantile of all of them, bar rounding at a
+/// bin's edge, and reading every slot cost a tenth of the gather at 768x768 (62 MB of slots
+/// for a few bytes each).
 const RADIUS_SAMPLES: usize = 1 << 15;
 
 /// Histogram of the search radii ([`radius_bin`]) of the valid slots among a fixed stride of
@@ -187,9 +188,9 @@ const KEY_LANES: usize = 8;
 /// Each photon's [`cell_key`], [`KEY_LANES`] photons at a time. The compiler packs a single
 /// photon's three divisions into one four-lane division whose fourth lane is the word after
 /// the position in memory, the photon's path index: a subnormal float, which the CPU divides
-/// in microcode at a hundred times the cost (keying took five times as long). Dividing the
-/// same coordinate of several photons fills every lane with a coordinate (padding with zero),
-/// and gives the same quotients as [`ppm_core::grid::cell_of`].
+/// in microcode (keying took five times as long). Dividing the same coordinate of several
+/// photons fills every lane with a coordinate (padding with zero), and gives the same
+/// quotients as [`ppm_core::grid::cell_of`].
 fn cell_keys(photons: &[Photon], cell: f32) -> Vec<u32> {
     let mut keys = vec![0u32; photons.len()];
     keys.par_chunks_mut(4096)
