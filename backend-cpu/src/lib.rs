@@ -637,6 +637,7 @@ impl ReadBack for CpuBackend {
                 needs: "an eye pass with the same slot count",
             });
         }
+        check_slots("write hit points", hit_points)?;
         self.hit_points.copy_from_slice(hit_points);
         Ok(())
     }

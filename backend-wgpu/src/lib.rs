@@ -921,6 +921,7 @@ impl ReadBack for WgpuBackend {
                 needs: "an eye pass with the same slot count",
             });
         }
+        check_hit_points("write hit points", hit_points)?;
         self.ctx
             .queue
             .write_buffer(buffer, 0, bytemuck::cast_slice(hit_points));

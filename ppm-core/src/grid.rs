@@ -13,8 +13,9 @@
 //! them contiguously and skips those of another cell that shares the bucket. Visiting cells in
 //! z, y, x order and photons in bucket order fixes the order of every sum, whatever the
 //! threads. A backend may scale the cells to suit its search (the CPU backend's are twice as
-//! wide), or read the quantile from a sample of the visible points (the CPU backend's, at
-//! 768x768): that changes the order of additions between backends, not what a disc holds.
+//! wide), or read the quantile from a sample of the visible points (the CPU backend's, from
+//! 65,536 slots on): that changes the order of additions between backends, not what a disc
+//! holds.
 //!
 //! Why this and not pbrt's grid over the visible points (each photon splatting into the
 //! points around it): splatting adds into a point's sums from many photons at once, which

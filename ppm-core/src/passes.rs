@@ -273,7 +273,10 @@ pub trait ReadBack {
     /// [`crate::layout::photon_flags::ADD_TO_MAP`], its own).
     fn read_photons(&mut self) -> Result<Vec<Photon>, BackendError>;
     /// Replaces the hit-point buffer (same slot count): seeds extreme states for the stress
-    /// suite and lets a debugging tool replay a recorded state.
+    /// suite, resumes a checkpoint and lets a debugging tool replay a recorded state. Slots
+    /// with a field that is not finite are refused ([`BackendError::NonFinite`], pass "write
+    /// hit points", as [`crate::check::check_hit_points`] names it) and nothing is written:
+    /// every pass screens only what it writes, so what is written here is screened here.
     fn write_hit_points(&mut self, hit_points: &[HitPoint]) -> Result<(), BackendError>;
 }
 

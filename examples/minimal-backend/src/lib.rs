@@ -336,6 +336,7 @@ impl ReadBack for MinimalBackend {
                 self.hit_points.len()
             )));
         }
+        check_hit_points("write hit points", hit_points)?;
         self.hit_points = hit_points.to_vec();
         Ok(())
     }
