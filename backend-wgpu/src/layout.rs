@@ -4,6 +4,15 @@
 use bytemuck::{Pod, Zeroable};
 use ppm_core::layout::{CameraMoveParams, GpuBounds, HitPoint};
 
+/// A bit of [`ppm_core::layout::PhotonPassParams::flags`] this backend sets on its own
+/// launches, above the contract's [`ppm_core::layout::photon_flags`]: a pairing pose B whose
+/// pose-A deposits are held unfiled in the same buffer marks both deposits of each pair that
+/// cancels ([`ppm_core::update::pairing::Partner::cancels`]) by the words beside them
+/// (`CANCELLED_PARTNER` in layout.wgsl), and the map that joins them leaves both out
+/// ([`GridBuildParams::leave_out`]). Only while they are unfiled: pose A's deposits, filed on
+/// their own, would otherwise lose their partners.
+pub const PHOTON_MARK_CANCELLED: u32 = 1 << 31;
+
 /// scan.wgsl's parameters. 16 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -34,8 +43,9 @@ pub struct GridBuildParams {
     /// for its pose B), first in the buffer: in each bucket they come before the pass's own,
     /// as in the CPU's map, whatever their ranks.
     pub held: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// Non-zero: leave out the deposits marked as one of a pair that cancels (a pairing pose
+    /// B joining its pose A's, [`PHOTON_MARK_CANCELLED`]), which need four words beside each.
+    pub leave_out: u32,
     /// Padding.
     pub _pad1: u32,
     /// Padding.

@@ -341,11 +341,12 @@ impl WgpuBackend {
         let Some(map) = &self.map else {
             return Ok(Vec::new());
         };
-        let count = map.count as usize;
         let grid: Vec<GridParams> = read_back(&self.ctx, &map.grid, 1)?;
+        // The deposits filed: those the grid left out have no place in its order.
+        let count = grid[0].photon_count as usize;
         let sorted: Vec<GridPhoton> = read_back(&self.ctx, &map.sorted, count)?;
         let order: Vec<u32> = read_back(&self.ctx, &map.order, count)?;
-        let ranks: Vec<u32> = read_back(&self.ctx, &map.ranks, count)?;
+        let ranks: Vec<u32> = read_back(&self.ctx, &map.ranks, map.count as usize)?;
         let mask = grid[0].bucket_count - 1;
         Ok(sorted
             .into_iter()

@@ -17,11 +17,12 @@ use ppm_core::passes::BackendError;
 pub struct PhotonMap {
     /// Deposits, in path order.
     pub photons: wgpu::Buffer,
-    /// Number of deposits.
+    /// Number of deposits, those the grid leaves out included.
     pub count: u32,
-    /// The grid's [`GridParams`], computed on the GPU.
+    /// The grid's [`GridParams`], computed on the GPU; its `photon_count` is the deposits
+    /// filed, `count` less those left out.
     pub grid: wgpu::Buffer,
-    /// Bucket starts: `bucket_count + 1` entries, the last being `count`.
+    /// Bucket starts: `bucket_count + 1` entries, the last being the deposits filed.
     pub bucket_start: wgpu::Buffer,
     /// Index in `photons` of each photon of `sorted`.
     pub order: wgpu::Buffer,
@@ -85,7 +86,7 @@ impl PhotonGridKernels {
                 &ctx.device,
                 &module,
                 "grid_copy_words_main",
-                &layout(&[0, 7, 11, 12]),
+                &layout(&[0, 4, 7, 11, 12]),
                 WORKGROUP,
                 &[("WORDS", f64::from(words))],
             )
@@ -93,10 +94,10 @@ impl PhotonGridKernels {
         Self {
             histogram: kernel("grid_histogram_main", WORKGROUP, &[0, 2, 3]),
             params: kernel("grid_params_main", 1, &[0, 3, 4]),
-            count: kernel("grid_count_main", WORKGROUP, &[0, 1, 4, 5, 8]),
-            scatter: kernel("grid_scatter_main", WORKGROUP, &[0, 6, 7, 8]),
-            sort: kernel("grid_sort_main", WORKGROUP, &[0, 5, 6, 7, 8, 10]),
-            copy: kernel("grid_copy_main", WORKGROUP, &[0, 1, 7, 8, 9]),
+            count: kernel("grid_count_main", WORKGROUP, &[0, 1, 4, 5, 8, 11]),
+            scatter: kernel("grid_scatter_main", WORKGROUP, &[0, 6, 7, 8, 11]),
+            sort: kernel("grid_sort_main", WORKGROUP, &[0, 4, 5, 6, 7, 8, 10]),
+            copy: kernel("grid_copy_main", WORKGROUP, &[0, 1, 4, 7, 8, 9]),
             copy_words,
         }
     }
@@ -104,7 +105,9 @@ impl PhotonGridKernels {
     /// Records the grid build over `photons` (`count` deposits, ranked in path order by
     /// `ranks`, the first `held` an earlier pass's, with `words` beside each in `weights`: 0,
     /// 1 or 4) into `buffers`, its cells sized to the gather radii of the hit points' visible
-    /// points (at least `sqrt(r2_floor)`); returns the map whose buffers the commands fill.
+    /// points (at least `sqrt(r2_floor)`), leaving out the deposits marked as pairs that
+    /// cancel where `leave_out` (and four words each); returns the map whose buffers the
+    /// commands fill.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -119,7 +122,7 @@ impl PhotonGridKernels {
             u32,
         ),
         (hit_points, slots): (&wgpu::Buffer, u32),
-        (r2_floor, held): (f32, u32),
+        (r2_floor, held, leave_out): (f32, u32, bool),
     ) -> Result<PhotonMap, BackendError> {
         let bucket_count = bucket_count(count);
         let bucket_bytes = (u64::from(bucket_count) + 1) * 4;
@@ -134,6 +137,7 @@ impl PhotonGridKernels {
                 hit_point_count: slots,
                 r2_floor,
                 held,
+                leave_out: u32::from(leave_out && words == 4),
                 ..GridBuildParams::default()
             },
         );

@@ -6,6 +6,7 @@
 //! join, so that one map and one search serve both.
 
 use super::*;
+use crate::layout::PHOTON_MARK_CANCELLED;
 
 /// A correction's pose-A deposits, first in the deposit buffers, held for its pose B's to join
 /// ([`WgpuBackend::fold_held`] files them alone where they cannot).
@@ -30,6 +31,8 @@ struct Filed<'a> {
     gather: (u32, f32),
     /// How the accumulation reads them.
     stage: GatherStage,
+    /// Leave out the deposits marked as pairs that cancel ([`PHOTON_MARK_CANCELLED`]).
+    leave_out: bool,
 }
 
 impl WgpuBackend {
@@ -271,6 +274,16 @@ impl WgpuBackend {
                 },
                 ..launch
             };
+            // A pairing pose B joining pose A's unfiled deposits marks the pairs that cancel,
+            // and its map leaves them out.
+            let marks = paired && base > 0 && self.held.is_some();
+            let launch = PhotonPassParams {
+                flags: match marks {
+                    true => launch.flags | PHOTON_MARK_CANCELLED,
+                    false => launch.flags,
+                },
+                ..launch
+            };
             // The kept segments take the place of the words an ordinary pass writes none of.
             let written = if keep { &self.path_segments } else { weights };
             let targets = PhotonTargets {
@@ -348,6 +361,7 @@ impl WgpuBackend {
                 words: (weights, words_each),
                 gather: (params.gather_kind, params.gather_r2_floor),
                 stage: GatherStage::Accumulate { weighted, paired },
+                leave_out: marks,
             };
             map = Some(self.file_and_fold(map_name, &filed)?);
             kept = keep;
@@ -430,7 +444,7 @@ impl WgpuBackend {
                     filed.count,
                 ),
                 (hit_points, slots.count),
-                (r2_floor, filed.held),
+                (r2_floor, filed.held, filed.leave_out),
             )?;
             self.kernels
                 .gather
@@ -457,6 +471,7 @@ impl WgpuBackend {
                 weighted: false,
                 paired: false,
             },
+            leave_out: false,
         };
         self.map = Some(self.file_and_fold("correction map, pose A", &filed)?);
         self.map_kind = held.gather_kind;

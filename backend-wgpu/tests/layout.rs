@@ -268,7 +268,8 @@ fn pass_parameters_match_their_wgsl_twins() {
     });
     same_layout!(PathDeposits {
         deposits,
-        normal_oct
+        normal_oct,
+        slots
     });
     same_layout!(ResolveParams {
         width,
@@ -366,7 +367,7 @@ fn backend_kernel_parameters_match_their_wgsl_twins() {
         hit_point_count,
         r2_floor,
         held,
-        _pad0,
+        leave_out,
         _pad1,
         _pad2
     });
@@ -514,6 +515,10 @@ fn shared_constants_agree() {
         ("RAYS_PER_SAMPLE", direct_light::RAYS_PER_SAMPLE),
         ("OBJECT_GROUPS", ppm_core::compile::OBJECT_GROUPS as u32),
         ("KEPT_SEGMENTS", backend_wgpu::KEPT_SEGMENTS),
+        (
+            "PHOTON_MARK_CANCELLED",
+            backend_wgpu::layout::PHOTON_MARK_CANCELLED,
+        ),
     ] {
         let sources = [
             LAYOUT_WGSL,

@@ -741,8 +741,9 @@ pub struct GridPhoton {
 
 /// Pose A's first stored deposits of one path of a local move's correction, which pose B's
 /// pass pairs its own with ([`crate::update::pairing`]): per deposit its position and power
-/// luminance, then their packed normals. 80 bytes; a deposit of luminance zero stands for
-/// none, so a fresh (zeroed) record pairs nothing.
+/// luminance, then their packed normals and where they lie in pose A's deposit buffer. 96
+/// bytes; a deposit of luminance zero stands for none, so a fresh (zeroed) record pairs
+/// nothing.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PathDeposits {
@@ -750,6 +751,10 @@ pub struct PathDeposits {
     pub deposits: [[f32; 4]; PAIRED_DEPOSITS],
     /// Their octahedral normals ([`Photon::normal_oct`]).
     pub normal_oct: [u32; PAIRED_DEPOSITS],
+    /// Their indices among pose A's deposits as the backend holds them, so that pose B can
+    /// mark the deposit of a pair that cancels, which its map then leaves out
+    /// ([`Partner::cancels`](crate::update::pairing::Partner::cancels)).
+    pub slots: [u32; PAIRED_DEPOSITS],
 }
 
 /// A local move's parameters as a GPU backend uploads them

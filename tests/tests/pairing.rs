@@ -8,18 +8,21 @@
 //! mover, so they are the same in both poses and their deposits cancel.
 
 use backend_cpu::CpuBackend;
+use backend_wgpu::WgpuBackend;
 use glam::Vec3;
 use harness::driver::Renderer;
-use ppm_core::layout::{HitPoint, hit_flags};
+use ppm_core::layout::{HitPoint, Photon, hit_flags};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
-use ppm_core::passes::Backend;
+use ppm_core::passes::{Backend, ReadBack};
+use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner};
 use std::process::ExitCode;
 use tests::furnace_with_mover;
 use tests::{BackendTrials, Suite, figure};
 
-/// The share of their history the kept slots keep through a small local move after eight
-/// iterations (their summed `emitted` after over before), pairing deposits or not.
-fn history_kept(backend: &mut dyn Backend, pair_deposits: bool) -> f64 {
+/// Eight iterations of the furnace whose small mover most paths cross the box of without
+/// meeting it, then its small local move, pairing deposits or not; returns the slots before
+/// the move.
+fn small_move(backend: &mut dyn Backend, pair_deposits: bool) -> Vec<HitPoint> {
     let scene = furnace_with_mover(
         Vec3::new(0.2, -0.9, 0.2),
         Vec3::new(0.9, -0.2, 0.9),
@@ -38,7 +41,14 @@ fn history_kept(backend: &mut dyn Backend, pair_deposits: bool) -> f64 {
     let before = render.backend().read_hit_points().unwrap();
     let moved = render.move_to(scene.at_frame(1), MoveMode::Local).unwrap();
     assert!(moved.restarted.is_none(), "{moved:?}");
-    let after = render.backend().read_hit_points().unwrap();
+    before
+}
+
+/// The share of their history the kept slots keep through [`small_move`] (their summed
+/// `emitted` after over before), pairing deposits or not.
+fn history_kept(backend: &mut dyn Backend, pair_deposits: bool) -> f64 {
+    let before = small_move(backend, pair_deposits);
+    let after = backend.read_hit_points().unwrap();
     let kept = |h: &&HitPoint| h.is_valid() && h.flags & hit_flags::UPDATED == 0;
     let sum = |slots: &[HitPoint], pick: &[bool]| -> f64 {
         slots
@@ -49,7 +59,7 @@ fn history_kept(backend: &mut dyn Backend, pair_deposits: bool) -> f64 {
             .sum()
     };
     let pick: Vec<bool> = after.iter().map(|h| kept(&h)).collect();
-    assert!(pick.iter().filter(|k| **k).count() > 100, "{moved:?}");
+    assert!(pick.iter().filter(|k| **k).count() > 100, "few slots kept");
     sum(&after, &pick) / sum(&before, &pick)
 }
 
@@ -76,11 +86,91 @@ fn paired_deposits_keep_the_history_a_small_move_did_not_change(
     );
 }
 
+/// The wgpu backend files a correction's two poses in one map, and leaves out both deposits
+/// of each pair that cancels, as the CPU's map does: the map holds every other deposit the
+/// poses made, each once. Pose A's deposits are its own: their power is negative.
+fn the_joined_map_leaves_out_both_deposits_of_each_pair_that_cancels() {
+    let mut backend = WgpuBackend::new().unwrap();
+    assert!(
+        MoveParams::default().pair_deposits,
+        "local mode pairs by default"
+    );
+    small_move(&mut backend, true);
+    // In path order by rank, which both poses share: each pose stays in path order.
+    let (pose_a, pose_b): (Vec<Photon>, Vec<Photon>) = backend
+        .read_photons()
+        .unwrap()
+        .into_iter()
+        .partition(|d| d.power[0] < 0.0);
+    let key = |d: &Photon| {
+        let bits = |v: [f32; 3]| v.map(f32::to_bits);
+        (bits(d.position), bits(d.power), d.normal_oct)
+    };
+    let mut expected: Vec<_> = pose_a.iter().chain(&pose_b).map(key).collect();
+    let mut cancelled = Vec::new();
+    let mut nth = 0;
+    for (i, b) in pose_b.iter().enumerate() {
+        nth = if i > 0 && pose_b[i - 1].path == b.path {
+            nth + 1
+        } else {
+            0
+        };
+        let first = pose_a.partition_point(|a| a.path < b.path);
+        let Some(a) = pose_a.get(first + nth).filter(|a| a.path == b.path) else {
+            continue;
+        };
+        let pair = partner(b, Some(&Partner::of(a))).filter(|_| nth < PAIRED_DEPOSITS);
+        if pair.is_some_and(|pair| pair.cancels(b)) {
+            cancelled.extend([key(a), key(b)]);
+        }
+    }
+    for gone in &cancelled {
+        let at = expected.iter().position(|k| k == gone).unwrap();
+        expected.swap_remove(at);
+    }
+    let mut filed: Vec<_> = backend
+        .map_order()
+        .unwrap()
+        .iter()
+        .map(|(_, _, g)| {
+            (
+                g.position.map(f32::to_bits),
+                g.power.map(f32::to_bits),
+                g.normal_oct,
+            )
+        })
+        .collect();
+    figure!(
+        "wgpu: {} deposits in pose A, {} in pose B, {} left out, {} filed",
+        pose_a.len(),
+        pose_b.len(),
+        cancelled.len(),
+        filed.len()
+    );
+    assert!(
+        cancelled.len() > pose_b.len() / 2,
+        "most paths cross the box without meeting the mover: {} of {} cancel",
+        cancelled.len() / 2,
+        pose_b.len()
+    );
+    expected.sort_unstable();
+    filed.sort_unstable();
+    assert!(
+        expected == filed,
+        "the map must hold the deposits but the pairs that cancel"
+    );
+}
+
 fn main() -> ExitCode {
     Suite::new()
         .on_every_backend(
             "paired_deposits_keep_the_history_a_small_move_did_not_change",
             paired_deposits_keep_the_history_a_small_move_did_not_change,
+        )
+        .test_needing(
+            &[tests::wgpu()],
+            "the_joined_map_leaves_out_both_deposits_of_each_pair_that_cancels",
+            the_joined_map_leaves_out_both_deposits_of_each_pair_that_cancels,
         )
         .run()
 }

@@ -71,7 +71,7 @@ fn visit(found: ptr<function, Search>, hp: HitPoint, r2: f32, p: GridPhoton, k: 
             let a = at - hp.position;
             partner = words.w;
             both = dot(a, a) < r2;
-            cancels = all(at == p.position) && partner == -own;
+            cancels = partner_cancels(words, p.position, own);
         }
         (*found).power_sq += variance_term(own, partner, both, cancels);
     }

@@ -53,8 +53,8 @@ fn path_replay_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
         }
         var photon = kept[deposit - 1u];
         photon.power *= params.power_scale;
-        append_deposit(photon, rank_base + bounce);
-        note_stored(&stored, nth, photon);
+        let slot = append_deposit(photon, rank_base + bounce);
+        note_stored(&stored, nth, photon, slot);
         nth++;
     }
     record_path(params.mask_offset + path, crossed_box, stored);

@@ -4,7 +4,9 @@
 // bucket order with ascending rank (the CPU's path order) within each bucket, held deposits
 // of an earlier pass first, so gathers sum in the CPU's order. Steps, one dispatch each:
 // histogram, params, count, (scan), scatter, sort, copy (and the deposits' words, where the
-// pass wrote some).
+// pass wrote some). A map that joins a pairing pose B's deposits to pose A's held ones leaves
+// out both deposits of each pair that cancels (marked CANCELLED_PARTNER by the photon pass):
+// the scan's total is then the deposits filed, which the sort writes into `grid`.
 
 struct GridBuildParams {
     photon_count: u32,
@@ -12,7 +14,7 @@ struct GridBuildParams {
     hit_point_count: u32,
     r2_floor: f32,
     held: u32,
-    _pad0: u32,
+    leave_out: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -92,10 +94,16 @@ fn grid_params_main() {
     grid = GridParams(cell, params.bucket_count, params.photon_count, 0u);
 }
 
+// Whether deposit `i` stays out of the map: one of a pair that cancels, where the build
+// leaves those out (four words beside each deposit, CANCELLED_PARTNER's luminance positive).
+fn left_out(i: u32) -> bool {
+    return params.leave_out != 0u && words[4u * i + 3u] > 0.0;
+}
+
 @compute @workgroup_size(64)
 fn grid_count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = item_index(gid, groups);
-    if i >= params.photon_count {
+    if i >= params.photon_count || left_out(i) {
         return;
     }
     let key = cell_key(cell_of(photons[i].position, grid.cell_size));
@@ -106,7 +114,7 @@ fn grid_count_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
 @compute @workgroup_size(64)
 fn grid_scatter_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = item_index(gid, groups);
-    if i >= params.photon_count {
+    if i >= params.photon_count || left_out(i) {
         return;
     }
     order[atomicAdd(&bucket_cursor[keys[i] & (params.bucket_count - 1u)], 1u)] = i;
@@ -120,11 +128,16 @@ fn grid_scatter_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
 // counts over the same entries, so neighbouring invocations stay in step: an insertion sort
 // by the invocation at each bucket's start left its group's other lanes idle, and the wide
 // cells of a local correction's map hold dozens of deposits a bucket (cornell-box's drag:
-// 8.1 ms of device time a step on lavapipe).
+// 8.1 ms of device time a step on lavapipe). The first invocation writes the deposits filed
+// (all but those left out) into `grid`, for the copies and the gathers.
 @compute @workgroup_size(64)
 fn grid_sort_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let k = item_index(gid, groups);
-    if k >= params.photon_count {
+    let filed = atomicLoad(&bucket_counts[params.bucket_count]);
+    if k == 0u {
+        grid.photon_count = filed;
+    }
+    if k >= filed {
         return;
     }
     let v = order[k];
@@ -152,7 +165,7 @@ fn after(a: vec2<u32>, b: vec2<u32>) -> bool {
 @compute @workgroup_size(64)
 fn grid_copy_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let k = item_index(gid, groups);
-    if k >= params.photon_count {
+    if k >= grid.photon_count {
         return;
     }
     let i = order[k];
@@ -163,7 +176,7 @@ fn grid_copy_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
 @compute @workgroup_size(64)
 fn grid_copy_words_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let k = item_index(gid, groups);
-    if k >= params.photon_count {
+    if k >= grid.photon_count {
         return;
     }
     let i = order[k];

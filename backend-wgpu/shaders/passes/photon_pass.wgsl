@@ -15,7 +15,11 @@
 // Pairing their deposits, pose A (PHOTON_RECORD_DEPOSITS) writes each path's first stored
 // deposits into `partners` at the path's bit, and pose B (PHOTON_PAIR_DEPOSITS) writes each
 // deposit's partner there (position and luminance, four words where region passes write a
-// weight; update.wgsl's pairing_partner).
+// weight; update.wgsl's pairing_partner). Where pose A's deposits are held unfiled for pose
+// B's to join (PHOTON_MARK_CANCELLED), a pair that cancels exactly (partner_cancels: its path
+// met no moved object up to it) has both deposits' words set to CANCELLED_PARTNER, and the map
+// leaves both out: they would add nothing to a gather but rounding, and they are a third of a
+// cornell-box drag step's correction (as backend-cpu's map leaves them out).
 //
 // An ordinary pass that keeps its paths (PHOTON_KEEP_PATHS, kept_paths.wgsl) writes their
 // segments into `words`, for path_replay.wgsl to answer the next correction's pose A.
@@ -107,6 +111,21 @@ fn keep_word(at: u32, value: f32) {
     }
 }
 
+// Writes the four words beside deposit `slot`: its pose-A partner (a pairing pose B).
+fn write_words(slot: u32, partner: vec4<f32>) {
+    for (var w = 0u; w < 4u; w++) {
+        words[4u * slot + w] = partner[w];
+    }
+}
+
+// Marks pose A's deposit `slot`, held in the buffer before this pass's, as one of a pair that
+// cancels (PHOTON_MARK_CANCELLED): its path stored it, so no other invocation writes its words.
+fn mark_cancelled(slot: u32) {
+    if 4u * slot + 3u < arrayLength(&words) {
+        write_words(slot, CANCELLED_PARTNER);
+    }
+}
+
 // Traces path `path`, of random numbers `key`, from `emission`, appending its deposits.
 fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
     var stored: PathDeposits;
@@ -116,6 +135,7 @@ fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
     // Pairing is a local correction's, whose passes test the movers' boxes.
     let records = MOVERS && (params.flags & PHOTON_RECORD_DEPOSITS) != 0u;
     let pairs = MOVERS && (params.flags & PHOTON_PAIR_DEPOSITS) != 0u;
+    let marks = pairs && (params.flags & PHOTON_MARK_CANCELLED) != 0u;
     // Pose A's deposits of this path (a fresh record pairs nothing), and which of its stored
     // deposits comes next.
     var pose_a: PathDeposits;
@@ -172,14 +192,16 @@ fn trace_photon(path: u32, key: StreamKey, emission: Emission) -> Traced {
                     words[slot] = emission.weight;
                 }
                 if pairs {
-                    let partner = pairing_partner(pose_a, nth, normal_oct);
-                    for (var w = 0u; w < 4u; w++) {
-                        words[4u * slot + w] = partner[w];
+                    var partner = pairing_partner(pose_a, nth, normal_oct);
+                    if marks && partner_cancels(partner, position, luminance(deposit)) {
+                        partner = CANCELLED_PARTNER;
+                        mark_cancelled(pose_a.slots[nth]);
                     }
+                    write_words(slot, partner);
                 }
             }
             if records {
-                note_stored(&stored, nth, photon);
+                note_stored(&stored, nth, photon, slot);
             }
             nth++;
         }

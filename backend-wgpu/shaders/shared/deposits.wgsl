@@ -16,12 +16,13 @@ fn append_deposit(photon: Photon, rank: u32) -> u32 {
     return slot;
 }
 
-// Notes `photon` as its path's `nth` stored deposit where it is among the first
-// PAIRED_DEPOSITS, for a pairing pass to pair with.
-fn note_stored(stored: ptr<function, PathDeposits>, nth: u32, photon: Photon) {
+// Notes `photon`, appended at `slot`, as its path's `nth` stored deposit where it is among
+// the first PAIRED_DEPOSITS, for a pairing pass to pair with.
+fn note_stored(stored: ptr<function, PathDeposits>, nth: u32, photon: Photon, slot: u32) {
     if nth < PAIRED_DEPOSITS {
         (*stored).deposits[nth] = vec4<f32>(photon.position, luminance(photon.power));
         (*stored).normal_oct[nth] = photon.normal_oct;
+        (*stored).slots[nth] = slot;
     }
 }
 

@@ -183,6 +183,13 @@ const PHOTON_CULL_UNCROSSED: u32 = 4u;
 const PHOTON_KEEP_PATHS: u32 = 8u;
 const PHOTON_RECORD_DEPOSITS: u32 = 32u;
 const PHOTON_PAIR_DEPOSITS: u32 = 64u;
+// The wgpu backend's own bit (backend_wgpu::layout::PHOTON_MARK_CANCELLED): a pairing pose B
+// whose pose-A deposits are held unfiled marks both deposits of each pair that cancels, for
+// the map that joins them to leave out.
+const PHOTON_MARK_CANCELLED: u32 = 0x80000000u;
+// The four words beside a deposit so marked, in place of a partner: a real partner's
+// luminance is pose A's, which is never positive.
+const CANCELLED_PARTNER: vec4<f32> = vec4<f32>(0.0, 0.0, 0.0, 1.0);
 
 struct GatherParams {
     alpha: f32,
@@ -212,6 +219,7 @@ const PAIR_FLOOR: f32 = 0.25;
 struct PathDeposits {
     deposits: array<vec4<f32>, 4>,
     normal_oct: vec4<u32>,
+    slots: vec4<u32>,
 }
 
 struct EmissionRegion {

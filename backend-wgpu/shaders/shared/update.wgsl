@@ -57,6 +57,12 @@ fn pairing_partner(pose_a: PathDeposits, nth: u32, normal_oct: u32) -> vec4<f32>
     return vec4<f32>(0.0);
 }
 
+// ppm_core::update::pairing::Partner::cancels: whether a deposit at `position` of luminance
+// `own` is its partner `partner` (a real one, luminance not zero) with the power negated.
+fn partner_cancels(partner: vec4<f32>, position: vec3<f32>, own: f32) -> bool {
+    return partner.w != 0.0 && all(partner.xyz == position) && partner.w == -own;
+}
+
 // ppm_core::update::pairing::variance_term: what a deposit of luminance `own` adds to a
 // disc's correction variance, its partner of luminance `partner` in the disc or not; the
 // cross term floored as ppm_core::update::pairing::cross_term floors it, and a pair that
