@@ -18,8 +18,8 @@
 // weight; update.wgsl's pairing_partner). Where pose A's deposits are held unfiled for pose
 // B's to join (PHOTON_MARK_CANCELLED), a pair that cancels exactly (partner_cancels: its path
 // met no moved object up to it) has both deposits' words set to CANCELLED_PARTNER, and the map
-// leaves both out: they would add nothing to a gather but rounding, and they are a third of a
-// cornell-box drag step's correction (as backend-cpu's map leaves them out).
+// leaves both out: they would add nothing to a gather but rounding, and they are 28% of a
+// cornell-box drag step's correction deposits (as backend-cpu's map leaves them out).
 //
 // An ordinary pass that keeps its paths (PHOTON_KEEP_PATHS, kept_paths.wgsl) writes their
 // segments into `words`, for path_replay.wgsl to answer the next correction's pose A.
