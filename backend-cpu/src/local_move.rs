@@ -139,20 +139,19 @@ pub fn direct_change_main(
 ) -> (LocalMoveStats, KnownPairs, bool) {
     let known = known.filter(|k| k.valid_for(before.pose, request));
     let moved = request.moved();
-    let pairs: Vec<Option<Box<[PairInPose]>>> = hit_points
+    // Each corrected sum screened as it is written.
+    let (pairs, finite): (Vec<_>, Vec<bool>) = hit_points
         .par_iter_mut()
         .enumerate()
         .map(|(slot, hp)| {
             let known = known.and_then(|p| p.slots.get(slot)).map(|p| &p[..]);
             let poses = (before, after, camera);
-            correct_direct(hp, slot as u32, poses, (request, &moved), known)
+            let pairs = correct_direct(hp, slot as u32, poses, (request, &moved), known);
+            let finite = pairs.is_none() || hp.direct.iter().all(|v| v.is_finite());
+            (pairs, finite)
         })
-        .collect();
-    let finite = hit_points
-        .iter()
-        .zip(&pairs)
-        .filter(|(_, p)| p.is_some())
-        .all(|(hp, _)| hp.direct.iter().all(|v| v.is_finite()));
+        .unzip();
+    let finite = finite.iter().all(|&f| f);
     let stats = LocalMoveStats {
         direct_corrected: pairs.iter().filter(|p| p.is_some()).count() as u64,
         ..LocalMoveStats::default()

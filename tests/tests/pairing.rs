@@ -14,7 +14,7 @@ use harness::driver::Renderer;
 use ppm_core::layout::{HitPoint, Photon, hit_flags};
 use ppm_core::params::{MoveMode, MoveParams, RenderParams};
 use ppm_core::passes::{Backend, ReadBack};
-use ppm_core::update::pairing::{PAIRED_DEPOSITS, Partner, partner};
+use ppm_core::update::pairing::pose_a_partners;
 use std::process::ExitCode;
 use tests::furnace_with_mover;
 use tests::{BackendTrials, Suite, figure};
@@ -107,20 +107,17 @@ fn the_joined_map_leaves_out_both_deposits_of_each_pair_that_cancels() {
         (bits(d.position), bits(d.power), d.normal_oct)
     };
     let mut expected: Vec<_> = pose_a.iter().chain(&pose_b).map(key).collect();
+    // ppm-core's own pairing rule says which pairs cancel; a pair's pose-A deposit is the one
+    // of its path at the same place.
     let mut cancelled = Vec::new();
-    let mut nth = 0;
-    for (i, b) in pose_b.iter().enumerate() {
-        nth = if i > 0 && pose_b[i - 1].path == b.path {
-            nth + 1
-        } else {
-            0
-        };
-        let first = pose_a.partition_point(|a| a.path < b.path);
-        let Some(a) = pose_a.get(first + nth).filter(|a| a.path == b.path) else {
-            continue;
-        };
-        let pair = partner(b, Some(&Partner::of(a))).filter(|_| nth < PAIRED_DEPOSITS);
+    for (b, pair) in pose_b.iter().zip(pose_a_partners(&pose_a, &pose_b)) {
         if pair.is_some_and(|pair| pair.cancels(b)) {
+            let first = pose_a.partition_point(|a| a.path < b.path);
+            let a = pose_a[first..]
+                .iter()
+                .find(|a| a.position == b.position)
+                .filter(|a| a.path == b.path)
+                .expect("a pair that cancels has its pose-A deposit");
             cancelled.extend([key(a), key(b)]);
         }
     }
